@@ -1,0 +1,47 @@
+/* cli.h — the `taslab` command line: dispatch table entries and option parsing.
+ * Parsing functions return 0 or -1 with a one-line message (what is wrong, what to do) in `err`;
+ * nothing here exits, so every parser is unit-tested (tests/test_cli_options.c). */
+#ifndef TASLAB_CLI_H
+#define TASLAB_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+typedef struct cli_command {
+	const char *name;
+	const char *summary;
+	int (*run)(int argc, char **argv); /* argv[0] is the command name; returns the exit status */
+	void (*usage)(FILE *out);
+} cli_command;
+
+enum { CLI_EXIT_OK = 0, CLI_EXIT_FAILURE = 1, CLI_EXIT_USAGE = 2 };
+
+/* "WxH", 1..16384 each. */
+int cli_parse_size(const char *s, uint32_t *w, uint32_t *h, char *err, size_t err_size);
+/* "A:B" = frames A..B-1 (half-open, like a slice), "A" = the single frame A, ":B" = 0..B-1,
+ * "A:" = from A to the end (end = *b_inout on entry). */
+int cli_parse_frames(const char *s, uint32_t *a, uint32_t *b_inout, bool *b_given, char *err, size_t err_size);
+/* A finite number within [lo, hi]; `what` names the option in messages. */
+int cli_parse_float(const char *s, const char *what, double lo, double hi, double *out, char *err, size_t err_size);
+
+typedef struct cli_render_opts {
+	const char *scene, *camera, *method, *out, *device;
+	const char *frames;   /* unparsed until the scene (its duration) is known */
+	uint32_t width, height;
+	double fps;           /* 0 = scene */
+	double threshold;
+	bool validation, no_exr, no_png, trivial_shading, quiet, help;
+} cli_render_opts;
+
+/* Parses `taslab render` arguments (argv[0] = "render"). */
+int cli_render_parse(int argc, char **argv, cli_render_opts *o, char *err, size_t err_size);
+/* Resolves a --scene argument: an existing file path, or the name of a built-in scene
+ * (scenes/NAME.json under $TASLAB_SCENES or the installed/source scenes folder). */
+int cli_resolve_scene(const char *arg, char *path, size_t path_size, char *err, size_t err_size);
+
+extern const cli_command cli_cmd_render;
+extern const cli_command cli_cmd_devices;
+
+#endif

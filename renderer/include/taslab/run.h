@@ -1,0 +1,47 @@
+/* run.h — a run folder (DESIGN section 5): frames/NNNNNN.exr + .png, stats.csv, manifest.json.
+ *
+ * Completeness protocol: run_writer_create deletes any manifest.json left in the folder, every file
+ * is written under a temporary name and renamed into place, and manifest.json is written last
+ * (run_writer_finish). A folder with a manifest.json is therefore a complete run; one without is not.
+ */
+#ifndef TASLAB_RUN_H
+#define TASLAB_RUN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/render.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct run_info {
+	const char *scene_name, *scene_path, *camera, *camera_motion, *method, *device, *driver;
+	float threshold;
+	uint32_t first_frame, last_frame; /* inclusive */
+	uint32_t width, height;
+	float fps;
+	bool validation;
+	bool write_exr, write_png;
+	const char *command_line;
+} run_info;
+
+typedef struct run_writer run_writer;
+
+int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size);
+/* Writes the frame's EXR and PNG and appends its stats.csv row. */
+int run_writer_frame(run_writer *w, const render_image *img, const render_stats *st, char *err, size_t err_size);
+/* Closes stats.csv and writes manifest.json (atomically) with totals. */
+int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size);
+/* Frees the writer; an unfinished run leaves no manifest.json. */
+void run_writer_destroy(run_writer **w);
+
+/* Creates a directory and its parents (like mkdir -p). */
+int run_mkdirs(const char *path, char *err, size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

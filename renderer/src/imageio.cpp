@@ -1,0 +1,120 @@
+// imageio.cpp — thin extern "C" shim over OpenImageIO (see imageio.h).
+#include "taslab/imageio.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+using namespace OIIO;
+
+static std::string temp_name(const char *path)
+{
+	// Same folder (so rename is atomic), hidden, unique per process.
+	std::string p(path);
+	size_t slash = p.find_last_of('/');
+	std::string dir = slash == std::string::npos ? "" : p.substr(0, slash + 1);
+	std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
+	return dir + "." + base + ".tmp" + std::to_string((long)getpid());
+}
+
+static int write_atomic(const char *path, const char *format, const ImageSpec &spec, TypeDesc type,
+			const void *pixels, stride_t xstride, char *err, size_t err_size)
+{
+	std::string tmp = temp_name(path);
+	auto out = ImageOutput::create(format);
+	if (!out) {
+		snprintf(err, err_size, "%s: OpenImageIO has no %s writer: %s", path, format, OIIO::geterror().c_str());
+		return -1;
+	}
+	if (!out->open(tmp, spec)) {
+		snprintf(err, err_size, "%s: cannot write: %s", path, out->geterror().c_str());
+		return -1;
+	}
+	bool ok = out->write_image(type, pixels, xstride);
+	ok = out->close() && ok;
+	if (!ok) {
+		snprintf(err, err_size, "%s: write failed: %s", path, out->geterror().c_str());
+		std::remove(tmp.c_str());
+		return -1;
+	}
+	if (std::rename(tmp.c_str(), path) != 0) {
+		snprintf(err, err_size, "%s: cannot rename temporary file into place: %s", path, strerror(errno));
+		std::remove(tmp.c_str());
+		return -1;
+	}
+	return 0;
+}
+
+extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t height, const uint16_t *rgba_half,
+				      const imageio_attr *attrs, size_t attr_count, char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 4, TypeDesc::HALF);
+	spec.channelnames = {"R", "G", "B", "A"};
+	spec.alpha_channel = 3;
+	spec.attribute("compression", "zip");
+	spec.attribute("oiio:ColorSpace", "Linear");
+	for (size_t i = 0; i < attr_count; i++)
+		spec.attribute(attrs[i].name, attrs[i].value);
+	return write_atomic(path, "openexr", spec, TypeDesc::HALF, rgba_half, AutoStride, err, err_size);
+}
+
+extern "C" int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+				      char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
+	spec.attribute("oiio:ColorSpace", "sRGB");
+	// Writing 3 channels out of 4-channel pixels: x stride of 4 bytes.
+	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgba8, 4, err, err_size);
+}
+
+extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err,
+				 size_t err_size)
+{
+	*rgb = nullptr;
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, OIIO::geterror().c_str());
+		return -1;
+	}
+	const ImageSpec &spec = in->spec();
+	if (spec.width <= 0 || spec.height <= 0 || spec.nchannels < 1) {
+		snprintf(err, err_size, "%s: image has no pixels", path);
+		return -1;
+	}
+	size_t n = (size_t)spec.width * spec.height;
+	std::vector<uint8_t> all(n * spec.nchannels);
+	if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::UINT8, all.data())) {
+		snprintf(err, err_size, "%s: cannot decode image: %s", path, in->geterror().c_str());
+		return -1;
+	}
+	uint8_t *out = (uint8_t *)malloc(n * 3);
+	if (!out) {
+		snprintf(err, err_size, "%s: out of memory", path);
+		return -1;
+	}
+	for (size_t i = 0; i < n; i++)
+		for (int c = 0; c < 3; c++)
+			out[i * 3 + c] = all[i * spec.nchannels + (c < spec.nchannels ? c : 0)];
+	*width = (uint32_t)spec.width;
+	*height = (uint32_t)spec.height;
+	*rgb = out;
+	return 0;
+}
+
+extern "C" int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err,
+				 size_t err_size)
+{
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, OIIO::geterror().c_str());
+		return -1;
+	}
+	std::string v = in->spec().get_string_attribute(name);
+	snprintf(value, value_size, "%s", v.c_str());
+	return 0;
+}
