@@ -189,8 +189,8 @@ void anim_motion_apply(const anim_motion *m, float t, tlm_trs *trs)
 		tlm_vec3 n = tlm_v3_normalize_or(m->axis, tlm_v3(0, 1, 0)), u, v;
 		plane_basis(n, &u, &v);
 		float a = (float)fmod((double)m->phase_deg + (double)m->rate_deg_s * tt, 360.0) * d2r;
-		/* Positive rate = counter-clockwise seen from +axis. */
-		tlm_vec3 off = tlm_v3_add(tlm_v3_scale(u, m->radius * cosf(a)), tlm_v3_scale(v, -m->radius * sinf(a)));
+		/* u rotated by angle a about the axis (right-hand rule, as SPIN): counter-clockwise seen from +axis. */
+		tlm_vec3 off = tlm_v3_add(tlm_v3_scale(u, m->radius * cosf(a)), tlm_v3_scale(v, m->radius * sinf(a)));
 		trs->t = tlm_v3_add(m->center, off);
 		break;
 	}

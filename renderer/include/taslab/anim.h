@@ -68,8 +68,9 @@ void anim_track_finish(anim_track *track);
 typedef enum anim_motion_kind {
 	ANIM_MOTION_INVALID = 0,
 	ANIM_MOTION_SPIN,  /* rotate about `axis` (through the object origin) at `rate` degrees/s */
-	ANIM_MOTION_ORBIT, /* sets translation = center + radius*(u cos a - v sin a), a = phase + rate*t, (u, v) spanning
-	                     the plane normal to axis; positive rate turns counter-clockwise seen from +axis */
+	ANIM_MOTION_ORBIT, /* sets translation = center + radius*(u cos a + v sin a), a = phase + rate*t, u = +X (or +Z
+	                     when the axis is near X) projected into the plane normal to the axis, v = axis x u:
+	                     u rotated about the axis by a, counter-clockwise seen from +axis (as SPIN) */
 	ANIM_MOTION_BOB,   /* translation += amplitude * sin(2*pi*frequency*t + phase) */
 	ANIM_MOTION_TRACKS,/* keyframe tracks (translation / rotation / scale) */
 	ANIM_MOTION_COUNT

@@ -1,0 +1,160 @@
+/* test_render.c — the Vulkan renderer on lavapipe under the Khronos validation layer: device
+ * identity, zero validation messages, determinism, frames as a pure function of time, statistics. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+#include "test_util.h"
+
+#define W 96
+#define H 54
+
+static scene *scn;
+static vkdev *dev;
+
+static int setup(void **state)
+{
+	(void)state;
+	char err[1024];
+	if (scene_load(TASLAB_SOURCE_DIR "/scenes/turntable.json", &scn, err, sizeof err)) {
+		fprintf(stderr, "%s\n", err);
+		return -1;
+	}
+	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	if (vkdev_create(&d, &dev, err, sizeof err)) {
+		fprintf(stderr, "%s\n", err);
+		return -1;
+	}
+	return 0;
+}
+
+static int teardown(void **state)
+{
+	(void)state;
+	uint32_t msgs = dev ? vkdev_validation_messages(dev) : 0;
+	vkdev_destroy(&dev);
+	scene_destroy(&scn);
+	return msgs ? -1 : 0;
+}
+
+typedef struct frame_copy {
+	uint8_t display[W * H * 4];
+	uint16_t hdr[W * H * 4];
+	render_stats st;
+} frame_copy;
+
+static void render_frames(int camera, const uint32_t *frames, size_t n, frame_copy *out, bool trivial)
+{
+	char err[1024];
+	render *r = NULL;
+	render_desc d = {.scene = scn, .camera = camera, .width = W, .height = H, .method = "ref",
+			 .trivial_shading = trivial};
+	if (render_create(dev, &d, &r, err, sizeof err))
+		fail_msg("render_create: %s", err);
+	for (size_t i = 0; i < n; i++) {
+		render_image img;
+		if (render_frame(r, frames[i], &img, &out[i].st, err, sizeof err))
+			fail_msg("render_frame: %s", err);
+		assert_int_equal(img.width, W);
+		assert_int_equal(img.height, H);
+		memcpy(out[i].display, img.display_rgba, sizeof out[i].display);
+		memcpy(out[i].hdr, img.hdr_rgba_half, sizeof out[i].hdr);
+	}
+	render_destroy(&r);
+	assert_null(r);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+}
+
+static void test_device_is_lavapipe(void **state)
+{
+	(void)state;
+	/* Mesa CI's renderer_check: the tests must really run on the CPU device. */
+	assert_true(vkdev_is_lavapipe(dev));
+	assert_non_null(strstr(dev->props.deviceName, "llvmpipe"));
+	assert_true(dev->validation);
+}
+
+static void test_determinism_and_purity(void **state)
+{
+	(void)state;
+	static frame_copy a[3], b[2];
+	uint32_t fa[3] = {12, 40, 12}, fb[2] = {40, 12};
+	render_frames(0, fa, 3, a, false);
+	render_frames(0, fb, 2, b, false);
+	/* Same frame, same device: identical bytes, whatever was rendered before (pure function of time). */
+	assert_memory_equal(a[0].display, a[2].display, sizeof a[0].display);
+	assert_memory_equal(a[0].hdr, b[1].hdr, sizeof a[0].hdr);
+	assert_memory_equal(a[1].display, b[0].display, sizeof a[1].display);
+	/* The scene is animated and the camera moves: frames 12 and 40 differ. */
+	assert_memory_not_equal(a[0].display, a[1].display, sizeof a[0].display);
+}
+
+static void test_statistics(void **state)
+{
+	(void)state;
+	static frame_copy f[1];
+	uint32_t fr[1] = {30};
+	render_frames(1, fr, 1, f, false);
+	render_stats *st = &f[0].st;
+	assert_int_equal(st->frame, 30);
+	assert_float_equal(st->time_s, 30.0 / scn->fps, 1e-9);
+	/* The stationary overview sees geometry and sky: 0 < visible < all pixels. */
+	assert_true(st->visible_samples > W * H / 4 && st->visible_samples < W * H);
+	assert_int_equal(st->shaded_samples, st->visible_samples); /* ref shades every visible sample */
+	/* lavapipe has pipeline statistics: at least one fragment invocation per visible sample. */
+	assert_true(dev->has_pipeline_stats);
+	assert_true(st->fs_invocations >= st->visible_samples);
+	assert_int_equal(st->pass_count, 5);
+	assert_string_equal(st->pass_names[2], "shade");
+	double sum = 0;
+	for (uint32_t p = 0; p < st->pass_count; p++) {
+		assert_true(st->gpu_ms[p] >= 0.0);
+		sum += st->gpu_ms[p];
+	}
+	assert_float_equal(sum, st->gpu_ms_total, 1e-6 * (1 + sum));
+	/* Coverage alpha in the HDR image agrees with the count. */
+	int64_t cov = 0;
+	for (size_t i = 0; i < (size_t)W * H; i++)
+		cov += f[0].hdr[i * 4 + 3] == 0x3C00; /* half 1.0 */
+	assert_int_equal(cov, st->visible_samples);
+}
+
+static void test_trivial_shading_differs(void **state)
+{
+	(void)state;
+	static frame_copy full[1], triv[1];
+	uint32_t fr[1] = {0};
+	render_frames(1, fr, 1, full, false);
+	render_frames(1, fr, 1, triv, true);
+	assert_int_equal(full[0].st.visible_samples, triv[0].st.visible_samples); /* same geometry */
+	assert_memory_not_equal(full[0].display, triv[0].display, sizeof full[0].display);
+}
+
+static void test_bad_arguments(void **state)
+{
+	(void)state;
+	char err[256];
+	render *r = NULL;
+	render_desc d = {.scene = scn, .camera = 0, .width = W, .height = H, .method = "nope"};
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+	assert_null(r);
+	d.method = "ref";
+	d.camera = 99;
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+	d.camera = 0;
+	d.width = 0;
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_device_is_lavapipe), cmocka_unit_test(test_determinism_and_purity),
+		cmocka_unit_test(test_statistics),         cmocka_unit_test(test_trivial_shading_differs),
+		cmocka_unit_test(test_bad_arguments),
+	};
+	return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -1,0 +1,83 @@
+/* test_util.c — helpers shared by the tests. */
+#include "test_util.h"
+
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+/* Keep Mesa's lavapipe driver and the validation layer loaded until exit: the Vulkan loader
+ * dlcloses them, after which LeakSanitizer cannot attribute their allocations to a module (and so
+ * cannot apply lsan.supp); pinned, their global state stays reachable and our own leaks still show. */
+__attribute__((constructor)) static void tu_pin_vulkan_libraries(void)
+{
+	dlopen("libvulkan_lvp.so", RTLD_NOW | RTLD_NODELETE);
+	dlopen("libVkLayer_khronos_validation.so", RTLD_NOW | RTLD_NODELETE);
+}
+
+const char *tu_tmpdir(const char *name)
+{
+	static char path[4096];
+	const char *base = getenv("TASLAB_TMP");
+	if (!base)
+		base = "/tmp/taslab-tests";
+	char cmd[8192];
+	snprintf(path, sizeof path, "%s/%s", base, name);
+	snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", path, path);
+	if (system(cmd) != 0)
+		fail_msg("cannot create %s", path);
+	return path;
+}
+
+int tu_run(const char *cmd, char *out, size_t out_size)
+{
+	char full[8192];
+	/* The taslab child process cannot pin the driver (see above), so LeakSanitizer is off for it;
+	 * the same code paths run in-process with leak checking in test_render and test_golden. */
+	snprintf(full, sizeof full, "ASAN_OPTIONS=detect_leaks=0 %s 2>&1", cmd);
+	FILE *p = popen(full, "r");
+	if (!p)
+		return -1;
+	size_t n = fread(out, 1, out_size - 1, p);
+	out[n] = 0;
+	int st = pclose(p);
+	return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+}
+
+int tu_file_exists(const char *path)
+{
+	struct stat sb;
+	return stat(path, &sb) == 0;
+}
+
+char *tu_read_file(const char *path, size_t *len)
+{
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	fseek(f, 0, SEEK_END);
+	long n = ftell(f);
+	fseek(f, 0, SEEK_SET);
+	char *buf = malloc((size_t)n + 1);
+	if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+		free(buf);
+		buf = NULL;
+	}
+	fclose(f);
+	if (buf) {
+		buf[n] = 0;
+		if (len)
+			*len = (size_t)n;
+	}
+	return buf;
+}
+
+int tu_count_lines(const char *s)
+{
+	int n = 0;
+	for (; *s; s++)
+		n += *s == '\n';
+	return n;
+}

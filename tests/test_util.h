@@ -1,0 +1,21 @@
+/* test_util.h — helpers shared by the tests. */
+#ifndef TASLAB_TEST_UTIL_H
+#define TASLAB_TEST_UTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+/* A fresh empty folder under the build tree (TASLAB_TMP) for one test; returns its path. */
+const char *tu_tmpdir(const char *name);
+/* Runs a shell command; returns its exit status; stdout+stderr captured into `out`. */
+int tu_run(const char *cmd, char *out, size_t out_size);
+int tu_file_exists(const char *path);
+/* Reads a whole file; caller frees. */
+char *tu_read_file(const char *path, size_t *len);
+/* Number of '\n'-terminated lines in s. */
+int tu_count_lines(const char *s);
+
+#endif
