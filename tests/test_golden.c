@@ -28,23 +28,13 @@ static vkdev *dev;
 static int setup(void **state)
 {
 	(void)state;
-	char err[1024];
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
-	if (scene_load(TASLAB_SOURCE_DIR "/scenes/turntable.json", &scn, err, sizeof err) ||
-	    vkdev_create(&d, &dev, err, sizeof err)) {
-		fprintf(stderr, "%s\n", err);
-		return -1;
-	}
-	return 0;
+	return tu_open_scene_and_device("turntable", &scn, &dev);
 }
 
 static int teardown(void **state)
 {
 	(void)state;
-	uint32_t msgs = dev ? vkdev_validation_messages(dev) : 0;
-	vkdev_destroy(&dev);
-	scene_destroy(&scn);
-	return msgs ? -1 : 0;
+	return tu_close_scene_and_device(&scn, &dev);
 }
 
 static void check_golden(const char *camera, uint32_t frame)

@@ -3,6 +3,9 @@
 
 #include <dlfcn.h>
 #include <stdio.h>
+
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -80,4 +83,24 @@ int tu_count_lines(const char *s)
 	for (; *s; s++)
 		n += *s == '\n';
 	return n;
+}
+
+int tu_open_scene_and_device(const char *name, scene **scn, vkdev **dev)
+{
+	char err[1024], path[4096];
+	snprintf(path, sizeof path, "%s/scenes/%s.json", TASLAB_SOURCE_DIR, name);
+	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	if (scene_load(path, scn, err, sizeof err) || vkdev_create(&d, dev, err, sizeof err)) {
+		fprintf(stderr, "%s\n", err);
+		return -1;
+	}
+	return 0;
+}
+
+int tu_close_scene_and_device(scene **scn, vkdev **dev)
+{
+	uint32_t msgs = *dev ? vkdev_validation_messages(*dev) : 0;
+	vkdev_destroy(dev);
+	scene_destroy(scn);
+	return msgs ? -1 : 0;
 }

@@ -18,4 +18,12 @@ char *tu_read_file(const char *path, size_t *len);
 /* Number of '\n'-terminated lines in s. */
 int tu_count_lines(const char *s);
 
+
+struct scene;
+struct vkdev;
+/* Loads scenes/NAME.json and opens lavapipe with the validation layer; 0 or -1 (message printed). */
+int tu_open_scene_and_device(const char *name, struct scene **scn, struct vkdev **dev);
+/* Frees both; returns -1 when the device saw any validation message, so a group teardown fails. */
+int tu_close_scene_and_device(struct scene **scn, struct vkdev **dev);
+
 #endif

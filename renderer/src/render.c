@@ -371,6 +371,32 @@ static void draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *
 	}
 }
 
+/* One depth-only rendering into `view` (cleared to 1): shadow layers and the depth pre-pass. */
+static void depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
+			    const render_pipeline *pipe, uint32_t slot, uint32_t layer, int shadow_pass)
+{
+	VkRenderingAttachmentInfo da = {
+		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+		.imageView = view,
+		.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+		.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
+		.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+		.clearValue = {.depthStencil = {1.0f, 0}},
+	};
+	VkRenderingInfo ri = {
+		.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
+		.renderArea = {{0, 0}, {w, h}},
+		.layerCount = 1,
+		.pDepthAttachment = &da,
+	};
+	vkCmdBeginRendering(cmd, &ri);
+	bind_scene(r, cmd, pipe);
+	set_viewport(cmd, w, h);
+	/* Shadow passes draw shadow casters with culling off; the pre-pass culls per material. */
+	draw_objects(r, cmd, pipe, slot, layer, shadow_pass, !shadow_pass);
+	vkCmdEndRendering(cmd);
+}
+
 void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 {
 	if (!r->shadow_layers)
@@ -380,27 +406,8 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	for (uint32_t layer = 0; layer < r->shadow_layers; layer++) {
-		VkRenderingAttachmentInfo da = {
-			.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-			.imageView = r->shadow_layer_views[layer],
-			.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-			.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-			.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-			.clearValue = {.depthStencil = {1.0f, 0}},
-		};
-		VkRenderingInfo ri = {
-			.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
-			.renderArea = {{0, 0}, {n, n}},
-			.layerCount = 1,
-			.pDepthAttachment = &da,
-		};
-		vkCmdBeginRendering(cmd, &ri);
-		bind_scene(r, cmd, &r->shadow_pipe);
-		set_viewport(cmd, n, n);
-		draw_objects(r, cmd, &r->shadow_pipe, slot, layer, 1, 0);
-		vkCmdEndRendering(cmd);
-	}
+	for (uint32_t layer = 0; layer < r->shadow_layers; layer++)
+		depth_only_pass(r, cmd, r->shadow_layer_views[layer], n, n, &r->shadow_pipe, slot, layer, 1);
 	vkdev_barrier_image(cmd, &r->shadow, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
 			    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
@@ -417,25 +424,7 @@ void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	VkRenderingAttachmentInfo da = {
-		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-		.imageView = r->depth.view,
-		.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-		.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-		.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-		.clearValue = {.depthStencil = {1.0f, 0}},
-	};
-	VkRenderingInfo ri = {
-		.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
-		.renderArea = {{0, 0}, {w, h}},
-		.layerCount = 1,
-		.pDepthAttachment = &da,
-	};
-	vkCmdBeginRendering(cmd, &ri);
-	bind_scene(r, cmd, &r->depth_pipe);
-	set_viewport(cmd, w, h);
-	draw_objects(r, cmd, &r->depth_pipe, slot, 0, 0, 1);
-	vkCmdEndRendering(cmd);
+	depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, slot, 0, 0);
 	VkMemoryBarrier2 mb = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
 		.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
