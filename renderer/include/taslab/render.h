@@ -40,7 +40,7 @@ typedef struct render_method_info {
 const render_method_info *render_methods(size_t *count);
 
 typedef struct render_desc {
-	const scene *scene;
+	const struct scene *scene;
 	int camera;             /* index into scene->cameras */
 	uint32_t width, height;
 	float fps;              /* frame f is at t = f / fps; 0 = the scene's fps */
