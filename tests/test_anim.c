@@ -138,11 +138,33 @@ static void test_motions(void **state)
 	assert_memory_equal(&a, &b, sizeof a);
 }
 
+static void test_fall(void **state)
+{
+	(void)state;
+	/* Dropped from y = 5 onto a floor at 0, g = 10, e = 0.5 (hand-computed):
+	 * impact at 1 s with 10 m/s; y(0.5) = 5 - 5*0.25 = 3.75; rebound at 5 m/s lasting 1 s, peak at 1.5 s:
+	 * 5*0.5 - 5*0.25 = 1.25; second rebound at 2.5 m/s from 2 s: y(2.25) = 2.5*0.25 - 5*0.0625 = 0.3125.
+	 * Horizontal 2 m/s for 1 s, then 1 m/s for 1 s, then 0.5 m/s: x(2.25) = 2 + 1 + 0.125 = 3.125. */
+	anim_motion f = {.kind = ANIM_MOTION_FALL, .velocity = {2, 0, 0}, .gravity = 10, .floor_y = 0, .restitution = 0.5f};
+	const float t[] = {0.5f, 1.0f, 1.5f, 2.0f, 2.25f, 60.0f};
+	const float y[] = {3.75f, 0.0f, 1.25f, 0.0f, 0.3125f, 0.0f};
+	for (int i = 0; i < 6; i++) {
+		tlm_trs trs = tlm_trs_identity();
+		trs.t.y = 5;
+		anim_motion_apply(&f, t[i], &trs);
+		if (fabsf(trs.t.y - y[i]) > 1e-4f)
+			fail_msg("fall: y(%g) = %g, expected %g", t[i], trs.t.y, y[i]);
+		if (i == 4)
+			near(trs.t.x, 3.125f);
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_step),     cmocka_unit_test(test_linear),   cmocka_unit_test(test_cubicspline),
 		cmocka_unit_test(test_rotation_slerp), cmocka_unit_test(test_validate), cmocka_unit_test(test_motions),
+		cmocka_unit_test(test_fall),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -161,6 +161,7 @@ const char *anim_motion_kind_name(anim_motion_kind kind)
 	case ANIM_MOTION_ORBIT: return "orbit";
 	case ANIM_MOTION_BOB: return "bob";
 	case ANIM_MOTION_TRACKS: return "keyframes";
+	case ANIM_MOTION_FALL: return "fall";
 	default: return "invalid";
 	}
 }
@@ -171,6 +172,43 @@ static void plane_basis(tlm_vec3 n, tlm_vec3 *u, tlm_vec3 *v)
 	tlm_vec3 ref = fabsf(n.x) < 0.9f ? tlm_v3(1, 0, 0) : tlm_v3(0, 0, 1);
 	*u = tlm_v3_normalize_or(tlm_v3_sub(ref, tlm_v3_scale(n, tlm_v3_dot(ref, n))), tlm_v3(1, 0, 0));
 	*v = tlm_v3_cross(n, *u);
+}
+
+/* Ballistic fall with bounces, in closed form (no integration, so any time can be evaluated).
+ * Segment 0: from height y0 with vertical speed vy until y = floor: y(s) = y0 + vy s - g s^2 / 2,
+ * impact after s1 = (vy + sqrt(vy^2 + 2 g (y0 - floor))) / g with speed v = g s1 - vy.
+ * Segment k >= 1: leaves the floor upwards at u_k = e^k v, lasts 2 u_k / g. Horizontal speed is
+ * multiplied by e at each impact. Bounces below 1 mm/s end the motion: the object rests. */
+static void fall_apply(const anim_motion *m, double tau, tlm_trs *trs)
+{
+	double g = m->gravity > 0.0f ? m->gravity : 9.81;
+	double e = m->restitution;
+	double x = trs->t.x, z = trs->t.z, y0 = trs->t.y, fl = m->floor_y;
+	double vx = m->velocity.x, vz = m->velocity.z, vy = m->velocity.y;
+	double h = y0 > fl ? y0 - fl : 0.0;
+	double s1 = (vy + sqrt(vy * vy + 2.0 * g * h)) / g;
+	if (tau <= s1) {
+		trs->t = tlm_v3((float)(x + vx * tau), (float)(y0 + vy * tau - 0.5 * g * tau * tau), (float)(z + vz * tau));
+		return;
+	}
+	x += vx * s1;
+	z += vz * s1;
+	tau -= s1;
+	double u = e * (g * s1 - vy);
+	for (int k = 0; k < 200 && u > 1e-3; k++) {
+		double d = 2.0 * u / g;
+		vx *= e;
+		vz *= e;
+		if (tau <= d) {
+			trs->t = tlm_v3((float)(x + vx * tau), (float)(fl + u * tau - 0.5 * g * tau * tau), (float)(z + vz * tau));
+			return;
+		}
+		x += vx * d;
+		z += vz * d;
+		tau -= d;
+		u *= e;
+	}
+	trs->t = tlm_v3((float)x, (float)fl, (float)z);
 }
 
 void anim_motion_apply(const anim_motion *m, float t, tlm_trs *trs)
@@ -202,6 +240,9 @@ void anim_motion_apply(const anim_motion *m, float t, tlm_trs *trs)
 	case ANIM_MOTION_TRACKS:
 		for (size_t i = 0; i < m->track_count; i++)
 			anim_track_apply(&m->tracks[i], tt, trs);
+		break;
+	case ANIM_MOTION_FALL:
+		fall_apply(m, tt, trs);
 		break;
 	default: break;
 	}

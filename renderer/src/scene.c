@@ -291,6 +291,14 @@ static int parse_motion(jp *c, json_t *m, const char *path, anim_motion *out)
 		    jnum(c, m, "frequency_hz", path, 0.5f, 0, 1000, &out->frequency_hz) ||
 		    jnum(c, m, "phase_deg", path, 0, -big, big, &out->phase_deg))
 			return SCENE_ERR_SCHEMA;
+	} else if (!strcmp(type, "fall")) {
+		static const char *const k[] = {"type", "velocity", "gravity", "floor_y", "restitution", "start_s", NULL};
+		out->kind = ANIM_MOTION_FALL;
+		if (jkeys(c, m, path, k) || jv3(c, m, "velocity", path, tlm_v3(0, 0, 0), 0, &out->velocity) ||
+		    jnum(c, m, "gravity", path, 9.81f, 0.01f, 1000, &out->gravity) ||
+		    jnum(c, m, "floor_y", path, 0, -big, big, &out->floor_y) ||
+		    jnum(c, m, "restitution", path, 0.5f, 0, 0.99f, &out->restitution))
+			return SCENE_ERR_SCHEMA;
 	} else if (!strcmp(type, "keyframes")) {
 		static const char *const k[] = {"type", "interpolation", "times", "translation", "rotation",
 						"rotation_deg", "scale", "start_s", NULL};
@@ -336,7 +344,7 @@ static int parse_motion(jp *c, json_t *m, const char *path, anim_motion *out)
 	} else {
 		char p[PATH_MAX_LEN];
 		subpath(p, path, "type");
-		return jfail(c, p, "unknown motion type '%s' (use spin, orbit, bob or keyframes)", type);
+		return jfail(c, p, "unknown motion type '%s' (use spin, orbit, bob, fall or keyframes)", type);
 	}
 	return 0;
 }

@@ -73,6 +73,7 @@ typedef enum anim_motion_kind {
 	                     u rotated about the axis by a, counter-clockwise seen from +axis (as SPIN) */
 	ANIM_MOTION_BOB,   /* translation += amplitude * sin(2*pi*frequency*t + phase) */
 	ANIM_MOTION_TRACKS,/* keyframe tracks (translation / rotation / scale) */
+	ANIM_MOTION_FALL,  /* ballistic fall from the current translation with bounces on a floor, closed form */
 	ANIM_MOTION_COUNT
 } anim_motion_kind;
 
@@ -86,6 +87,10 @@ typedef struct anim_motion {
 	float frequency_hz; /* BOB */
 	float phase_deg;    /* SPIN, ORBIT, BOB: value at t = 0 */
 	float start_s;      /* motion is frozen at its t = start_s state before start_s */
+	tlm_vec3 velocity;  /* FALL: initial velocity (m/s) */
+	float gravity;      /* FALL: m/s^2, pulling along -Y */
+	float floor_y;      /* FALL: height of the object origin when resting on the floor */
+	float restitution;  /* FALL: bounce speed ratio 0..1 (also applied to horizontal speed at each bounce) */
 	size_t track_count; /* TRACKS */
 	anim_track *tracks; /* TRACKS: owned */
 } anim_motion;
