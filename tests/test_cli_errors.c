@@ -128,6 +128,11 @@ static void test_help_and_version(void **state)
 	assert_int_equal(tu_run(cmd, out, sizeof out), 0);
 	assert_non_null(strstr(out, "--scene"));
 	assert_non_null(strstr(out, "tasa"));
+	snprintf(cmd, sizeof cmd, "%s scenes", TASLAB_BINARY);
+	assert_int_equal(tu_run(cmd, out, sizeof out), 0);
+	assert_non_null(strstr(out, "turntable"));
+	assert_non_null(strstr(out, "orbit "));
+	assert_non_null(strstr(out, "stationary"));
 	snprintf(cmd, sizeof cmd, "%s frobnicate", TASLAB_BINARY);
 	assert_int_equal(tu_run(cmd, out, sizeof out), 2);
 	assert_non_null(strstr(out, "unknown command"));

@@ -1,0 +1,69 @@
+/* cmd_scenes.c — `taslab scenes`: lists the built-in scenes with their camera paths. */
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "taslab/scene.h"
+
+#ifndef TASLAB_SCENES_DIR
+#define TASLAB_SCENES_DIR "scenes"
+#endif
+
+static void scenes_usage(FILE *out)
+{
+	fprintf(out, "usage: taslab scenes\n\nLists the built-in scenes (scenes/*.json, or $TASLAB_SCENES) with their\n"
+		     "duration, lights and camera paths (stationary or moving), for 'taslab render --scene/--camera'.\n");
+}
+
+static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+static int scenes_run(int argc, char **argv)
+{
+	if (argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+		scenes_usage(stdout);
+		return CLI_EXIT_OK;
+	}
+	if (argc > 1) {
+		fprintf(stderr, "taslab scenes: unexpected argument '%s' (see 'taslab scenes --help')\n", argv[1]);
+		return CLI_EXIT_USAGE;
+	}
+	const char *dir = getenv("TASLAB_SCENES");
+	if (!dir || !*dir)
+		dir = TASLAB_SCENES_DIR;
+	DIR *d = opendir(dir);
+	if (!d) {
+		fprintf(stderr, "taslab scenes: cannot open the scenes folder %s (set TASLAB_SCENES)\n", dir);
+		return CLI_EXIT_FAILURE;
+	}
+	char *names[256];
+	size_t n = 0;
+	struct dirent *e;
+	while ((e = readdir(d)) && n < 256) {
+		size_t len = strlen(e->d_name);
+		if (len > 5 && !strcmp(e->d_name + len - 5, ".json") && e->d_name[0] != '.')
+			names[n++] = strdup(e->d_name);
+	}
+	closedir(d);
+	qsort(names, n, sizeof names[0], cmp_str);
+	int status = CLI_EXIT_OK;
+	for (size_t i = 0; i < n; i++) {
+		char path[4096], err[1024];
+		scene *s = NULL;
+		snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+		if (!names[i] || scene_load(path, &s, err, sizeof err)) {
+			fprintf(stderr, "taslab scenes: %s\n", names[i] ? err : "out of memory");
+			status = CLI_EXIT_FAILURE;
+		} else {
+			printf("%s  (%.1f s at %g fps, %zu objects, %zu lights)\n", s->name, (double)s->duration_s,
+			       (double)s->fps, s->object_count, s->light_count);
+			for (size_t c = 0; c < s->camera_count; c++)
+				printf("    camera %-16s %s\n", s->cameras[c].name, scene_camera_motion_name(s->cameras[c].motion));
+			scene_destroy(&s);
+		}
+		free(names[i]);
+	}
+	return status;
+}
+
+const cli_command cli_cmd_scenes = {"scenes", "list built-in scenes and their camera paths", scenes_run, scenes_usage};
