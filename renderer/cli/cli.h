@@ -26,6 +26,10 @@ int cli_parse_frames(const char *s, uint32_t *a, uint32_t *b_inout, bool *b_give
 /* A finite number within [lo, hi]; `what` names the option in messages. */
 int cli_parse_float(const char *s, const char *what, double lo, double hi, double *out, char *err, size_t err_size);
 
+/* For commands without options: handles --help (returns CLI_EXIT_OK after printing usage) and rejects
+ * any other argument (CLI_EXIT_USAGE); returns -1 when the command should run. */
+int cli_no_args(int argc, char **argv, void (*usage)(FILE *out));
+
 typedef struct cli_render_opts {
 	const char *scene, *camera, *method, *out, *device;
 	const char *frames;   /* unparsed until the scene (its duration) is known */

@@ -12,14 +12,9 @@ static void devices_usage(FILE *out)
 
 static int devices_run(int argc, char **argv)
 {
-	if (argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-		devices_usage(stdout);
-		return CLI_EXIT_OK;
-	}
-	if (argc > 1) {
-		fprintf(stderr, "taslab devices: unexpected argument '%s' (see 'taslab devices --help')\n", argv[1]);
-		return CLI_EXIT_USAGE;
-	}
+	int st = cli_no_args(argc, argv, devices_usage);
+	if (st >= 0)
+		return st;
 	char list[2048];
 	VkResult r = vkdev_list(list, sizeof list);
 	if (r) {

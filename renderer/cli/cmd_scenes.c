@@ -20,14 +20,9 @@ static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *
 
 static int scenes_run(int argc, char **argv)
 {
-	if (argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-		scenes_usage(stdout);
-		return CLI_EXIT_OK;
-	}
-	if (argc > 1) {
-		fprintf(stderr, "taslab scenes: unexpected argument '%s' (see 'taslab scenes --help')\n", argv[1]);
-		return CLI_EXIT_USAGE;
-	}
+	int st = cli_no_args(argc, argv, scenes_usage);
+	if (st >= 0)
+		return st;
 	const char *dir = getenv("TASLAB_SCENES");
 	if (!dir || !*dir)
 		dir = TASLAB_SCENES_DIR;

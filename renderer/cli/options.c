@@ -114,3 +114,16 @@ int cli_resolve_scene(const char *arg, char *path, size_t path_size, char *err, 
 		 arg, TASLAB_SCENES_DIR);
 	return -1;
 }
+
+int cli_no_args(int argc, char **argv, void (*usage)(FILE *out))
+{
+	if (argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+		usage(stdout);
+		return CLI_EXIT_OK;
+	}
+	if (argc > 1) {
+		fprintf(stderr, "taslab %s: unexpected argument '%s' (see 'taslab %s --help')\n", argv[0], argv[1], argv[0]);
+		return CLI_EXIT_USAGE;
+	}
+	return -1;
+}
