@@ -263,7 +263,7 @@ void render_update_state(render *r, uint32_t slot, double time_s)
 	for (size_t i = 0; i < s->object_count; i++) {
 		mat_copy(ob[i].world, r->world[i]);
 		mat_copy(ob[i].normal_matrix, tlm_mat4_transpose(tlm_mat4_inverse(r->world[i])));
-		ob[i].material[0] = (uint32_t)s->objects[i].material;
+		ob[i].material[0] = s->objects[i].material >= 0 ? (uint32_t)s->objects[i].material : 0u;
 	}
 	scene_camera_state cam = scene_camera_eval(s, r->desc.camera, t);
 	tlm_mat4 view = tlm_mat4_look_at(cam.eye, cam.target, tlm_v3(0, 1, 0));
@@ -360,8 +360,8 @@ static void draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *
 	const scene *s = r->scene;
 	for (size_t i = 0; i < s->object_count; i++) {
 		const scene_object *o = &s->objects[i];
-		if (shadow_casters_only && !o->casts_shadow)
-			continue;
+		if (o->mesh < 0 || (shadow_casters_only && !o->casts_shadow))
+			continue; /* transform-only node */
 		gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer};
 		vkCmdPushConstants(cmd, p->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
 		if (set_cull)

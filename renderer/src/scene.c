@@ -3,6 +3,7 @@
  * errors that name the file and the JSON path, so a typo never silently changes an experiment. */
 #include "taslab/scene.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <jansson.h>
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gltf.h"
 #include "procgen.h"
 
 #define PATH_MAX_LEN 256
@@ -457,9 +459,11 @@ static int parse_textures(jp *c, scene *s, json_t *root)
 static int parse_materials(jp *c, scene *s, json_t *root)
 {
 	json_t *t = json_object_get(root, "materials");
-	if (!json_is_object(t) || json_object_size(t) == 0)
-		return jfail(c, "$.materials", "expected an object mapping names to materials (at least one)");
-	s->materials = calloc(json_object_size(t), sizeof *s->materials);
+	if (!t)
+		return 0;
+	if (!json_is_object(t))
+		return jfail(c, "$.materials", "expected an object mapping names to materials");
+	s->materials = calloc(json_object_size(t) + 1, sizeof *s->materials);
 	if (!s->materials)
 		return SCENE_ERR_NOMEM;
 	const char *name;
@@ -506,9 +510,11 @@ static int parse_materials(jp *c, scene *s, json_t *root)
 static int parse_meshes(jp *c, scene *s, json_t *root)
 {
 	json_t *t = json_object_get(root, "meshes");
-	if (!json_is_object(t) || json_object_size(t) == 0)
-		return jfail(c, "$.meshes", "expected an object mapping names to meshes (at least one)");
-	s->meshes = calloc(json_object_size(t), sizeof *s->meshes);
+	if (!t)
+		return 0;
+	if (!json_is_object(t))
+		return jfail(c, "$.meshes", "expected an object mapping names to meshes");
+	s->meshes = calloc(json_object_size(t) + 1, sizeof *s->meshes);
 	if (!s->meshes)
 		return SCENE_ERR_NOMEM;
 	const char *name;
@@ -544,9 +550,11 @@ static int parse_meshes(jp *c, scene *s, json_t *root)
 static int parse_objects(jp *c, scene *s, json_t *root)
 {
 	json_t *a = json_object_get(root, "objects");
+	if (!a && json_object_get(root, "assets"))
+		return 0;
 	if (!json_is_array(a) || json_array_size(a) == 0)
-		return jfail(c, "$.objects", "expected a non-empty array of objects");
-	s->objects = calloc(json_array_size(a), sizeof *s->objects);
+		return jfail(c, "$.objects", "expected a non-empty array of objects (or glTF \"assets\")");
+	s->objects = calloc(json_array_size(a) + 1, sizeof *s->objects);
 	if (!s->objects)
 		return SCENE_ERR_NOMEM;
 	for (size_t i = 0; i < json_array_size(a); i++) {
@@ -567,8 +575,8 @@ static int parse_objects(jp *c, scene *s, json_t *root)
 			return SCENE_ERR_SCHEMA;
 		if (i > 0 && FIND(s->objects, i, o->name) >= 0)
 			return jfail(c, p, "duplicate object name '%s'", o->name);
-		o->mesh = FIND(s->meshes, s->mesh_count, mesh);
-		o->material = FIND(s->materials, s->material_count, mat);
+		o->mesh = s->mesh_count ? FIND(s->meshes, s->mesh_count, mesh) : -1;
+		o->material = s->material_count ? FIND(s->materials, s->material_count, mat) : -1;
 		if (o->mesh < 0) {
 			subpath(pp, p, "mesh");
 			return jfail(c, pp, "no mesh named '%s' in $.meshes", mesh);
@@ -584,6 +592,67 @@ static int parse_objects(jp *c, scene *s, json_t *root)
 				subpath(pp, p, "parent");
 				return jfail(c, pp, "no earlier object named '%s' (parents must come before children)", parent);
 			}
+		}
+	}
+	return 0;
+}
+
+static int grow_objects(scene *s, size_t extra)
+{
+	scene_object *n = realloc(s->objects, (s->object_count + extra + 1) * sizeof *n);
+	if (!n)
+		return SCENE_ERR_NOMEM;
+	memset(n + s->object_count, 0, (extra + 1) * sizeof *n);
+	s->objects = n;
+	return 0;
+}
+
+/* "assets": glTF files placed in the scene; each gets a root object carrying the placement and motions,
+ * under which the asset's node hierarchy hangs. Paths are relative to the scene file. */
+static int parse_assets(jp *c, scene *s, json_t *root)
+{
+	json_t *a = json_object_get(root, "assets");
+	if (!a)
+		return 0;
+	if (!json_is_array(a))
+		return jfail(c, "$.assets", "expected an array of glTF assets");
+	for (size_t i = 0; i < json_array_size(a); i++) {
+		static const char *const k[] = {"name", "gltf", "parent", "translation", "rotation", "rotation_deg",
+						"scale", "animation", NULL};
+		json_t *d = json_array_get(a, i);
+		char p[PATH_MAX_LEN], pp[PATH_MAX_LEN], file[4096];
+		subidx(p, "$.assets", i);
+		const char *name, *gl, *parent;
+		if (jkeys(c, d, p, k) || jstr(c, d, "name", p, NULL, &name) || jstr(c, d, "gltf", p, NULL, &gl) ||
+		    jstr(c, d, "parent", p, "", &parent))
+			return SCENE_ERR_SCHEMA;
+		int rc = grow_objects(s, 1);
+		if (rc)
+			return rc;
+		scene_object *o = &s->objects[s->object_count];
+		o->mesh = o->material = o->parent = -1;
+		if (jname(c, name, p, o->name) || parse_trs(c, d, p, &o->base))
+			return SCENE_ERR_SCHEMA;
+		s->object_count++;
+		if (parse_motions(c, d, p, &o->motion_count, &o->motions))
+			return SCENE_ERR_SCHEMA;
+		if (FIND(s->objects, s->object_count - 1, o->name) >= 0)
+			return jfail(c, p, "duplicate object name '%s'", o->name);
+		if (parent[0] && (o->parent = FIND(s->objects, s->object_count - 1, parent)) < 0) {
+			subpath(pp, p, "parent");
+			return jfail(c, pp, "no object named '%s'", parent);
+		}
+		const char *slash = strrchr(c->file, '/');
+		if (gl[0] == '/' || !slash)
+			snprintf(file, sizeof file, "%s", gl);
+		else
+			snprintf(file, sizeof file, "%.*s/%s", (int)(slash - c->file), c->file, gl);
+		char gerr[1024];
+		rc = gltf_append(s, file, (int)s->object_count - 1, NULL, gerr, sizeof gerr);
+		if (rc) {
+			subpath(pp, p, "gltf");
+			jfail(c, pp, "%s", gerr);
+			return rc == SCENE_ERR_NOMEM ? rc : SCENE_ERR_SCHEMA;
 		}
 	}
 	return 0;
@@ -726,7 +795,7 @@ static int parse_root(jp *c, scene *s, json_t *root)
 {
 	static const char *const k[] = {"taslab_scene", "name", "duration_s", "fps", "exposure", "ambient", "sky",
 					"texture_size", "shadow_map_size", "textures", "materials", "meshes",
-					"objects", "lights", "cameras", NULL};
+					"objects", "assets", "lights", "cameras", NULL};
 	if (!json_is_object(root))
 		return jfail(c, "$", "expected a JSON object");
 	if (jkeys(c, root, "$", k))
@@ -750,8 +819,14 @@ static int parse_root(jp *c, scene *s, json_t *root)
 		return jfail(c, "$.texture_size", "must be a power of two");
 	int rc;
 	if ((rc = parse_textures(c, s, root)) || (rc = parse_materials(c, s, root)) || (rc = parse_meshes(c, s, root)) ||
-	    (rc = parse_objects(c, s, root)) || (rc = parse_lights(c, s, root)) || (rc = parse_cameras(c, s, root)))
+	    (rc = parse_objects(c, s, root)) || (rc = parse_assets(c, s, root)) || (rc = parse_lights(c, s, root)) ||
+	    (rc = parse_cameras(c, s, root)))
 		return rc;
+	size_t drawable = 0;
+	for (size_t i = 0; i < s->object_count; i++)
+		drawable += s->objects[i].mesh >= 0;
+	if (!drawable)
+		return jfail(c, "$.objects", "the scene has no object with a mesh: nothing to render");
 	if (scene_shadow_layer_count(s) > SCENE_MAX_SHADOW_LAYERS)
 		return jfail(c, "$.lights", "shadowed lights need %u shadow-map layers, at most %d are supported "
 				 "(a point light takes 6)", scene_shadow_layer_count(s), SCENE_MAX_SHADOW_LAYERS);
@@ -787,9 +862,154 @@ int scene_load_from_memory(const char *json, size_t len, const char *origin, sce
 	return 0;
 }
 
+/* Grows a scene array by `extra` zeroed entries (keeps one spare). */
+#define GROW(arr, count, extra)                                                                                    \
+	do {                                                                                                       \
+		void *p_ = realloc((arr), ((count) + (extra) + 1) * sizeof *(arr));                                \
+		if (!p_)                                                                                           \
+			goto nomem;                                                                                \
+		(arr) = p_;                                                                                        \
+		memset((arr) + (count), 0, ((extra) + 1) * sizeof *(arr));                                         \
+	} while (0)
+
+/* A scene around a bare glTF file (`taslab render --scene model.gltf`): the asset on a floor, a sun, a key
+ * spot and a fill light scaled to the asset's bounds at t = 0, and two camera paths framing the bounds:
+ * `orbit` (moving, a 90 degree arc over 5 s) and `front` (stationary), plus the asset's own cameras. */
+static int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
+{
+	scene *s = calloc(1, sizeof *s);
+	tlm_mat4 *world = NULL;
+	if (!s || !(s->path = strdup(path)))
+		goto nomem;
+	const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+	size_t n = 0;
+	for (const char *q = base; *q && *q != '.' && n < SCENE_NAME_MAX - 1; q++)
+		s->name[n++] = (isalnum((unsigned char)*q) || *q == '-' || *q == '_') ? *q : '_';
+	if (!n)
+		s->name[n++] = 'g';
+	s->duration_s = 5.0f;
+	s->fps = 60.0f;
+	s->exposure = 1.0f;
+	s->ambient[0] = s->ambient[1] = s->ambient[2] = 0.03f;
+	s->sky[0] = 0.05f, s->sky[1] = 0.06f, s->sky[2] = 0.08f;
+	s->texture_size = 1024;
+	s->shadow_map_size = 1024;
+	int rc = gltf_append(s, path, -1, NULL, err, err_size);
+	if (rc)
+		goto fail;
+	world = calloc(s->object_count + 1, sizeof *world);
+	if (!world)
+		goto nomem;
+	scene_eval(s, 0.0f, world, NULL);
+	tlm_vec3 lo = tlm_v3(1e30f, 1e30f, 1e30f), hi = tlm_v3(-1e30f, -1e30f, -1e30f);
+	for (size_t i = 0; i < s->object_count; i++) {
+		if (s->objects[i].mesh < 0)
+			continue;
+		const scene_mesh *m = &s->meshes[s->objects[i].mesh];
+		for (int k = 0; k < 8; k++) {
+			tlm_vec3 p = tlm_v3(k & 1 ? m->bounds_max.x : m->bounds_min.x, k & 2 ? m->bounds_max.y : m->bounds_min.y,
+					    k & 4 ? m->bounds_max.z : m->bounds_min.z);
+			p = tlm_mat4_mul_point(world[i], p);
+			lo = tlm_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+			hi = tlm_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+		}
+	}
+	if (lo.x > hi.x) {
+		snprintf(err, err_size, "%s: the glTF has no triangle meshes to render", path);
+		rc = SCENE_ERR_SCHEMA;
+		goto fail;
+	}
+	tlm_vec3 c = tlm_v3_scale(tlm_v3_add(lo, hi), 0.5f);
+	float r = fmaxf(0.5f * tlm_v3_length(tlm_v3_sub(hi, lo)), 1e-3f);
+	/* floor */
+	GROW(s->meshes, s->mesh_count, 1);
+	GROW(s->materials, s->material_count, 1);
+	GROW(s->objects, s->object_count, 1);
+	procgen_mesh_desc fd = {.kind = "plane", .size = {6 * r, 0, 6 * r}, .segments = 8, .uv_scale = 1};
+	char why[200];
+	if (procgen_mesh(&fd, &s->meshes[s->mesh_count], why, sizeof why))
+		goto nomem;
+	snprintf(s->meshes[s->mesh_count].name, SCENE_NAME_MAX, "taslab_floor");
+	scene_material *fm = &s->materials[s->material_count];
+	snprintf(fm->name, SCENE_NAME_MAX, "taslab_floor");
+	fm->base_color[0] = fm->base_color[1] = fm->base_color[2] = 0.35f, fm->base_color[3] = 1;
+	fm->roughness = 0.8f;
+	fm->normal_scale = fm->occlusion_strength = 1;
+	fm->base_color_tex = fm->metal_rough_tex = fm->normal_tex = fm->emissive_tex = fm->occlusion_tex = SCENE_TEX_NONE;
+	scene_object *fo = &s->objects[s->object_count];
+	snprintf(fo->name, SCENE_NAME_MAX, "taslab_floor");
+	fo->mesh = (int)s->mesh_count++;
+	fo->material = (int)s->material_count++;
+	fo->parent = -1;
+	fo->casts_shadow = false;
+	fo->base = tlm_trs_identity();
+	fo->base.t = tlm_v3(c.x, lo.y - 1e-3f * r, c.z);
+	s->object_count++;
+	/* lights: intensities scale with distance^2 so the asset is lit alike at any size */
+	GROW(s->lights, s->light_count, 3);
+	scene_light *L = s->lights;
+	float d = 3.0f * r;
+	L[0] = (scene_light){.name = "sun", .kind = SCENE_LIGHT_DIRECTIONAL, .color = {1, 0.96f, 0.9f}, .intensity = 2.0f,
+			     .casts_shadow = true, .shadow_extent = 2.0f * r, .shadow_center = c};
+	L[1] = (scene_light){.name = "key", .kind = SCENE_LIGHT_SPOT, .color = {1, 0.9f, 0.8f}, .intensity = 2.5f * d * d,
+			     .inner_cone_deg = 20, .outer_cone_deg = 32, .casts_shadow = true};
+	L[2] = (scene_light){.name = "fill", .kind = SCENE_LIGHT_POINT, .color = {0.6f, 0.7f, 1.0f}, .intensity = 0.8f * d * d};
+	tlm_vec3 sun_dir = tlm_v3_normalize_or(tlm_v3(-0.4f, -1.0f, -0.3f), tlm_v3(0, -1, 0));
+	tlm_vec3 key_pos = tlm_v3_add(c, tlm_v3(0.6f * d, 0.8f * d, 0.6f * d));
+	tlm_vec3 dirs[2] = {sun_dir, tlm_v3_normalize_or(tlm_v3_sub(c, key_pos), tlm_v3(0, -1, 0))};
+	for (int i = 0; i < 3; i++) {
+		L[i].base = tlm_trs_identity();
+		if (i < 2) { /* orientation turning -Z onto the direction */
+			tlm_vec3 from = tlm_v3(0, 0, -1), ax = tlm_v3_cross(from, dirs[i]);
+			L[i].base.r = tlm_quat_normalize((tlm_quat){ax.x, ax.y, ax.z, 1.0f + tlm_v3_dot(from, dirs[i])});
+		}
+	}
+	L[1].base.t = key_pos;
+	L[2].base.t = tlm_v3_add(c, tlm_v3(-0.8f * d, 0.4f * d, 0.5f * d));
+	s->light_count = 3;
+	/* cameras: glTF cameras (if any) were appended by gltf_append; put ours first */
+	size_t own = s->camera_count;
+	GROW(s->cameras, s->camera_count, 2);
+	memmove(s->cameras + 2, s->cameras, own * sizeof *s->cameras);
+	memset(s->cameras, 0, 2 * sizeof *s->cameras);
+	float dist = r / tanf(0.5f * 50.0f * TLM_PI / 180.0f) * 1.1f;
+	for (int k = 0; k < 2; k++) {
+		scene_camera *cam = &s->cameras[k];
+		snprintf(cam->name, SCENE_NAME_MAX, k ? "front" : "orbit");
+		cam->motion = k ? SCENE_CAMERA_STATIONARY : SCENE_CAMERA_MOVING;
+		cam->fov_deg = 50.0f;
+		cam->znear = fmaxf(1e-3f, 0.01f * dist);
+		cam->zfar = 20.0f * dist;
+		cam->key_count = k ? 1 : 5;
+		cam->keys = calloc(cam->key_count, sizeof *cam->keys);
+		if (!cam->keys)
+			goto nomem;
+		for (size_t j = 0; j < cam->key_count; j++) {
+			float a = (k ? 20.0f : -45.0f + 22.5f * (float)j) * TLM_PI / 180.0f;
+			cam->keys[j].t = 1.25f * (float)j;
+			cam->keys[j].position = tlm_v3_add(c, tlm_v3(dist * sinf(a), 0.35f * dist, dist * cosf(a)));
+			cam->keys[j].target = c;
+		}
+	}
+	s->camera_count += 2;
+	free(world);
+	*out = s;
+	return 0;
+nomem:
+	snprintf(err, err_size, "%s: out of memory", path);
+	rc = SCENE_ERR_NOMEM;
+fail:
+	free(world);
+	scene_destroy(&s);
+	return rc;
+}
+
 int scene_load(const char *path, scene **out, char *err, size_t err_size)
 {
 	*out = NULL;
+	size_t plen = strlen(path);
+	if ((plen > 5 && !strcmp(path + plen - 5, ".gltf")) || (plen > 4 && !strcmp(path + plen - 4, ".glb")))
+		return scene_from_gltf(path, out, err, err_size);
 	FILE *f = fopen(path, "rb");
 	if (!f) {
 		snprintf(err, err_size, "%s: cannot open scene file: %s (built-in scenes are in scenes/; see 'taslab render --help')",

@@ -1,0 +1,20 @@
+/* gltf.h (private) — appends a glTF 2.0 asset (.gltf or .glb) to a scene being built (gltf.cpp).
+ * Adds materials, textures (resampled to scene->texture_size), meshes (one per primitive), one object
+ * per node (parent = `parent`, or -1) plus one child object per primitive, node animations as
+ * keyframe motions, and perspective cameras as stationary camera paths. On success *root_object is
+ * the object all of the asset's root nodes hang from. Errors: negative SCENE_ERR_*, message in err. */
+#ifndef TASLAB_GLTF_H
+#define TASLAB_GLTF_H
+
+#include "taslab/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+int gltf_append(scene *s, const char *path, int parent, int *root_object, char *err, size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
