@@ -26,7 +26,7 @@ static void render_usage(FILE *out)
 		"  RUN/stats.csv (per frame), RUN/manifest.json (written last: the run is complete).\n"
 		"\n"
 		"options:\n"
-		"  --scene S         built-in scene name (see scenes/) or path to a scene .json file\n"
+		"  --scene S         built-in scene name (see taslab scenes), a scene .json file, or a .gltf/.glb\n"
 		"  --camera C        camera path name (default: the scene's first)\n"
 		"  --method M        rendering method (default: ref)\n"
 		"  --threshold T     threshold in 8-bit code values for adaptive methods (default 8)\n"
