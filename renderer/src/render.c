@@ -7,9 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/depth_mask_frag.h"
 #include "shaders/display_comp.h"
 #include "shaders/scene_vert.h"
 #include "shaders/shade_frag.h"
+#include "shaders/shadow_mask_vert.h"
 #include "shaders/shadow_vert.h"
 #include "shaders/trivial_frag.h"
 
@@ -266,6 +268,7 @@ void render_update_state(render *r, uint32_t slot, double time_s)
 		ob[i].material[0] = s->objects[i].material >= 0 ? (uint32_t)s->objects[i].material : 0u;
 	}
 	scene_camera_state cam = scene_camera_eval(s, r->desc.camera, t);
+	r->eye = cam.eye;
 	tlm_mat4 view = tlm_mat4_look_at(cam.eye, cam.target, tlm_v3(0, 1, 0));
 	tlm_mat4 proj = tlm_mat4_perspective(cam.fov_deg * TLM_PI / 180.0f,
 					     (float)r->desc.width / (float)r->desc.height, cam.znear, cam.zfar);
@@ -354,26 +357,54 @@ static void set_viewport(VkCommandBuffer cmd, uint32_t w, uint32_t h)
 	vkCmdSetScissor(cmd, 0, 1, &sc);
 }
 
+#define ALPHA_BIT(m) (1u << (m))
+#define OPAQUE_BIT ALPHA_BIT(SCENE_ALPHA_OPAQUE)
+#define MASK_BIT ALPHA_BIT(SCENE_ALPHA_MASK)
+#define BLEND_BIT ALPHA_BIT(SCENE_ALPHA_BLEND)
+
+static void draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
+			size_t i, int set_cull)
+{
+	const scene *s = r->scene;
+	const scene_object *o = &s->objects[i];
+	gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer};
+	vkCmdPushConstants(cmd, p->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
+	if (set_cull)
+		vkCmdSetCullMode(cmd, s->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+	const scene_mesh *m = &s->meshes[o->mesh];
+	vkCmdDrawIndexed(cmd, m->index_count, 1, r->mesh_first_index[o->mesh], (int32_t)r->mesh_vertex_offset[o->mesh], 0);
+}
+
+/* Draws the objects whose material alpha mode is in `modes` (ALPHA_BIT set), in scene order. */
 static void draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
-			 int shadow_casters_only, int set_cull)
+			 unsigned modes, int shadow_casters_only, int set_cull)
 {
 	const scene *s = r->scene;
 	for (size_t i = 0; i < s->object_count; i++) {
 		const scene_object *o = &s->objects[i];
 		if (o->mesh < 0 || (shadow_casters_only && !o->casts_shadow))
 			continue; /* transform-only node */
-		gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer};
-		vkCmdPushConstants(cmd, p->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
-		if (set_cull)
-			vkCmdSetCullMode(cmd, s->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
-		const scene_mesh *m = &s->meshes[o->mesh];
-		vkCmdDrawIndexed(cmd, m->index_count, 1, r->mesh_first_index[o->mesh], (int32_t)r->mesh_vertex_offset[o->mesh], 0);
+		if (modes & ALPHA_BIT(s->materials[o->material].alpha_mode))
+			draw_object(r, cmd, p, slot, layer, i, set_cull);
 	}
 }
 
-/* One depth-only rendering into `view` (cleared to 1): shadow layers and the depth pre-pass. */
+static int has_alpha_mode(const render *r, scene_alpha_mode mode)
+{
+	for (size_t i = 0; i < r->scene->object_count; i++) {
+		const scene_object *o = &r->scene->objects[i];
+		if (o->mesh >= 0 && r->scene->materials[o->material].alpha_mode == mode)
+			return 1;
+	}
+	return 0;
+}
+
+/* One depth-only rendering into `view` (cleared to 1): shadow layers and the depth pre-pass. Opaque
+ * objects use `pipe`; alpha-masked ones `mask_pipe` (alpha test in the fragment shader); blended
+ * objects write no depth and cast no shadow. */
 static void depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
-			    const render_pipeline *pipe, uint32_t slot, uint32_t layer, int shadow_pass)
+			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
+			    int shadow_pass)
 {
 	VkRenderingAttachmentInfo da = {
 		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
@@ -393,7 +424,11 @@ static void depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, ui
 	bind_scene(r, cmd, pipe);
 	set_viewport(cmd, w, h);
 	/* Shadow passes draw shadow casters with culling off; the pre-pass culls per material. */
-	draw_objects(r, cmd, pipe, slot, layer, shadow_pass, !shadow_pass);
+	draw_objects(r, cmd, pipe, slot, layer, OPAQUE_BIT, shadow_pass, !shadow_pass);
+	if (mask_pipe->pipeline) {
+		bind_scene(r, cmd, mask_pipe);
+		draw_objects(r, cmd, mask_pipe, slot, layer, MASK_BIT, shadow_pass, !shadow_pass);
+	}
 	vkCmdEndRendering(cmd);
 }
 
@@ -407,7 +442,7 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
 	for (uint32_t layer = 0; layer < r->shadow_layers; layer++)
-		depth_only_pass(r, cmd, r->shadow_layer_views[layer], n, n, &r->shadow_pipe, slot, layer, 1);
+		depth_only_pass(r, cmd, r->shadow_layer_views[layer], n, n, &r->shadow_pipe, &r->shadow_mask_pipe, slot, layer, 1);
 	vkdev_barrier_image(cmd, &r->shadow, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
 			    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
@@ -424,7 +459,7 @@ void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, slot, 0, 0);
+	depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, 0);
 	VkMemoryBarrier2 mb = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
 		.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
@@ -472,7 +507,34 @@ void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot)
 	vkCmdBeginRendering(cmd, &ri);
 	bind_scene(r, cmd, &r->shade_pipe);
 	set_viewport(cmd, w, h);
-	draw_objects(r, cmd, &r->shade_pipe, slot, 0, 0, 1);
+	draw_objects(r, cmd, &r->shade_pipe, slot, 0, OPAQUE_BIT | MASK_BIT, 0, 1);
+	if (r->blend_count) {
+		/* glTF BLEND: "over" compositing after the opaque surfaces, objects sorted back to front by the
+		 * distance of their bounds centre from the camera (per object, not per triangle). */
+		const scene *sc = r->scene;
+		float *dist = malloc(r->blend_count * sizeof *dist);
+		uint32_t n = 0;
+		for (size_t i = 0; dist && i < sc->object_count; i++) {
+			const scene_object *o = &sc->objects[i];
+			if (o->mesh < 0 || sc->materials[o->material].alpha_mode != SCENE_ALPHA_BLEND)
+				continue;
+			const scene_mesh *m = &sc->meshes[o->mesh];
+			tlm_vec3 c = tlm_mat4_mul_point(r->world[i], tlm_v3_scale(tlm_v3_add(m->bounds_min, m->bounds_max), 0.5f));
+			uint32_t k = n++;
+			float d = tlm_v3_length(tlm_v3_sub(c, r->eye));
+			while (k > 0 && dist[k - 1] < d) { /* insertion sort, farthest first; ties keep scene order */
+				dist[k] = dist[k - 1];
+				r->blend_order[k] = r->blend_order[k - 1];
+				k--;
+			}
+			dist[k] = d;
+			r->blend_order[k] = (uint32_t)i;
+		}
+		free(dist);
+		bind_scene(r, cmd, &r->shade_blend_pipe);
+		for (uint32_t k = 0; k < n; k++)
+			draw_object(r, cmd, &r->shade_blend_pipe, slot, 0, r->blend_order[k], 1);
+	}
 	vkCmdEndRendering(cmd);
 	if (r->stats_pool)
 		vkCmdEndQuery(cmd, r->stats_pool, 0);
@@ -525,10 +587,20 @@ void render_pass_readback(render *r, VkCommandBuffer cmd)
 
 /* ------------------------------------------------------------------ pipelines */
 
-static VkResult make_graphics(render *r, const uint32_t *vs, size_t vs_size, const uint32_t *fs, size_t fs_size,
-			      int position_only, int depth_write, VkCompareOp depth_op, int color, int bias,
-			      render_pipeline *out)
+/* A graphics pipeline of the frame pipeline; zero-initialised fields mean "off". */
+typedef struct pipe_desc {
+	const uint32_t *vs, *fs;
+	size_t vs_size, fs_size;
+	unsigned attributes;   /* bit i: vertex attribute location i (0 position, 1 normal, 2 uv, 3 tangent) */
+	int depth_write, color, bias, blend;
+	VkCompareOp depth_op;
+	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
+} pipe_desc;
+
+static VkResult make_graphics(render *r, const pipe_desc *pd, render_pipeline *out)
 {
+	const uint32_t *vs = pd->vs, *fs = pd->fs;
+	size_t vs_size = pd->vs_size, fs_size = pd->fs_size;
 	VkShaderModule vm = VK_NULL_HANDLE, fm = VK_NULL_HANDLE;
 	VkResult res = vkdev_shader_module(r->dev, vs, vs_size, &vm);
 	if (!res && fs)
@@ -545,24 +617,32 @@ static VkResult make_graphics(render *r, const uint32_t *vs, size_t vs_size, con
 	};
 	if ((res = vkCreatePipelineLayout(r->dev->device, &li, NULL, &out->layout)))
 		goto done;
+	VkBool32 spec_value = pd->fs_alpha_blend ? VK_TRUE : VK_FALSE;
+	VkSpecializationMapEntry spec_entry = {0, 0, sizeof spec_value};
+	VkSpecializationInfo spec = {1, &spec_entry, sizeof spec_value, &spec_value};
 	VkPipelineShaderStageCreateInfo stages[2] = {
 		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_VERTEX_BIT,
 		 .module = vm, .pName = "main"},
 		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
-		 .module = fm, .pName = "main"},
+		 .module = fm, .pName = "main", .pSpecializationInfo = pd->fs_alpha_blend ? &spec : NULL},
 	};
 	VkVertexInputBindingDescription bind = {0, sizeof(scene_vertex), VK_VERTEX_INPUT_RATE_VERTEX};
-	VkVertexInputAttributeDescription attrs[4] = {
+	const VkVertexInputAttributeDescription all_attrs[4] = {
 		{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene_vertex, position)},
 		{1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene_vertex, normal)},
 		{2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene_vertex, uv)},
 		{3, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(scene_vertex, tangent)},
 	};
+	VkVertexInputAttributeDescription attrs[4];
+	uint32_t nattr = 0;
+	for (int i = 0; i < 4; i++)
+		if (pd->attributes & (1u << i))
+			attrs[nattr++] = all_attrs[i];
 	VkPipelineVertexInputStateCreateInfo vi = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO,
 		.vertexBindingDescriptionCount = 1,
 		.pVertexBindingDescriptions = &bind,
-		.vertexAttributeDescriptionCount = position_only ? 1u : 4u,
+		.vertexAttributeDescriptionCount = nattr,
 		.pVertexAttributeDescriptions = attrs,
 	};
 	VkPipelineInputAssemblyStateCreateInfo ia = {
@@ -576,7 +656,7 @@ static VkResult make_graphics(render *r, const uint32_t *vs, size_t vs_size, con
 		.polygonMode = VK_POLYGON_MODE_FILL,
 		.cullMode = VK_CULL_MODE_NONE,
 		.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE,
-		.depthBiasEnable = bias ? VK_TRUE : VK_FALSE,
+		.depthBiasEnable = pd->bias ? VK_TRUE : VK_FALSE,
 		.depthBiasConstantFactor = 1.25f,
 		.depthBiasSlopeFactor = 1.75f,
 		.lineWidth = 1.0f,
@@ -588,25 +668,35 @@ static VkResult make_graphics(render *r, const uint32_t *vs, size_t vs_size, con
 	VkPipelineDepthStencilStateCreateInfo ds = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
 		.depthTestEnable = VK_TRUE,
-		.depthWriteEnable = depth_write ? VK_TRUE : VK_FALSE,
-		.depthCompareOp = depth_op,
+		.depthWriteEnable = pd->depth_write ? VK_TRUE : VK_FALSE,
+		.depthCompareOp = pd->depth_op,
 	};
-	VkPipelineColorBlendAttachmentState cba = {.colorWriteMask = 0xF};
+	/* Blending: "over" for colour; coverage alpha accumulates as a + (1 - a) * dst. */
+	VkPipelineColorBlendAttachmentState cba = {
+		.blendEnable = pd->blend ? VK_TRUE : VK_FALSE,
+		.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA,
+		.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+		.colorBlendOp = VK_BLEND_OP_ADD,
+		.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE,
+		.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+		.alphaBlendOp = VK_BLEND_OP_ADD,
+		.colorWriteMask = 0xF,
+	};
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
-		.attachmentCount = color ? 1u : 0u,
+		.attachmentCount = pd->color ? 1u : 0u,
 		.pAttachments = &cba,
 	};
 	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
 	VkPipelineDynamicStateCreateInfo dy = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-		.dynamicStateCount = bias ? 2u : 3u,
+		.dynamicStateCount = pd->bias ? 2u : 3u,
 		.pDynamicStates = dyn,
 	};
 	VkFormat cfmt = VK_FORMAT_R16G16B16A16_SFLOAT;
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
-		.colorAttachmentCount = color ? 1u : 0u,
+		.colorAttachmentCount = pd->color ? 1u : 0u,
 		.pColorAttachmentFormats = &cfmt,
 		.depthAttachmentFormat = VK_FORMAT_D32_SFLOAT,
 	};
@@ -822,14 +912,45 @@ fail:
 static int create_pipelines(render *r, char *err, size_t err_size)
 {
 	int rc = 0;
-	CHECK_VK(make_graphics(r, shadow_vert, sizeof shadow_vert, NULL, 0, 1, 1, VK_COMPARE_OP_LESS, 0, 1, &r->shadow_pipe));
-	CHECK_VK(make_graphics(r, scene_vert, sizeof scene_vert, NULL, 0, 0, 1, VK_COMPARE_OP_LESS, 0, 0, &r->depth_pipe));
-	if (r->desc.trivial_shading)
-		CHECK_VK(make_graphics(r, scene_vert, sizeof scene_vert, trivial_frag, sizeof trivial_frag, 0, 0,
-				       VK_COMPARE_OP_EQUAL, 1, 0, &r->shade_pipe));
-	else
-		CHECK_VK(make_graphics(r, scene_vert, sizeof scene_vert, shade_frag, sizeof shade_frag, 0, 0,
-				       VK_COMPARE_OP_EQUAL, 1, 0, &r->shade_pipe));
+	const unsigned POS = 1u, UV = 4u, ALL = 15u;
+	pipe_desc shadow = {.vs = shadow_vert, .vs_size = sizeof shadow_vert, .attributes = POS, .depth_write = 1,
+			    .depth_op = VK_COMPARE_OP_LESS, .bias = 1};
+	pipe_desc depth = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = ALL, .depth_write = 1,
+			   .depth_op = VK_COMPARE_OP_LESS};
+	pipe_desc shade = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = ALL, .color = 1,
+			   .depth_op = VK_COMPARE_OP_EQUAL, .fs = shade_frag, .fs_size = sizeof shade_frag};
+	if (r->desc.trivial_shading) {
+		shade.fs = trivial_frag;
+		shade.fs_size = sizeof trivial_frag;
+	}
+	CHECK_VK(make_graphics(r, &shadow, &r->shadow_pipe));
+	CHECK_VK(make_graphics(r, &depth, &r->depth_pipe));
+	CHECK_VK(make_graphics(r, &shade, &r->shade_pipe));
+	if (has_alpha_mode(r, SCENE_ALPHA_MASK)) {
+		pipe_desc sm = shadow, dm = depth;
+		sm.vs = shadow_mask_vert, sm.vs_size = sizeof shadow_mask_vert, sm.attributes = POS | UV;
+		sm.fs = dm.fs = depth_mask_frag;
+		sm.fs_size = dm.fs_size = sizeof depth_mask_frag;
+		CHECK_VK(make_graphics(r, &sm, &r->shadow_mask_pipe));
+		CHECK_VK(make_graphics(r, &dm, &r->depth_mask_pipe));
+	}
+	if (has_alpha_mode(r, SCENE_ALPHA_BLEND)) {
+		pipe_desc sb = shade;
+		sb.depth_op = VK_COMPARE_OP_LESS_OR_EQUAL;
+		sb.blend = 1;
+		sb.fs_alpha_blend = !r->desc.trivial_shading;
+		CHECK_VK(make_graphics(r, &sb, &r->shade_blend_pipe));
+		for (size_t i = 0; i < r->scene->object_count; i++) {
+			const scene_object *o = &r->scene->objects[i];
+			r->blend_count += o->mesh >= 0 && r->scene->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND;
+		}
+		r->blend_order = calloc(r->blend_count, sizeof *r->blend_order);
+		if (!r->blend_order) {
+			rc = RENDER_ERR_NOMEM;
+			snprintf(err, err_size, "out of memory");
+			goto fail;
+		}
+	}
 	CHECK_VK(make_display_pipeline(r));
 	r->ts_count = 0;
 	if (r->dev->has_timestamps) {
@@ -933,8 +1054,9 @@ void render_destroy(render **pr)
 	vkDeviceWaitIdle(d);
 	if (r->method && r->method->finish)
 		r->method->finish(r);
-	render_pipeline *pipes[] = {&r->shadow_pipe, &r->depth_pipe, &r->shade_pipe, &r->display_pipe};
-	for (size_t i = 0; i < 4; i++) {
+	render_pipeline *pipes[] = {&r->shadow_pipe,	  &r->depth_pipe,      &r->shade_pipe,	    &r->display_pipe,
+				    &r->shadow_mask_pipe, &r->depth_mask_pipe, &r->shade_blend_pipe};
+	for (size_t i = 0; i < sizeof pipes / sizeof pipes[0]; i++) {
 		if (pipes[i]->pipeline)
 			vkDestroyPipeline(d, pipes[i]->pipeline, NULL);
 		if (pipes[i]->layout)
@@ -969,6 +1091,7 @@ void render_destroy(render **pr)
 				&r->readback_hdr, &r->readback_display};
 	for (size_t i = 0; i < 7; i++)
 		vkdev_buffer_destroy(r->dev, bufs[i]);
+	free(r->blend_order);
 	free(r->shadow_layer_views);
 	free(r->light_shadow_layer);
 	free(r->mesh_first_index);

@@ -63,6 +63,10 @@ struct render {
 	VkDescriptorPool pool;
 	VkDescriptorSet scene_set, display_set;
 	render_pipeline shadow_pipe, depth_pipe, shade_pipe, display_pipe;
+	render_pipeline shadow_mask_pipe, depth_mask_pipe, shade_blend_pipe; /* glTF alphaMode MASK / BLEND */
+	tlm_vec3 eye;             /* camera position of the last render_update_state (blend sorting) */
+	uint32_t *blend_order;    /* BLEND objects, sorted back to front each frame */
+	uint32_t blend_count;
 
 	/* queries */
 	VkQueryPool ts_pool, stats_pool;
