@@ -52,6 +52,15 @@ static void test_bad_inputs(void **state)
 	expect_failure(args, "no_such_builtin", run);
 	assert_false(tu_file_exists(run));
 
+	/* A glTF whose buffer is missing. */
+	snprintf(bad, sizeof bad, "%s/broken.gltf", dir);
+	f = fopen(bad, "w");
+	fputs("{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"uri\": \"absent.bin\", \"byteLength\": 4}]}", f);
+	fclose(f);
+	snprintf(args, sizeof args, "--scene %s --out %s", bad, run);
+	expect_failure(args, "absent.bin", run);
+	assert_false(tu_file_exists(run));
+
 	/* Unwritable output: a folder cannot be created under a regular file. */
 	snprintf(bad, sizeof bad, "%s/a_file", dir);
 	f = fopen(bad, "w");
