@@ -33,6 +33,7 @@ int cli_no_args(int argc, char **argv, void (*usage)(FILE *out));
 typedef struct cli_render_opts {
 	const char *scene, *camera, *method, *out, *device;
 	const char *frames;   /* unparsed until the scene (its duration) is known */
+	const char *ocio_config, *display, *view; /* display transform (colour.h) */
 	uint32_t width, height;
 	double fps;           /* 0 = scene */
 	double threshold;

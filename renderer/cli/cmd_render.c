@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "taslab/colour.h"
 #include "taslab/render.h"
 #include "taslab/run.h"
 #include "taslab/scene.h"
@@ -36,6 +37,9 @@ static void render_usage(FILE *out)
 		"  --out RUN         output folder (default runs/SCENE-CAMERA-METHOD)\n"
 		"  --device D        Vulkan device: index, name substring, or 'lavapipe' for the CPU\n"
 		"                    (default: a GPU if present, else lavapipe)\n"
+		"  --ocio-config F   OpenColorIO config for the display transform (default: $OCIO, else the\n"
+		"                    built-in ACES 1.0 SDR-video output transform on an sRGB display)\n"
+		"  --display D, --view V  display and view of that config (default: the config's defaults)\n"
 		"  --validation      enable the Khronos validation layer; any message fails the run\n"
 		"  --no-exr, --no-png  skip writing that frame format\n"
 		"  --trivial-shading benchmark only: replace shading with base colour output\n"
@@ -120,6 +124,15 @@ int cli_render_parse(int argc, char **argv, cli_render_opts *o, char *err, size_
 				snprintf(err, err_size, "--out needs a folder name");
 				return -1;
 			}
+		} else if (!strcmp(name, "--ocio-config")) {
+			if (need_value(argc, argv, &i, &iv, &o->ocio_config, err, err_size))
+				return -1;
+		} else if (!strcmp(name, "--display")) {
+			if (need_value(argc, argv, &i, &iv, &o->display, err, err_size))
+				return -1;
+		} else if (!strcmp(name, "--view")) {
+			if (need_value(argc, argv, &i, &iv, &o->view, err, err_size))
+				return -1;
 		} else if (!strcmp(name, "--device")) {
 			if (need_value(argc, argv, &i, &iv, &o->device, err, err_size))
 				return -1;
@@ -200,6 +213,7 @@ static int render_run(int argc, char **argv)
 	vkdev *dev = NULL;
 	render *r = NULL;
 	run_writer *w = NULL;
+	colour *col = NULL;
 	int status = CLI_EXIT_FAILURE;
 	if (cli_render_parse(argc, argv, &o, err, sizeof err)) {
 		fprintf(stderr, "taslab render: %s\n", err);
@@ -247,6 +261,12 @@ static int render_run(int argc, char **argv)
 		snprintf(out_default, sizeof out_default, "runs/%s-%s-%s", scn->name, scn->cameras[cam].name, o.method);
 		out = out_default;
 	}
+	colour_desc cd = {.config_path = o.ocio_config, .display = o.display, .view = o.view};
+	if (colour_create(&cd, &col, err, sizeof err)) {
+		fprintf(stderr, "taslab render: %s\n", err);
+		status = CLI_EXIT_USAGE;
+		goto done;
+	}
 	vkdev_desc dd = {.device = o.device, .validation = o.validation};
 	if (vkdev_create(&dd, &dev, err, sizeof err)) {
 		fprintf(stderr, "taslab render: %s\n", err);
@@ -261,6 +281,7 @@ static int render_run(int argc, char **argv)
 		.method = o.method,
 		.threshold = (float)o.threshold,
 		.trivial_shading = o.trivial_shading,
+		.colour = col,
 	};
 	if (render_create(dev, &rd, &r, err, sizeof err)) {
 		fprintf(stderr, "taslab render: %s\n", err);
@@ -284,6 +305,7 @@ static int render_run(int argc, char **argv)
 		.write_exr = !o.no_exr,
 		.write_png = !o.no_png,
 		.command_line = cmdline,
+		.display_transform = colour_name(col),
 	};
 	if (run_writer_create(out, &info, &w, err, sizeof err)) {
 		fprintf(stderr, "taslab render: %s\n", err);
@@ -324,6 +346,7 @@ done:
 	if (dev && dev->validation && vkdev_validation_messages(dev) && status == CLI_EXIT_OK)
 		status = CLI_EXIT_FAILURE;
 	vkdev_destroy(&dev);
+	colour_destroy(&col);
 	scene_destroy(&scn);
 	return status;
 }

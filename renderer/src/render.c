@@ -2,13 +2,15 @@
  * forward shading, display encoding, readback, queries; method dispatch (see render.h). */
 #include "render_internal.h"
 
+#include "shader_compile.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "shaders/depth_mask_frag.h"
-#include "shaders/display_comp.h"
+#include "shaders/display_comp_in.h"
 #include "shaders/scene_vert.h"
 #include "shaders/shade_frag.h"
 #include "shaders/shadow_mask_vert.h"
@@ -724,10 +726,26 @@ done:
 	return res;
 }
 
-static VkResult make_display_pipeline(render *r)
+/* Display pass: display.comp.in with the OpenColorIO function of the active view transform inserted. */
+static VkResult make_display_pipeline(render *r, char *err, size_t err_size)
 {
+	const char *marker = "// @OCIO_DISPLAY@";
+	const char *at = strstr(display_comp_in, marker);
+	const char *fn = colour_glsl(r->colour);
+	size_t n = strlen(display_comp_in) + strlen(fn) + 1;
+	char *src = malloc(n);
+	uint32_t *spv = NULL;
+	size_t spv_size = 0;
+	if (!src || !at)
+		return VK_ERROR_OUT_OF_HOST_MEMORY;
+	snprintf(src, n, "%.*s%s%s", (int)(at - display_comp_in), display_comp_in, fn, at + strlen(marker));
+	int bad = shc_compile(src, SHC_STAGE_COMPUTE, &spv, &spv_size, err, err_size);
+	free(src);
+	if (bad)
+		return VK_ERROR_INITIALIZATION_FAILED;
 	VkShaderModule cm;
-	VkResult res = vkdev_shader_module(r->dev, display_comp, sizeof display_comp, &cm);
+	VkResult res = vkdev_shader_module(r->dev, spv, spv_size, &cm);
+	free(spv);
 	if (res)
 		return res;
 	VkPipelineLayoutCreateInfo li = {
@@ -951,7 +969,12 @@ static int create_pipelines(render *r, char *err, size_t err_size)
 			goto fail;
 		}
 	}
-	CHECK_VK(make_display_pipeline(r));
+	VkResult dr = make_display_pipeline(r, err, err_size);
+	if (dr == VK_ERROR_INITIALIZATION_FAILED) { /* shader compilation: `err` holds the compiler's message */
+		rc = RENDER_ERR_ARG;
+		goto fail;
+	}
+	CHECK_VK(dr);
 	r->ts_count = 0;
 	if (r->dev->has_timestamps) {
 		VkQueryPoolCreateInfo qi = {
@@ -1033,6 +1056,15 @@ int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, 
 		rc = RENDER_ERR_NOMEM;
 		goto fail;
 	}
+	r->colour = desc->colour;
+	if (!r->colour) {
+		colour_desc cd = {0};
+		if (colour_create(&cd, &r->own_colour, err, err_size)) {
+			rc = RENDER_ERR_ARG;
+			goto fail;
+		}
+		r->colour = r->own_colour;
+	}
 	if ((rc = upload_scene(r, err, err_size)) || (rc = create_targets(r, err, err_size)) ||
 	    (rc = create_descriptors(r, err, err_size)) || (rc = create_pipelines(r, err, err_size)))
 		goto fail;
@@ -1091,6 +1123,7 @@ void render_destroy(render **pr)
 				&r->readback_hdr, &r->readback_display};
 	for (size_t i = 0; i < 7; i++)
 		vkdev_buffer_destroy(r->dev, bufs[i]);
+	colour_destroy(&r->own_colour);
 	free(r->blend_order);
 	free(r->shadow_layer_views);
 	free(r->light_shadow_layer);

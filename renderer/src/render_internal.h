@@ -74,6 +74,9 @@ struct render {
 	VkCommandBuffer cmd;
 	VkFence fence;
 
+	colour *own_colour;       /* created when desc.colour is NULL */
+	const colour *colour;
+
 	/* scratch */
 	tlm_mat4 *world;
 	scene_light_state *light_states;

@@ -203,6 +203,8 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 			      "gpu_ms_median", median, "wall_s", wall_s,
 			      "command", in->command_line ? in->command_line : "");
 	json_object_set_new(json_object_get(m, "inputs"), "camera_motion", json_string(in->camera_motion));
+	json_object_set_new(json_object_get(m, "outputs"), "display_transform",
+			    json_string(in->display_transform ? in->display_transform : ""));
 	if (!m) {
 		snprintf(err, err_size, "cannot build manifest.json");
 		return -1;

@@ -19,6 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "taslab/colour.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
@@ -47,6 +48,7 @@ typedef struct render_desc {
 	const char *method;     /* name from render_methods() */
 	float threshold;        /* T in 8-bit code values, for methods that use one */
 	bool trivial_shading;   /* benchmark only: swap the shading for base colour output */
+	const struct colour *colour; /* display transform (borrowed); NULL: the built-in ACES default */
 } render_desc;
 
 /* Per-frame statistics (DESIGN section 5, stats.csv). -1 means "not applicable / not available". */

@@ -26,6 +26,7 @@ typedef struct run_info {
 	bool validation;
 	bool write_exr, write_png;
 	const char *command_line;
+	const char *display_transform; /* colour_name() of the view transform used for the PNGs */
 } run_info;
 
 typedef struct run_writer run_writer;
