@@ -49,5 +49,7 @@ int cli_resolve_scene(const char *arg, char *path, size_t path_size, char *err, 
 extern const cli_command cli_cmd_render;
 extern const cli_command cli_cmd_devices;
 extern const cli_command cli_cmd_scenes;
+extern const cli_command cli_cmd_tonemap;
+extern const cli_command cli_cmd_clip;
 
 #endif

@@ -3,6 +3,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -11,6 +12,15 @@
 #include <vector>
 
 using namespace OIIO;
+
+// OpenImageIO error strings can span lines (one per failing layer); keep the first line.
+static std::string first_line(std::string e)
+{
+	size_t nl = e.find('\n');
+	if (nl != std::string::npos)
+		e.resize(nl);
+	return e.empty() ? std::string("unknown error") : e;
+}
 
 static std::string temp_name(const char *path)
 {
@@ -78,7 +88,7 @@ extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *he
 	*rgb = nullptr;
 	auto in = ImageInput::open(path);
 	if (!in) {
-		snprintf(err, err_size, "%s: cannot read image: %s", path, OIIO::geterror().c_str());
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
 		return -1;
 	}
 	const ImageSpec &spec = in->spec();
@@ -89,7 +99,7 @@ extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *he
 	size_t n = (size_t)spec.width * spec.height;
 	std::vector<uint8_t> all(n * spec.nchannels);
 	if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::UINT8, all.data())) {
-		snprintf(err, err_size, "%s: cannot decode image: %s", path, in->geterror().c_str());
+		snprintf(err, err_size, "%s: cannot decode image: %s", path, first_line(in->geterror()).c_str());
 		return -1;
 	}
 	uint8_t *out = (uint8_t *)malloc(n * 3);
@@ -106,12 +116,65 @@ extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *he
 	return 0;
 }
 
+extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba,
+				       int reject_nonfinite, char *err, size_t err_size)
+{
+	*rgba = nullptr;
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		return -1;
+	}
+	const ImageSpec &spec = in->spec();
+	int nc = spec.nchannels;
+	if (spec.width <= 0 || spec.height <= 0 || nc < 1) {
+		snprintf(err, err_size, "%s: image has no pixels", path);
+		return -1;
+	}
+	size_t n = (size_t)spec.width * spec.height;
+	std::vector<float> all(n * nc);
+	if (!in->read_image(0, 0, 0, nc, TypeDesc::FLOAT, all.data())) {
+		snprintf(err, err_size, "%s: cannot decode image (truncated or corrupt?): %s", path,
+			 first_line(in->geterror()).c_str());
+		return -1;
+	}
+	float *out = (float *)malloc(n * 4 * sizeof(float));
+	if (!out) {
+		snprintf(err, err_size, "%s: out of memory", path);
+		return -1;
+	}
+	for (size_t i = 0; i < n; i++) {
+		for (int c = 0; c < 4; c++)
+			out[i * 4 + c] = c < nc ? all[i * nc + c] : (c == 3 ? 1.0f : all[i * nc]);
+		if (reject_nonfinite)
+			for (int c = 0; c < 4; c++)
+				if (!std::isfinite(out[i * 4 + c])) {
+					snprintf(err, err_size, "%s: non-finite value (NaN or Inf) at pixel (%zu, %zu)", path,
+						 i % spec.width, i / spec.width);
+					free(out);
+					return -1;
+				}
+	}
+	*width = (uint32_t)spec.width;
+	*height = (uint32_t)spec.height;
+	*rgba = out;
+	return 0;
+}
+
+extern "C" int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb,
+					     char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
+	spec.attribute("oiio:ColorSpace", "sRGB");
+	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgb, 3, err, err_size);
+}
+
 extern "C" int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err,
 				 size_t err_size)
 {
 	auto in = ImageInput::open(path);
 	if (!in) {
-		snprintf(err, err_size, "%s: cannot read image: %s", path, OIIO::geterror().c_str());
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
 		return -1;
 	}
 	std::string v = in->spec().get_string_attribute(name);

@@ -27,6 +27,13 @@ int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, co
 			   size_t err_size);
 /* Reads any image OpenImageIO can read as 8-bit RGB; *rgb is malloc'ed (caller frees). */
 int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size);
+/* Reads an image as float RGBA (missing channels: RGB from the first channel, alpha 1); *rgba is malloc'ed.
+ * Fails with a message naming the first non-finite pixel when `reject_nonfinite` is set. */
+int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
+			    char *err, size_t err_size);
+/* 8-bit RGB PNG from RGB8 pixels. */
+int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb, char *err,
+				  size_t err_size);
 /* Reads a string attribute of an image's header into `value` (empty if absent). */
 int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size);
 

@@ -1,0 +1,157 @@
+/* test_clip.c — clips are bit-exact: a rendered run is encoded (lossless VP9, gbrp, WebM) and decoded with
+ * libavcodec, and every decoded frame equals its PNG exactly; `taslab tonemap` reproduces the renderer's
+ * PNGs within 1 code value (GPU vs CPU OCIO); bad runs fail with one line and leave no clip behind. */
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "taslab/clip.h"
+#include "taslab/imageio.h"
+#include "test_util.h"
+
+static char out[65536];
+static char run[4096];
+
+static int setup(void **state)
+{
+	(void)state;
+	char cmd[8192];
+	snprintf(run, sizeof run, "%s/run", tu_tmpdir("clip"));
+	snprintf(cmd, sizeof cmd, "%s render --scene turntable --camera orbit --size 64x36 --frames 10:14 --device lavapipe "
+		 "--validation --quiet --out %s", TASLAB_BINARY, run);
+	return tu_run(cmd, out, sizeof out) == 0 ? 0 : (fprintf(stderr, "%s\n", out), -1);
+}
+
+typedef struct cmp_ctx {
+	const char *run;
+	uint32_t first, count;
+	int mismatches;
+} cmp_ctx;
+
+static int compare_frame(void *user, uint32_t index, uint32_t w, uint32_t h, const uint8_t *rgb)
+{
+	cmp_ctx *c = user;
+	char path[4096], err[1024];
+	uint32_t pw, ph;
+	uint8_t *png = NULL;
+	snprintf(path, sizeof path, "%s/frames/%06u.png", c->run, c->first + index);
+	if (imageio_read_rgb8(path, &pw, &ph, &png, err, sizeof err) || pw != w || ph != h ||
+	    memcmp(png, rgb, (size_t)w * h * 3) != 0)
+		c->mismatches++;
+	free(png);
+	c->count++;
+	return 0;
+}
+
+static void test_clip_bit_exact(void **state)
+{
+	(void)state;
+	char clip[4096], err[1024];
+	snprintf(clip, sizeof clip, "%s/../clip.webm", run);
+	uint32_t n = 0;
+	if (clip_encode_run(run, clip, &n, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(n, 4);
+	cmp_ctx c = {run, 10, 0, 0};
+	double fps = 0;
+	if (clip_decode(clip, compare_frame, &c, &fps, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(c.count, 4);
+	assert_int_equal(c.mismatches, 0); /* max difference 0 */
+	assert_float_equal(fps, 60.0, 1e-9);
+}
+
+static void test_tonemap_matches_renderer(void **state)
+{
+	(void)state;
+	char cmd[8192], a[4096], b[4096], err[1024];
+	snprintf(cmd, sizeof cmd, "%s tonemap %s", TASLAB_BINARY, run);
+	if (tu_run(cmd, out, sizeof out) != 0)
+		fail_msg("%s", out);
+	for (int f = 10; f < 14; f++) {
+		uint32_t w, h, w2, h2;
+		uint8_t *x = NULL, *y = NULL;
+		snprintf(a, sizeof a, "%s/frames/%06d.png", run, f);
+		snprintf(b, sizeof b, "%s/tonemapped/%06d.png", run, f);
+		assert_int_equal(imageio_read_rgb8(a, &w, &h, &x, err, sizeof err), 0);
+		assert_int_equal(imageio_read_rgb8(b, &w2, &h2, &y, err, sizeof err), 0);
+		int max = 0;
+		for (size_t i = 0; i < (size_t)w * h * 3; i++)
+			max = abs(x[i] - y[i]) > max ? abs(x[i] - y[i]) : max;
+		/* Same half-float input, same OCIO processor on GPU and CPU: at most a rounding step apart. */
+		assert_true(max <= 1);
+		free(x);
+		free(y);
+	}
+}
+
+static int dir_has_tmp(const char *dir)
+{
+	DIR *d = opendir(dir);
+	struct dirent *e;
+	int found = 0;
+	while (d && (e = readdir(d)))
+		found |= strstr(e->d_name, ".tmp") != NULL;
+	if (d)
+		closedir(d);
+	return found;
+}
+
+/* One line on stderr from taslab; `noisy_library` allows extra lines printed by a decoder library itself
+ * (libpng reports truncated files straight to stderr before OpenImageIO returns the error to us). */
+static void expect_clip_failure(const char *run_dir, const char *needle, int noisy_library)
+{
+	char cmd[8192], clip[4096];
+	snprintf(clip, sizeof clip, "%s/out.webm", run_dir);
+	snprintf(cmd, sizeof cmd, "%s clip %s --out %s", TASLAB_BINARY, run_dir, clip);
+	int st = tu_run(cmd, out, sizeof out);
+	const char *ours = strstr(out, "taslab clip:");
+	const char *nl = ours ? strchr(ours, '\n') : NULL;
+	int ok = st != 0 && ours && nl && strstr(ours, needle) && strstr(ours, needle) < nl &&
+		 (noisy_library || tu_count_lines(out) == 1);
+	if (!ok)
+		fail_msg("'%s' gave %d:\n%s(expected one line with '%s')", cmd, st, out, needle);
+	assert_false(tu_file_exists(clip));
+	assert_false(dir_has_tmp(run_dir));
+}
+
+static void test_bad_runs(void **state)
+{
+	(void)state;
+	char cmd[8192], p[4096];
+	const char *dir = tu_tmpdir("clip_bad");
+	/* A missing frame in the middle. */
+	snprintf(cmd, sizeof cmd, "cp -r %s %s/gap && rm %s/gap/frames/000012.png", run, dir, dir);
+	assert_int_equal(system(cmd), 0);
+	snprintf(p, sizeof p, "%s/gap", dir);
+	expect_clip_failure(p, "000012.png is missing", 0);
+	/* A frame of another size. */
+	snprintf(cmd, sizeof cmd, "cp -r %s %s/size && oiiotool %s/frames/000011.png --resize 32x18 -o %s/size/frames/000012.png",
+		 run, dir, run, dir);
+	assert_int_equal(system(cmd), 0);
+	snprintf(p, sizeof p, "%s/size", dir);
+	expect_clip_failure(p, "differs from the first frame", 0);
+	/* A truncated PNG. */
+	snprintf(cmd, sizeof cmd, "cp -r %s %s/trunc && truncate -s 100 %s/trunc/frames/000013.png", run, dir, dir);
+	assert_int_equal(system(cmd), 0);
+	snprintf(p, sizeof p, "%s/trunc", dir);
+	expect_clip_failure(p, "000013.png", 1);
+	/* Not a run. */
+	expect_clip_failure(dir, "manifest.json", 0);
+	/* tonemap: a truncated EXR is a clear error. */
+	snprintf(cmd, sizeof cmd, "truncate -s 200 %s/trunc/frames/000013.exr && %s tonemap %s/trunc/frames/000013.exr",
+		 dir, TASLAB_BINARY, dir);
+	assert_int_not_equal(tu_run(cmd, out, sizeof out), 0);
+	assert_non_null(strstr(out, "000013.exr"));
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_clip_bit_exact),
+		cmocka_unit_test(test_tonemap_matches_renderer),
+		cmocka_unit_test(test_bad_runs),
+	};
+	return cmocka_run_group_tests(tests, setup, NULL);
+}
