@@ -191,8 +191,19 @@ static double now_s(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static void progress(bool tty, uint32_t done, uint32_t total, double elapsed)
+typedef struct progress_state {
+	int tty;
+	double t0;
+	char banner[512]; /* printed with the first progress report, once the run folder exists */
+} progress_state;
+
+static void progress(void *user, uint32_t done, uint32_t total)
 {
+	progress_state *ps = user;
+	int tty = ps->tty;
+	double elapsed = now_s() - ps->t0;
+	if (done == 1)
+		fputs(ps->banner, stderr);
 	if (tty) {
 		int width = 30, fill = (int)((double)done / total * width);
 		fprintf(stderr, "\r[%.*s%*s] %u/%u frames, %.1f s", fill, "##############################", width - fill, "",
@@ -211,8 +222,6 @@ static int render_run(int argc, char **argv)
 	cli_render_opts o;
 	scene *scn = NULL;
 	vkdev *dev = NULL;
-	render *r = NULL;
-	run_writer *w = NULL;
 	colour *col = NULL;
 	int status = CLI_EXIT_FAILURE;
 	if (cli_render_parse(argc, argv, &o, err, sizeof err)) {
@@ -272,68 +281,34 @@ static int render_run(int argc, char **argv)
 		fprintf(stderr, "taslab render: %s\n", err);
 		goto done;
 	}
-	render_desc rd = {
+	progress_state ps = {isatty(2), now_s(), ""};
+	snprintf(ps.banner, sizeof ps.banner, "taslab: rendering %s/%s with %s on %s, frames %u..%u at %ux%u\n",
+		 scn->name, scn->cameras[cam].name, o.method, dev->props.deviceName, first, end - 1, o.width, o.height);
+	run_render_desc rr = {
+		.dev = dev,
 		.scene = scn,
-		.camera = cam,
-		.width = o.width,
-		.height = o.height,
-		.fps = fps,
-		.method = o.method,
-		.threshold = (float)o.threshold,
-		.trivial_shading = o.trivial_shading,
-		.colour = col,
-	};
-	if (render_create(dev, &rd, &r, err, sizeof err)) {
-		fprintf(stderr, "taslab render: %s\n", err);
-		goto done;
-	}
-	run_info info = {
-		.scene_name = scn->name,
 		.scene_path = scene_path,
-		.camera = scn->cameras[cam].name,
-		.camera_motion = scene_camera_motion_name(scn->cameras[cam].motion),
+		.camera = cam,
+		.colour = col,
 		.method = o.method,
-		.device = dev->props.deviceName,
-		.driver = dev->driver_info,
 		.threshold = (float)o.threshold,
-		.first_frame = first,
-		.last_frame = end - 1,
+		.first = first,
+		.end = end,
 		.width = o.width,
 		.height = o.height,
 		.fps = fps,
-		.validation = dev->validation,
 		.write_exr = !o.no_exr,
 		.write_png = !o.no_png,
+		.trivial_shading = o.trivial_shading,
+		.out = out,
 		.command_line = cmdline,
-		.display_transform = colour_name(col),
+		.progress = o.quiet ? NULL : progress,
+		.user = &ps,
 	};
-	if (run_writer_create(out, &info, &w, err, sizeof err)) {
-		fprintf(stderr, "taslab render: %s\n", err);
-		status = CLI_EXIT_USAGE;
-		goto done;
-	}
-	if (!o.quiet)
-		fprintf(stderr, "taslab: rendering %s/%s with %s on %s, frames %u..%u at %ux%u\n", scn->name,
-			scn->cameras[cam].name, o.method, dev->props.deviceName, first, end - 1, o.width, o.height);
-	bool tty = isatty(2);
-	double t0 = now_s();
-	for (uint32_t f = first; f < end; f++) {
-		render_image img;
-		render_stats st;
-		if (render_frame(r, f, &img, &st, err, sizeof err) || run_writer_frame(w, &img, &st, err, sizeof err)) {
-			fprintf(stderr, "%staslab render: frame %u: %s\n", tty ? "\n" : "", f, err);
-			goto done;
-		}
-		if (dev->validation && vkdev_validation_messages(dev)) {
-			fprintf(stderr, "taslab render: %u Vulkan validation message(s) at frame %u (printed above); run not completed\n",
-				vkdev_validation_messages(dev), f);
-			goto done;
-		}
-		if (!o.quiet)
-			progress(tty, f - first + 1, end - first, now_s() - t0);
-	}
-	if (run_writer_finish(w, now_s() - t0, err, sizeof err)) {
-		fprintf(stderr, "taslab render: %s\n", err);
+	int rc = run_render(&rr, err, sizeof err);
+	if (rc) {
+		fprintf(stderr, "%staslab render: %s\n", ps.tty && !o.quiet ? "\n" : "", err);
+		status = rc == RUN_ERR_OUTPUT ? CLI_EXIT_USAGE : CLI_EXIT_FAILURE;
 		goto done;
 	}
 	if (!o.quiet)
@@ -341,8 +316,6 @@ static int render_run(int argc, char **argv)
 	printf("%s\n", out);
 	status = CLI_EXIT_OK;
 done:
-	run_writer_destroy(&w);
-	render_destroy(&r);
 	if (dev && dev->validation && vkdev_validation_messages(dev) && status == CLI_EXIT_OK)
 		status = CLI_EXIT_FAILURE;
 	vkdev_destroy(&dev);

@@ -39,6 +39,30 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size);
 /* Frees the writer; an unfinished run leaves no manifest.json. */
 void run_writer_destroy(run_writer **w);
 
+/* Renders frames [first, end) of a scene/camera with a method into a run folder: render_create, then
+ * render_frame + run_writer_frame per frame, then run_writer_finish. Fails on any Vulkan validation
+ * message when the device has validation on. `progress` (may be NULL) is called after each frame. */
+typedef struct run_render_desc {
+	struct vkdev *dev;
+	const struct scene *scene;
+	const char *scene_path;
+	int camera;
+	const struct colour *colour;
+	const char *method;
+	float threshold;
+	uint32_t first, end;
+	uint32_t width, height;
+	float fps;
+	bool write_exr, write_png, trivial_shading;
+	const char *out;
+	const char *command_line;
+	void (*progress)(void *user, uint32_t done, uint32_t total);
+	void *user;
+} run_render_desc;
+
+enum { RUN_ERR_OUTPUT = -2 /* the run folder could not be created or written */ };
+int run_render(const run_render_desc *d, char *err, size_t err_size);
+
 /* Creates a directory and its parents (like mkdir -p). */
 int run_mkdirs(const char *path, char *err, size_t err_size);
 
