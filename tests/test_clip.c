@@ -146,12 +146,62 @@ static void test_bad_runs(void **state)
 	assert_non_null(strstr(out, "000013.exr"));
 }
 
+typedef struct count_ctx {
+	uint32_t frames, width, height;
+} count_ctx;
+
+static int count_frame(void *user, uint32_t index, uint32_t w, uint32_t h, const uint8_t *rgb)
+{
+	(void)index;
+	(void)rgb;
+	count_ctx *c = user;
+	c->frames++;
+	c->width = w;
+	c->height = h;
+	return 0;
+}
+
+static void test_pair(void **state)
+{
+	(void)state;
+	char cmd[8192], p[4096], err[1024];
+	const char *dir = tu_tmpdir("pair");
+	snprintf(cmd, sizeof cmd, "%s pair --scene turntable --camera overview --frames 5:8 --size 48x27 --device lavapipe "
+		 "--validation --variants ref --out %s/set", TASLAB_BINARY, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s", out);
+	snprintf(p, sizeof p, "%s/set/pairs.json", dir);
+	char *js = tu_read_file(p, NULL);
+	assert_non_null(js);
+	assert_non_null(strstr(js, "\"camera_motion\": \"stationary\""));
+	assert_non_null(strstr(js, "\"clip\": \"clips/ref.webm\""));
+	assert_non_null(strstr(js, "\"inspect\": \"inspect/ref.webm\""));
+	free(js);
+	count_ctx c = {0};
+	snprintf(p, sizeof p, "%s/set/clips/ref.webm", dir);
+	assert_int_equal(clip_decode(p, count_frame, &c, NULL, err, sizeof err), 0);
+	assert_int_equal(c.frames, 3);
+	assert_int_equal(c.width, 48);
+	memset(&c, 0, sizeof c);
+	snprintf(p, sizeof p, "%s/set/inspect/ref.webm", dir);
+	assert_int_equal(clip_decode(p, count_frame, &c, NULL, err, sizeof err), 0);
+	assert_int_equal(c.frames, 3);
+	assert_int_equal(c.width, 2 * 48 + 2); /* side by side with a 2-pixel gap */
+	/* Unknown and not-yet-implemented variants are refused before anything is rendered. */
+	snprintf(cmd, sizeof cmd, "%s pair --scene turntable --variants warp@8 --out %s/bad", TASLAB_BINARY, dir);
+	assert_int_equal(tu_run(cmd, out, sizeof out), 2);
+	assert_non_null(strstr(out, "warp"));
+	snprintf(p, sizeof p, "%s/bad", dir);
+	assert_false(tu_file_exists(p));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_clip_bit_exact),
 		cmocka_unit_test(test_tonemap_matches_renderer),
 		cmocka_unit_test(test_bad_runs),
+		cmocka_unit_test(test_pair),
 	};
 	return cmocka_run_group_tests(tests, setup, NULL);
 }

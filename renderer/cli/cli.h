@@ -51,5 +51,6 @@ extern const cli_command cli_cmd_devices;
 extern const cli_command cli_cmd_scenes;
 extern const cli_command cli_cmd_tonemap;
 extern const cli_command cli_cmd_clip;
+extern const cli_command cli_cmd_pair;
 
 #endif
