@@ -2,6 +2,9 @@
  * processor (the same view transform the renderer applies on the GPU; colour.h). */
 #include <dirent.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +55,38 @@ static int tonemap_one(const colour *c, const char *in, const char *out, char *e
 	free(rgb);
 	free(px);
 	return rc;
+}
+
+/* Frames are independent: worker threads take the next frame index until done or one fails. */
+typedef struct tonemap_job {
+	const colour *c;
+	const char *dir, *outd;
+	char **names;
+	size_t n;
+	atomic_size_t next;
+	atomic_int failed;
+	pthread_mutex_t lock;
+	char err[1024];
+} tonemap_job;
+
+static void *tonemap_worker(void *arg)
+{
+	tonemap_job *j = arg;
+	for (;;) {
+		size_t i = atomic_fetch_add(&j->next, 1);
+		if (i >= j->n || atomic_load(&j->failed))
+			return NULL;
+		char in[8192], out[8192], err[1024];
+		snprintf(in, sizeof in, "%s/%s", j->dir, j->names[i]);
+		snprintf(out, sizeof out, "%s/%.*s.png", j->outd, (int)strlen(j->names[i]) - 4, j->names[i]);
+		if (tonemap_one(j->c, in, out, err, sizeof err)) {
+			pthread_mutex_lock(&j->lock);
+			if (!atomic_exchange(&j->failed, 1))
+				snprintf(j->err, sizeof j->err, "%s", err);
+			pthread_mutex_unlock(&j->lock);
+			return NULL;
+		}
+	}
 }
 
 static int tonemap_run(int argc, char **argv)
@@ -148,15 +183,24 @@ static int tonemap_run(int argc, char **argv)
 		goto done;
 	}
 	qsort(names, n, sizeof *names, cmp_str);
-	for (size_t i = 0; i < n; i++) {
-		char in[8192], out[8192];
-		snprintf(in, sizeof in, "%s/%s", dir, names[i]);
-		snprintf(out, sizeof out, "%s/%.*s.png", outd, (int)strlen(names[i]) - 4, names[i]);
-		if (tonemap_one(c, in, out, err, sizeof err)) {
-			fprintf(stderr, "taslab tonemap: %s\n", err);
-			status = CLI_EXIT_FAILURE;
-			goto done;
-		}
+	tonemap_job job = {.c = c, .dir = dir, .outd = outd, .names = names, .n = n};
+	pthread_mutex_init(&job.lock, NULL);
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	size_t nt = cores < 1 ? 1 : (size_t)cores > n ? n : (size_t)(cores > 16 ? 16 : cores);
+	pthread_t th[16];
+	size_t started = 0;
+	for (; started < nt; started++)
+		if (pthread_create(&th[started], NULL, tonemap_worker, &job))
+			break;
+	if (started == 0)
+		tonemap_worker(&job);
+	for (size_t t = 0; t < started; t++)
+		pthread_join(th[t], NULL);
+	pthread_mutex_destroy(&job.lock);
+	if (atomic_load(&job.failed)) {
+		fprintf(stderr, "taslab tonemap: %s\n", job.err);
+		status = CLI_EXIT_FAILURE;
+		goto done;
 	}
 	fprintf(stderr, "taslab: tone-mapped %zu frame(s) to %s (%s)\n", n, outd, colour_name(c));
 done:
