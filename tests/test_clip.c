@@ -139,6 +139,26 @@ static void test_bad_runs(void **state)
 	expect_clip_failure(p, "000013.png", 1);
 	/* Not a run. */
 	expect_clip_failure(dir, "manifest.json", 0);
+	/* Unknown OCIO display / view and a missing config: one line, usage exit status, nothing written. */
+	snprintf(p, sizeof p, "%s/cfg.ocio", dir);
+	FILE *f = fopen(p, "w");
+	fputs("ocio_profile_version: 2\nroles:\n  scene_linear: lin\n  default: lin\ndisplays:\n  sRGB:\n"
+	      "    - !<View> {name: Raw, colorspace: lin}\ncolorspaces:\n  - !<ColorSpace> {name: lin}\n", f);
+	fclose(f);
+	const char *bad_cfg[][2] = {{"--display Projector", "no display 'Projector' (displays: sRGB)"},
+				    {"--view Filmic", "has no view 'Filmic' (views: Raw)"}};
+	for (int i = 0; i < 2; i++) {
+		snprintf(cmd, sizeof cmd, "%s tonemap %s --out %s/tm%d --ocio-config %s %s", TASLAB_BINARY, run, dir, i, p,
+			 bad_cfg[i][0]);
+		assert_int_equal(tu_run(cmd, out, sizeof out), 2);
+		if (!strstr(out, bad_cfg[i][1]) || tu_count_lines(out) != 1)
+			fail_msg("%s:\n%s", cmd, out);
+		snprintf(cmd, sizeof cmd, "%s/tm%d", dir, i);
+		assert_false(tu_file_exists(cmd));
+	}
+	snprintf(cmd, sizeof cmd, "%s render --scene turntable --ocio-config %s/none.ocio --out %s/r", TASLAB_BINARY, dir, dir);
+	assert_int_equal(tu_run(cmd, out, sizeof out), 2);
+	assert_non_null(strstr(out, "none.ocio"));
 	/* tonemap: a truncated EXR is a clear error. */
 	snprintf(cmd, sizeof cmd, "truncate -s 200 %s/trunc/frames/000013.exr && %s tonemap %s/trunc/frames/000013.exr",
 		 dir, TASLAB_BINARY, dir);
