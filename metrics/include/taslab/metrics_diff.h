@@ -1,0 +1,42 @@
+/* metrics_diff.h — `taslab metrics diff`: compare two frame sequences (run folders or image folders) and
+ * write DIR/frames.csv and DIR/summary.json (names as in DESIGN section 6), optional heatmaps and plots.
+ * Decoding of frame pair i+1 overlaps the statistics of pair i (a prefetch thread). */
+#ifndef TASLAB_METRICS_DIFF_H
+#define TASLAB_METRICS_DIFF_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "taslab/colour.h"
+#include "taslab/metrics.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mtr_format { MTR_FORMAT_PNG = 0, MTR_FORMAT_EXR } mtr_format;
+
+typedef struct mtr_diff_desc {
+	const char *ref, *test; /* run folders (their frames/) or folders of images */
+	const char *out;        /* output folder */
+	mtr_format format;      /* PNG: the display frames as stored; EXR: through `colour` (unquantised) */
+	const colour *colour;   /* required for EXR */
+	bool heatmaps;          /* DIR/heatmaps/NNNNNN.png for every frame */
+	double heatmap_max;     /* colour scale maximum (code values); 0: 64 */
+	bool plots;             /* DIR/plots/ PNG plots through gnuplot (skipped with a note if gnuplot is missing) */
+	int threads;            /* <= 0: all cores */
+} mtr_diff_desc;
+
+typedef struct mtr_diff_result {
+	size_t frames;
+	mtr_frame_stats pooled;
+	double seconds;         /* wall time */
+	double compute_seconds; /* time in statistics (excluding decoding) */
+} mtr_diff_result;
+
+int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

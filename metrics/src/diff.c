@@ -1,0 +1,377 @@
+/* diff.c — comparing two frame sequences into frames.csv / summary.json / heatmaps / plots (metrics_diff.h). */
+#include "taslab/metrics_diff.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "taslab/imageio.h"
+#include "taslab/run.h"
+
+typedef struct sequence {
+	char dir[4096];
+	char **names; /* sorted file names with the chosen extension */
+	size_t n;
+} sequence;
+
+static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+static int is_dir(const char *p)
+{
+	struct stat sb;
+	return stat(p, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+static void sequence_free(sequence *s)
+{
+	for (size_t i = 0; i < s->n; i++)
+		free(s->names[i]);
+	free(s->names);
+	s->names = NULL;
+	s->n = 0;
+}
+
+static int sequence_open(const char *path, const char *ext, sequence *s, char *err, size_t err_size)
+{
+	memset(s, 0, sizeof *s);
+	char frames[4096];
+	snprintf(frames, sizeof frames, "%s/frames", path);
+	if (!is_dir(path)) {
+		snprintf(err, err_size, "%s: not a folder (give a run folder or a folder of images)", path);
+		return -1;
+	}
+	snprintf(s->dir, sizeof s->dir, "%s", is_dir(frames) ? frames : path);
+	DIR *d = opendir(s->dir);
+	struct dirent *e;
+	size_t el = strlen(ext);
+	while (d && (e = readdir(d))) {
+		size_t len = strlen(e->d_name);
+		if (len > el && !strcmp(e->d_name + len - el, ext) && e->d_name[0] != '.') {
+			char **nn = realloc(s->names, (s->n + 1) * sizeof *nn);
+			char *dup = strdup(e->d_name);
+			if (!nn || !dup) {
+				free(dup);
+				if (nn)
+					s->names = nn;
+				closedir(d);
+				snprintf(err, err_size, "out of memory");
+				return -1;
+			}
+			s->names = nn;
+			s->names[s->n++] = dup;
+		}
+	}
+	if (d)
+		closedir(d);
+	if (s->n == 0) {
+		snprintf(err, err_size, "%s: no %s frames", s->dir, ext);
+		return -1;
+	}
+	qsort(s->names, s->n, sizeof *s->names, cmp_str);
+	return 0;
+}
+
+/* A decoded frame pair, display-referred floats 0..255. */
+typedef struct pair_buf {
+	float *a, *b;
+	uint32_t w, h;
+	int rc;
+	char err[1024];
+} pair_buf;
+
+static int load_frame(const mtr_diff_desc *d, const char *path, float **rgb, uint32_t *w, uint32_t *h, char *err,
+		      size_t err_size)
+{
+	*rgb = NULL;
+	if (d->format == MTR_FORMAT_PNG) {
+		uint8_t *px = NULL;
+		if (imageio_read_rgb8(path, w, h, &px, err, err_size))
+			return -1;
+		size_t n = (size_t)*w * *h * 3;
+		*rgb = malloc(n * sizeof **rgb);
+		if (*rgb)
+			for (size_t i = 0; i < n; i++)
+				(*rgb)[i] = px[i];
+		free(px);
+	} else {
+		float *px = NULL;
+		if (imageio_read_rgba_float(path, w, h, &px, 1, err, err_size))
+			return -1;
+		size_t n = (size_t)*w * *h;
+		colour_apply(d->colour, px, n, 4);
+		*rgb = malloc(n * 3 * sizeof **rgb);
+		if (*rgb)
+			for (size_t i = 0; i < n; i++)
+				for (int c = 0; c < 3; c++) {
+					float v = px[i * 4 + c];
+					(*rgb)[i * 3 + c] = 255.0f * (v < 0 ? 0 : (v > 1 ? 1 : v));
+				}
+		free(px);
+	}
+	if (!*rgb) {
+		snprintf(err, err_size, "out of memory");
+		return -1;
+	}
+	return 0;
+}
+
+typedef struct loader {
+	const mtr_diff_desc *d;
+	const sequence *ra, *rb;
+	size_t index;
+	pair_buf *out;
+} loader;
+
+static void load_pair(loader *l)
+{
+	char pa[8192], pb[8192];
+	pair_buf *o = l->out;
+	uint32_t wb, hb;
+	snprintf(pa, sizeof pa, "%s/%s", l->ra->dir, l->ra->names[l->index]);
+	snprintf(pb, sizeof pb, "%s/%s", l->rb->dir, l->rb->names[l->index]);
+	o->rc = load_frame(l->d, pa, &o->a, &o->w, &o->h, o->err, sizeof o->err) ||
+		load_frame(l->d, pb, &o->b, &wb, &hb, o->err, sizeof o->err);
+	if (!o->rc && (wb != o->w || hb != o->h)) {
+		snprintf(o->err, sizeof o->err, "%s is %ux%u but %s is %ux%u: compare frames of the same size", pa, o->w, o->h,
+			 pb, wb, hb);
+		o->rc = -1;
+	}
+}
+
+static void *load_main(void *p)
+{
+	load_pair(p);
+	return NULL;
+}
+
+static void csv_num(FILE *f, double v)
+{
+	if (isfinite(v))
+		fprintf(f, "%.6g", v);
+}
+
+static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int write_plots(const char *out, char *err, size_t err_size)
+{
+	char script[4096], cmd[8400];
+	snprintf(script, sizeof script, "%s/plots/plots.gp", out);
+	FILE *f = fopen(script, "w");
+	if (!f) {
+		snprintf(err, err_size, "%s: cannot write", script);
+		return -1;
+	}
+	/* Per-frame series and exceedance, from frames.csv (columns per DESIGN section 6). */
+	fprintf(f,
+		"set datafile separator ','\n"
+		"set terminal pngcairo size 960,540 font 'sans,10'\n"
+		"set key outside right top\n"
+		"set grid\n"
+		"set output '%s/plots/frames.png'\n"
+		"set title 'max-RGB difference per frame'\n"
+		"set xlabel 'frame'; set ylabel 'code values (0-255)'\n"
+		"plot '%s/frames.csv' using 1:2 every ::1 with lines title 'mean', "
+		"'' using 1:4 every ::1 with lines title 'p95', '' using 1:5 every ::1 with lines title 'p99', "
+		"'' using 1:6 every ::1 with lines title 'max', '' using 1:15 every ::1 with lines title 'flicker mean'\n"
+		"set output '%s/plots/exceed.png'\n"
+		"set title 'fraction of pixels with d > T per frame'\n"
+		"set ylabel 'fraction'; set logscale y\n"
+		"plot for [c=7:12] '%s/frames.csv' using 1:(column(c) > 0 ? column(c) : 1/0) every ::1 with lines "
+		"title columnheader(c)\n",
+		out, out, out, out);
+	fclose(f);
+	snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
+	FILE *p = popen(cmd, "r");
+	char line[512] = "";
+	if (p) {
+		while (fgets(line, sizeof line, p))
+			;
+	}
+	int st = p ? pclose(p) : -1;
+	if (st != 0) {
+		snprintf(err, err_size, "gnuplot failed (%s); plots skipped", st == 127 * 256 ? "not installed" : "see plots.gp");
+		return -1;
+	}
+	return 0;
+}
+
+int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)
+{
+	const char *ext = d->format == MTR_FORMAT_PNG ? ".png" : ".exr";
+	sequence ra, rb;
+	int rc = -1;
+	mtr_frame_stats *stats = NULL;
+	float *map = NULL;
+	pair_buf cur = {0}, prev = {0}, next = {0};
+	FILE *csv = NULL;
+	char path[4096], tmp_csv[4096];
+	memset(res, 0, sizeof *res);
+	memset(&rb, 0, sizeof rb);
+	if (d->format == MTR_FORMAT_EXR && !d->colour) {
+		snprintf(err, err_size, "EXR comparison needs a display transform");
+		return -1;
+	}
+	if (sequence_open(d->ref, ext, &ra, err, err_size))
+		return -1;
+	if (sequence_open(d->test, ext, &rb, err, err_size))
+		goto done;
+	if (ra.n != rb.n) {
+		snprintf(err, err_size, "%s has %zu frames but %s has %zu: compare runs of the same frames", ra.dir, ra.n,
+			 rb.dir, rb.n);
+		goto done;
+	}
+	for (size_t i = 0; i < ra.n; i++)
+		if (strcmp(ra.names[i], rb.names[i])) {
+			snprintf(err, err_size, "frame files differ: %s/%s vs %s/%s", ra.dir, ra.names[i], rb.dir, rb.names[i]);
+			goto done;
+		}
+	snprintf(path, sizeof path, "%s/%s", d->out, d->heatmaps ? "heatmaps" : "");
+	if (run_mkdirs(path, err, err_size))
+		goto done;
+	if (d->plots) {
+		snprintf(path, sizeof path, "%s/plots", d->out);
+		if (run_mkdirs(path, err, err_size))
+			goto done;
+	}
+	snprintf(path, sizeof path, "%s/summary.json", d->out);
+	unlink(path); /* an old summary must not look like this comparison's result */
+	stats = calloc(ra.n, sizeof *stats);
+	snprintf(tmp_csv, sizeof tmp_csv, "%s/.frames.csv.tmp%ld", d->out, (long)getpid());
+	csv = fopen(tmp_csv, "w");
+	if (!stats || !csv) {
+		snprintf(err, err_size, "%s: cannot write frames.csv", d->out);
+		goto done;
+	}
+	fprintf(csv, "frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,exceed_16,"
+		     "exceed_32,exceed_64,psnr,ssim,flicker_mean\n");
+	double t0 = now_s(), compute = 0;
+	loader l = {d, &ra, &rb, 0, &cur};
+	load_pair(&l);
+	for (size_t i = 0; i < ra.n; i++) {
+		if (cur.rc) {
+			snprintf(err, err_size, "%s", cur.err);
+			goto done;
+		}
+		/* Overlap: decode pair i+1 on a helper thread while pair i is measured. */
+		pthread_t th;
+		int threaded = 0;
+		loader ln = {d, &ra, &rb, i + 1, &next};
+		memset(&next, 0, sizeof next);
+		if (i + 1 < ra.n)
+			threaded = pthread_create(&th, NULL, load_main, &ln) == 0;
+		if (!map && !(map = malloc((size_t)cur.w * cur.h * sizeof *map))) {
+			snprintf(err, err_size, "out of memory");
+			if (threaded)
+				pthread_join(th, NULL);
+			goto done;
+		}
+		mtr_image a = {cur.w, cur.h, cur.a}, b = {cur.w, cur.h, cur.b};
+		mtr_image ap = {prev.w, prev.h, prev.a}, bp = {prev.w, prev.h, prev.b};
+		int have_prev = prev.a && prev.w == cur.w && prev.h == cur.h;
+		double tc = now_s();
+		int crc = mtr_frame_compare(&a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, d->threads, &stats[i],
+					    err, err_size);
+		compute += now_s() - tc;
+		if (!crc && d->heatmaps) {
+			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", d->out, (int)strlen(ra.names[i]) - 4, ra.names[i]);
+			crc = mtr_heatmap_write(path, map, cur.w, cur.h, d->heatmap_max > 0 ? d->heatmap_max : 64, err, err_size);
+		}
+		if (threaded)
+			pthread_join(th, NULL);
+		else if (i + 1 < ra.n)
+			load_pair(&ln);
+		if (crc)
+			goto done;
+		if (cur.w != (prev.w ? prev.w : cur.w) || cur.h != (prev.h ? prev.h : cur.h)) {
+			snprintf(err, err_size, "frame %s has another size than the previous frames", ra.names[i]);
+			goto done;
+		}
+		const mtr_frame_stats *s = &stats[i];
+		fprintf(csv, "%ld,", atol(ra.names[i]));
+		double v[5] = {s->mean, s->p50, s->p95, s->p99, s->max};
+		for (int k = 0; k < 5; k++)
+			csv_num(csv, v[k]), fputc(',', csv);
+		for (int k = 0; k < MTR_THRESHOLD_COUNT; k++)
+			csv_num(csv, s->exceed[k]), fputc(',', csv);
+		csv_num(csv, s->psnr), fputc(',', csv);
+		csv_num(csv, s->ssim), fputc(',', csv);
+		csv_num(csv, s->flicker_mean);
+		fputc('\n', csv);
+		free(prev.a);
+		free(prev.b);
+		prev = cur;
+		cur = next;
+		memset(&next, 0, sizeof next);
+	}
+	if (fclose(csv) != 0) {
+		csv = NULL;
+		snprintf(err, err_size, "%s: write error", tmp_csv);
+		goto done;
+	}
+	csv = NULL;
+	snprintf(path, sizeof path, "%s/frames.csv", d->out);
+	if (rename(tmp_csv, path)) {
+		snprintf(err, err_size, "%s: %s", path, strerror(errno));
+		goto done;
+	}
+	res->frames = ra.n;
+	mtr_pool(stats, ra.n, &res->pooled);
+	res->seconds = now_s() - t0;
+	res->compute_seconds = compute;
+	const mtr_frame_stats *p = &res->pooled;
+	json_t *ex = json_object();
+	json_t *j = json_pack("{s:s, s:s, s:s, s:I, s:o, s:o, s:o, s:o, s:o}", "ref", d->ref, "test", d->test, "format",
+			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)ra.n, "maxrgb_mean",
+			      num_or_null(p->mean), "maxrgb_p50", num_or_null(p->p50), "maxrgb_p95", num_or_null(p->p95),
+			      "maxrgb_p99", num_or_null(p->p99), "maxrgb_max", num_or_null(p->max));
+	for (int k = 0; k < MTR_THRESHOLD_COUNT; k++) {
+		char key[32];
+		snprintf(key, sizeof key, "exceed_%g", mtr_thresholds[k]);
+		json_object_set_new(j, key, num_or_null(p->exceed[k]));
+	}
+	json_decref(ex);
+	json_object_set_new(j, "psnr", num_or_null(p->psnr));
+	json_object_set_new(j, "ssim", num_or_null(p->ssim));
+	json_object_set_new(j, "flicker_mean", num_or_null(p->flicker_mean));
+	json_object_set_new(j, "pooling", json_string("mean over frames; maxrgb_max: max; psnr: from the mean MSE; "
+						      "flicker_mean: over frames 2..n"));
+	char tmp_json[4096];
+	snprintf(tmp_json, sizeof tmp_json, "%s/.summary.json.tmp%ld", d->out, (long)getpid());
+	snprintf(path, sizeof path, "%s/summary.json", d->out);
+	int jr = json_dump_file(j, tmp_json, JSON_INDENT(2)) || rename(tmp_json, path);
+	json_decref(j);
+	if (jr) {
+		unlink(tmp_json);
+		snprintf(err, err_size, "%s: cannot write", path);
+		goto done;
+	}
+	if (d->plots && write_plots(d->out, err, err_size))
+		fprintf(stderr, "taslab metrics: note: %s\n", err);
+	rc = 0;
+done:
+	if (csv) {
+		fclose(csv);
+		unlink(tmp_csv);
+	}
+	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b);
+	free(map);
+	free(stats);
+	sequence_free(&ra);
+	sequence_free(&rb);
+	return rc;
+}
