@@ -13,6 +13,7 @@
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
+#include "taslab/metrics_runs.h"
 #include "test_util.h"
 
 static void test_hand_computed(void **state)
@@ -283,13 +284,79 @@ static void test_diff_files(void **state)
 	assert_non_null(strstr(err, "NaN"));
 }
 
+static void make_run(const char *dir, const char *method, double T, const char *csv)
+{
+	char p[4096];
+	snprintf(p, sizeof p, "mkdir -p %s", dir);
+	assert_int_equal(system(p), 0);
+	snprintf(p, sizeof p, "%s/manifest.json", dir);
+	FILE *f = fopen(p, "w");
+	fprintf(f, "{\"inputs\": {\"method\": \"%s\", \"scene\": \"s\", \"camera\": \"c\", \"threshold\": %g}}", method, T);
+	fclose(f);
+	snprintf(p, sizeof p, "%s/stats.csv", dir);
+	f = fopen(p, "w");
+	fputs(csv, f);
+	fclose(f);
+}
+
+static void test_runs_summary(void **state)
+{
+	(void)state;
+	/* Hand-made runs. ref: invocations 1000 + 1000 = 2000, gpu ms 10, 12, 14 -> median 12.
+	 * tas@8: invocations (300+50) + (200+50) + (100+50) = 750 -> reduction 1 - 750/2000 = 62.5%;
+	 * reuse mean (0.5 + 0.7 + 0.9)/3 = 0.7; gpu ms 4, 8, 6 -> median 6 -> speedup 12/6 = 2;
+	 * tallies late 1+0+2 = 3, early 4, on_time 10, unchanged 100. */
+	const char *base = tu_tmpdir("metrics_runs");
+	char ref[4096], tas[4096], out[4096], err[1024];
+	snprintf(ref, sizeof ref, "%s/ref", base);
+	snprintf(tas, sizeof tas, "%s/tas", base);
+	snprintf(out, sizeof out, "%s/out", base);
+	const char *hdr = "frame,time_s,visible_samples,shaded_samples,visible_units,shaded_units,new_units,reuse_fraction,"
+			  "fs_invocations,cs_invocations,gpu_ms_total,gpu_ms_shade";
+	char csv[2048];
+	snprintf(csv, sizeof csv, "%s\n0,0,1,1,1,1,,0,1000,,10,1\n1,0,1,1,1,1,,0,,,14,1\n2,0,1,1,1,1,,0,1000,0,12,1\n", hdr);
+	make_run(ref, "ref", 8, csv);
+	snprintf(csv, sizeof csv, "%s,late,early,on_time,unchanged\n0,0,1,1,1,1,,0.5,300,50,4,1,1,1,3,30\n"
+		 "1,0,1,1,1,1,,0.7,200,50,8,1,0,2,3,30\n2,0,1,1,1,1,,0.9,100,50,6,1,2,1,4,40\n", hdr);
+	make_run(tas, "tas", 8, csv);
+	const char *runs[2] = {tas, ref};
+	mtr_run_summary s[2];
+	if (mtr_runs_summarise(runs, 2, -1, s, err, sizeof err))
+		fail_msg("%s", err);
+	assert_float_equal(s[1].invocations, 2000, 0);
+	assert_float_equal(s[0].invocation_reduction, 0.625, 1e-12);
+	assert_float_equal(s[0].reuse_mean, 0.7, 1e-12);
+	assert_float_equal(s[1].gpu_ms_median, 12, 0);
+	assert_float_equal(s[0].speedup_vs_ref, 2.0, 1e-12);
+	assert_float_equal(s[0].late, 3, 0);
+	assert_float_equal(s[0].early, 4, 0);
+	assert_float_equal(s[0].on_time, 10, 0);
+	assert_float_equal(s[0].unchanged, 100, 0);
+	assert_true(isnan(s[1].late));
+	assert_int_equal(mtr_runs_write(s, 2, out, err, sizeof err), 0);
+	char p[4096];
+	snprintf(p, sizeof p, "%s/table1.md", out);
+	char *md = tu_read_file(p, NULL);
+	assert_non_null(md);
+	assert_non_null(strstr(md, "| tas | 62.5 |"));
+	free(md);
+	/* A run with a short row, and a folder that is no run. */
+	snprintf(csv, sizeof csv, "%s\n0,0,1\n", hdr);
+	make_run(tas, "tas", 8, csv);
+	assert_int_not_equal(mtr_runs_summarise(runs, 2, -1, s, err, sizeof err), 0);
+	assert_non_null(strstr(err, "row 2"));
+	const char *none[1] = {base};
+	assert_int_not_equal(mtr_runs_summarise(none, 1, -1, s, err, sizeof err), 0);
+	assert_non_null(strstr(err, "manifest.json"));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_hand_computed),  cmocka_unit_test(test_identical_and_single_pixel),
 		cmocka_unit_test(test_percentile_vs_sort), cmocka_unit_test(test_ssim_vs_skimage),
 		cmocka_unit_test(test_jnd),            cmocka_unit_test(test_colormap),
-		cmocka_unit_test(test_diff_files),
+		cmocka_unit_test(test_diff_files),       cmocka_unit_test(test_runs_summary),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -8,11 +8,13 @@
 #include "taslab/colour.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
+#include "taslab/metrics_runs.h"
 
 static void metrics_usage(FILE *out)
 {
 	fprintf(out,
 		"usage: taslab metrics diff --ref A --test B --out DIR [options]\n"
+		"       taslab metrics runs --out DIR [--baseline RUN] RUN...\n"
 		"       taslab metrics jnd --n N --ref-preferred R [--ties K] [--confidence 0.95]\n\n"
 		"diff: compares two frame sequences (run folders or folders of images, same frame names and sizes)\n"
 		"  and writes DIR/frames.csv (frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,\n"
@@ -23,6 +25,10 @@ static void metrics_usage(FILE *out)
 		"  --heatmap-max V     colour scale maximum in code values (default 64)\n"
 		"  --plots             DIR/plots/frames.png, exceed.png (gnuplot)\n"
 		"  --threads N         worker threads (default: all cores)\n"
+		"runs: from each run's stats.csv: reuse %%, shader invocations and their reduction against the\n"
+		"  baseline (default: the first ref run) in the paper's Table 1 layout, median GPU frame time and\n"
+		"  speedup against ref (same scene and camera), late/early/on-time/unchanged sums when present;\n"
+		"  writes DIR/runs.csv, runs.json, table1.md.\n"
 		"jnd: p_ref = (R + K/2)/N with a Wilson interval, JND = Phi^-1(p)/Phi^-1(0.75) (p clamped half an\n"
 		"  observation from 0 and 1 so the JND stays finite); prints JSON.\n");
 }
@@ -126,6 +132,47 @@ static int jnd_cmd(int argc, char **argv)
 	return CLI_EXIT_OK;
 }
 
+static int runs_cmd(int argc, char **argv)
+{
+	const char *out = NULL, *baseline = NULL;
+	const char *runs[256];
+	size_t n = 0;
+	char err[1024];
+	for (int i = 2; i < argc; i++) {
+		if (!strcmp(argv[i], "--out") && i + 1 < argc)
+			out = argv[++i];
+		else if (!strcmp(argv[i], "--baseline") && i + 1 < argc)
+			baseline = argv[++i];
+		else if (argv[i][0] != '-' && n < 256)
+			runs[n++] = argv[i];
+		else {
+			fprintf(stderr, "taslab metrics runs: unexpected argument '%s' (see 'taslab metrics --help')\n", argv[i]);
+			return CLI_EXIT_USAGE;
+		}
+	}
+	int base = -1;
+	if (baseline) {
+		runs[n] = baseline;
+		base = (int)n++;
+	}
+	if (!out || n == 0) {
+		fprintf(stderr, "taslab metrics runs: need --out DIR and at least one run folder\n");
+		return CLI_EXIT_USAGE;
+	}
+	mtr_run_summary *s = calloc(n, sizeof *s);
+	if (!s || mtr_runs_summarise(runs, n, base, s, err, sizeof err) || mtr_runs_write(s, n, out, err, sizeof err)) {
+		fprintf(stderr, "taslab metrics runs: %s\n", s ? err : "out of memory");
+		free(s);
+		return CLI_EXIT_FAILURE;
+	}
+	for (size_t i = 0; i < n; i++)
+		fprintf(stderr, "%-40s %-5s T=%-3g reuse %6.2f%%  invocations %.0f (reduction %.1f%%)  %.1f ms  speedup %.2fx\n",
+			s[i].path, s[i].method, s[i].threshold, 100 * s[i].reuse_mean, s[i].invocations,
+			100 * s[i].invocation_reduction, s[i].gpu_ms_median, s[i].speedup_vs_ref);
+	free(s);
+	return CLI_EXIT_OK;
+}
+
 static int metrics_run(int argc, char **argv)
 {
 	if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
@@ -136,7 +183,9 @@ static int metrics_run(int argc, char **argv)
 		return diff_cmd(argc, argv);
 	if (!strcmp(argv[1], "jnd"))
 		return jnd_cmd(argc, argv);
-	fprintf(stderr, "taslab metrics: unknown subcommand '%s' (diff or jnd; see 'taslab metrics --help')\n", argv[1]);
+	if (!strcmp(argv[1], "runs"))
+		return runs_cmd(argc, argv);
+	fprintf(stderr, "taslab metrics: unknown subcommand '%s' (diff, runs or jnd; see 'taslab metrics --help')\n", argv[1]);
 	return CLI_EXIT_USAGE;
 }
 
