@@ -253,6 +253,14 @@ static void test_diff_files(void **state)
 			     "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean\n0,0,0,0,0,0,0,0,0,0,0,0,,1,\n";
 	assert_true(strncmp(csv, expect, strlen(expect)) == 0); /* identical frame 0: psnr empty (inf), no flicker */
 	free(csv);
+	/* Pooled distribution: 3 frames x 320 pixels, one pixel at d = 50, the rest at 0. */
+	snprintf(p, sizeof p, "%s/distribution.csv", out);
+	char *dist = tu_read_file(p, NULL);
+	assert_non_null(dist);
+	assert_non_null(strstr(dist, "\n0,1,959,"));
+	assert_non_null(strstr(dist, "\n50,51,1,"));
+	assert_int_equal(tu_count_lines(dist), 257);
+	free(dist);
 	snprintf(p, sizeof p, "%s/summary.json", out);
 	json_error_t je;
 	json_t *js = json_load_file(p, 0, &je);

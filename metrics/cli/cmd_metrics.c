@@ -23,12 +23,13 @@ static void metrics_usage(FILE *out)
 		"  --ocio-config F, --display D, --view V   display transform for --format exr\n"
 		"  --heatmaps          DIR/heatmaps/NNNNNN.png: max-RGB difference maps with a legend\n"
 		"  --heatmap-max V     colour scale maximum in code values (default 64)\n"
-		"  --plots             DIR/plots/frames.png, exceed.png (gnuplot)\n"
+		"  --plots             DIR/plots/frames.png, exceed.png, distribution.png (gnuplot)\n"
+		"  DIR/distribution.csv: the pooled distribution of d in 1-code-value bins (always written)\n"
 		"  --threads N         worker threads (default: all cores)\n"
 		"runs: from each run's stats.csv: reuse %%, shader invocations and their reduction against the\n"
 		"  baseline (default: the first ref run) in the paper's Table 1 layout, median GPU frame time and\n"
 		"  speedup against ref (same scene and camera), late/early/on-time/unchanged sums when present;\n"
-		"  writes DIR/runs.csv, runs.json, table1.md.\n"
+		"  writes DIR/runs.csv, runs.json, table1.md and per-T plots (reduction, reuse, speedup .png).\n"
 		"jnd: p_ref = (R + K/2)/N with a Wilson interval, JND = Phi^-1(p)/Phi^-1(0.75) (p clamped half an\n"
 		"  observation from 0 and 1 so the JND stays finite); prints JSON.\n");
 }
@@ -165,6 +166,8 @@ static int runs_cmd(int argc, char **argv)
 		free(s);
 		return CLI_EXIT_FAILURE;
 	}
+	if (mtr_runs_plot(s, n, out, err, sizeof err))
+		fprintf(stderr, "taslab metrics runs: note: %s\n", err);
 	for (size_t i = 0; i < n; i++)
 		fprintf(stderr, "%-40s %-5s T=%-3g reuse %6.2f%%  invocations %.0f (reduction %.1f%%)  %.1f ms  speedup %.2fx\n",
 			s[i].path, s[i].method, s[i].threshold, 100 * s[i].reuse_mean, s[i].invocations,

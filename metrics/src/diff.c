@@ -192,8 +192,13 @@ static int write_plots(const char *out, char *err, size_t err_size)
 		"set title 'fraction of pixels with d > T per frame'\n"
 		"set ylabel 'fraction'; set logscale y\n"
 		"plot for [c=7:12] '%s/frames.csv' using 1:(column(c) > 0 ? column(c) : 1/0) every ::1 with lines "
-		"title columnheader(c)\n",
-		out, out, out, out);
+		"title columnheader(c)\n"
+		"set output '%s/plots/distribution.png'\n"
+		"set title 'distribution of the max-RGB difference over all frames'\n"
+		"set xlabel 'd (code values)'; set ylabel 'fraction of pixels'; set logscale y; set xrange [0:*]\n"
+		"set style fill solid 0.6\n"
+		"plot '%s/distribution.csv' using 1:($4 > 0 ? $4 : 1/0) every ::1 with boxes notitle\n",
+		out, out, out, out, out, out);
 	fclose(f);
 	snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
 	FILE *p = popen(cmd, "r");
@@ -218,6 +223,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	mtr_frame_stats *stats = NULL;
 	float *map = NULL;
 	pair_buf cur = {0}, prev = {0}, next = {0};
+	uint64_t hist[256] = {0}; /* pooled distribution of d, 1 code value per bin (last bin: 255) */
+	uint64_t hist_total = 0;
 	FILE *csv = NULL;
 	char path[4096], tmp_csv[4096];
 	memset(res, 0, sizeof *res);
@@ -287,6 +294,12 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		int crc = mtr_frame_compare(&a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, d->threads, &stats[i],
 					    err, err_size);
 		compute += now_s() - tc;
+		if (!crc)
+			for (size_t px = 0; px < (size_t)cur.w * cur.h; px++) {
+				int bin = (int)map[px];
+				hist[bin > 255 ? 255 : bin]++;
+			}
+		hist_total += (uint64_t)cur.w * cur.h;
 		if (!crc && d->heatmaps) {
 			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", d->out, (int)strlen(ra.names[i]) - 4, ra.names[i]);
 			crc = mtr_heatmap_write(path, map, cur.w, cur.h, d->heatmap_max > 0 ? d->heatmap_max : 64, err, err_size);
@@ -358,6 +371,20 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	if (jr) {
 		unlink(tmp_json);
 		snprintf(err, err_size, "%s: cannot write", path);
+		goto done;
+	}
+	snprintf(path, sizeof path, "%s/distribution.csv", d->out);
+	FILE *hf = fopen(path, "w");
+	if (!hf) {
+		snprintf(err, err_size, "%s: cannot write", path);
+		goto done;
+	}
+	fprintf(hf, "d_from,d_to,count,fraction\n");
+	for (int b = 0; b < 256; b++)
+		fprintf(hf, "%d,%d,%llu,%.9g\n", b, b + 1, (unsigned long long)hist[b],
+			hist_total ? (double)hist[b] / (double)hist_total : 0.0);
+	if (fclose(hf)) {
+		snprintf(err, err_size, "%s: write error", path);
 		goto done;
 	}
 	if (d->plots && write_plots(d->out, err, err_size))

@@ -274,3 +274,48 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 	}
 	return 0;
 }
+
+int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
+{
+	char path[4096], cmd[8400];
+	snprintf(path, sizeof path, "%s/runs.gp", dir);
+	FILE *f = fopen(path, "w");
+	if (!f) {
+		snprintf(err, err_size, "%s: cannot write", path);
+		return -1;
+	}
+	/* Per-T summaries: reuse and invocation reduction against T, one line per method (from runs.csv). */
+	char methods[2048] = "";
+	for (size_t i = 0; i < n; i++) {
+		int first = strcmp(s[i].method, "ref") != 0;
+		for (size_t j = 0; j < i; j++)
+			first &= strcmp(s[j].method, s[i].method) != 0;
+		if (first && strlen(methods) + strlen(s[i].method) + 2 < sizeof methods) {
+			strcat(methods, methods[0] ? " " : "");
+			strcat(methods, s[i].method);
+		}
+	}
+	fprintf(f,
+		"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10'\nset grid\n"
+		"set key outside right top\nset logscale x 2\nset xlabel 'threshold T (code values)'\n"
+		"methods = '%s'\n"
+		"set output '%s/reduction.png'\nset title 'shader invocations: reduction against the baseline'\n"
+		"set ylabel 'reduction (%%)'\n"
+		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):9 every ::1 with linespoints title m\n"
+		"set output '%s/reuse.png'\nset title 'shading reuse'\nset ylabel 'reuse (%%)'\n"
+		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):7 every ::1 with linespoints title m\n"
+		"set output '%s/speedup.png'\nset title 'speedup against ref (median GPU frame time)'\nset ylabel 'speedup (x)'\n"
+		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):11 every ::1 with linespoints title m\n",
+		methods, dir, dir, dir, dir, dir, dir);
+	fclose(f);
+	if (!methods[0]) {
+		snprintf(err, err_size, "no non-ref runs: per-T plots skipped");
+		return -1;
+	}
+	snprintf(cmd, sizeof cmd, "gnuplot '%s' >/dev/null 2>&1", path);
+	if (system(cmd) != 0) {
+		snprintf(err, err_size, "gnuplot failed or is not installed; plots skipped (script: %s)", path);
+		return -1;
+	}
+	return 0;
+}

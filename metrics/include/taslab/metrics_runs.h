@@ -33,6 +33,10 @@ int mtr_runs_summarise(const char *const *runs, size_t n, int baseline, mtr_run_
  * one row per method, one column per T). */
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
 
+/* Draws DIR/reduction.png, reuse.png and speedup.png against T, one line per method (gnuplot, from
+ * DIR/runs.csv written by mtr_runs_write). Returns -1 with a note when gnuplot is missing or nothing to draw. */
+int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
+
 #ifdef __cplusplus
 }
 #endif
