@@ -15,6 +15,7 @@
 
 #include "taslab/imageio.h"
 #include "taslab/run.h"
+#include "plot.h"
 
 typedef struct sequence {
 	char dir[4096];
@@ -169,7 +170,7 @@ static double now_s(void)
 
 static int write_plots(const char *out, char *err, size_t err_size)
 {
-	char script[4096], cmd[8400];
+	char script[4096];
 	snprintf(script, sizeof script, "%s/plots/plots.gp", out);
 	FILE *f = fopen(script, "w");
 	if (!f) {
@@ -200,19 +201,7 @@ static int write_plots(const char *out, char *err, size_t err_size)
 		"plot '%s/distribution.csv' using 1:($4 > 0 ? $4 : 1/0) every ::1 with boxes notitle\n",
 		out, out, out, out, out, out);
 	fclose(f);
-	snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
-	FILE *p = popen(cmd, "r");
-	char line[512] = "";
-	if (p) {
-		while (fgets(line, sizeof line, p))
-			;
-	}
-	int st = p ? pclose(p) : -1;
-	if (st != 0) {
-		snprintf(err, err_size, "gnuplot failed (%s); plots skipped", st == 127 * 256 ? "not installed" : "see plots.gp");
-		return -1;
-	}
-	return 0;
+	return mtr_gnuplot(script, err, err_size);
 }
 
 int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)

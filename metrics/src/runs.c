@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "taslab/run.h"
+#include "plot.h"
 
 #define MAX_COLS 64
 
@@ -277,7 +278,7 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 
 int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
 {
-	char path[4096], cmd[8400];
+	char path[4096];
 	snprintf(path, sizeof path, "%s/runs.gp", dir);
 	FILE *f = fopen(path, "w");
 	if (!f) {
@@ -312,10 +313,5 @@ int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err
 		snprintf(err, err_size, "no non-ref runs: per-T plots skipped");
 		return -1;
 	}
-	snprintf(cmd, sizeof cmd, "gnuplot '%s' >/dev/null 2>&1", path);
-	if (system(cmd) != 0) {
-		snprintf(err, err_size, "gnuplot failed or is not installed; plots skipped (script: %s)", path);
-		return -1;
-	}
-	return 0;
+	return mtr_gnuplot(path, err, err_size);
 }
