@@ -1,7 +1,11 @@
 /* test_util.c — helpers shared by the tests. */
 #include "test_util.h"
 
+#include <arpa/inet.h>
 #include <dlfcn.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <stdio.h>
 
 #include "taslab/scene.h"
@@ -103,4 +107,40 @@ int tu_close_scene_and_device(scene **scn, vkdev **dev)
 	vkdev_destroy(dev);
 	scene_destroy(scn);
 	return msgs ? -1 : 0;
+}
+
+int tu_http(int port, const char *method, const char *path, const char *headers, const char *body, char *resp,
+	    size_t resp_size)
+{
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	if (fd < 0 || connect(fd, (struct sockaddr *)&sa, sizeof sa)) {
+		if (fd >= 0)
+			close(fd);
+		return -1;
+	}
+	char req[16384];
+	size_t bl = body ? strlen(body) : 0;
+	int n = snprintf(req, sizeof req, "%s %s HTTP/1.0\r\nHost: 127.0.0.1\r\nContent-Length: %zu\r\n%s\r\n", method, path, bl,
+			 headers ? headers : "");
+	if (write(fd, req, (size_t)n) != n || (bl && write(fd, body, bl) != (ssize_t)bl)) {
+		close(fd);
+		return -1;
+	}
+	size_t got = 0;
+	ssize_t r;
+	char *buf = malloc(1 << 20);
+	while (buf && got < (1 << 20) - 1 && (r = read(fd, buf + got, (1 << 20) - 1 - got)) > 0)
+		got += (size_t)r;
+	close(fd);
+	if (!buf)
+		return -1;
+	buf[got] = 0;
+	int status = -1;
+	sscanf(buf, "HTTP/1.%*d %d", &status);
+	char *b = strstr(buf, "\r\n\r\n");
+	snprintf(resp, resp_size, "%s", b ? b + 4 : "");
+	free(buf);
+	return status;
 }

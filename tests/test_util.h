@@ -19,6 +19,11 @@ char *tu_read_file(const char *path, size_t *len);
 int tu_count_lines(const char *s);
 
 
+/* Minimal HTTP/1.0 client for loopback tests: sends METHOD PATH (with BODY and extra header lines
+ * `headers`, may be NULL) to 127.0.0.1:port; returns the status code (or -1) and the response body. */
+int tu_http(int port, const char *method, const char *path, const char *headers, const char *body, char *resp,
+	    size_t resp_size);
+
 struct scene;
 struct vkdev;
 /* Loads scenes/NAME.json and opens lavapipe with the validation layer; 0 or -1 (message printed). */

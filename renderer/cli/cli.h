@@ -53,5 +53,6 @@ extern const cli_command cli_cmd_tonemap;
 extern const cli_command cli_cmd_clip;
 extern const cli_command cli_cmd_pair;
 extern const cli_command cli_cmd_metrics; /* metrics/cli */
+extern const cli_command cli_cmd_study;   /* study/cli */
 
 #endif

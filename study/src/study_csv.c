@@ -1,0 +1,364 @@
+/* study_csv.c — ratings in and out: long-format CSV (DESIGN section 7) and pwcmp layout (study.h). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <unistd.h>
+
+#include "study_internal.h"
+
+static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
+
+/* Query of every answered test trial, one row per answer, in participant / trial order. */
+static const char *ANSWERS_SQL =
+	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms"
+	" FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx"
+	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
+	" WHERE t.kind = 'test' ORDER BY p.id, t.idx";
+
+static int open_tmp(const char *path, char *tmp, size_t tmp_size, FILE **f, char *err, size_t err_size)
+{
+	snprintf(tmp, tmp_size, "%s.tmp%ld", path, (long)getpid());
+	*f = fopen(tmp, "w");
+	if (!*f) {
+		snprintf(err, err_size, "%s: cannot write: %s", path, strerror(errno));
+		return STY_ERR_ARG;
+	}
+	return STY_OK;
+}
+
+static int close_tmp(FILE *f, const char *tmp, const char *path, char *err, size_t err_size)
+{
+	if (fclose(f) != 0 || rename(tmp, path) != 0) {
+		unlink(tmp);
+		snprintf(err, err_size, "%s: write failed: %s", path, strerror(errno));
+		return STY_ERR_ARG;
+	}
+	return STY_OK;
+}
+
+int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
+{
+	char tmp[4200];
+	FILE *f;
+	sqlite3_stmt *st;
+	if (open_tmp(path, tmp, sizeof tmp, &f, err, err_size))
+		return STY_ERR_ARG;
+	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
+		fclose(f);
+		unlink(tmp);
+		return sty_db_fail(s, err, err_size, "export");
+	}
+	fprintf(f, "%s\n", LONG_HEADER);
+	while (sqlite3_step(st) == SQLITE_ROW) {
+		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
+		fprintf(f, "%s,%d,%s,%s,%s,%s,", sqlite3_column_text(st, 0), sqlite3_column_int(st, 1),
+			sqlite3_column_text(st, 2), sqlite3_column_text(st, 3), sqlite3_column_text(st, 4),
+			sqlite3_column_text(st, 5));
+		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
+			fprintf(f, "%g", sqlite3_column_double(st, 6));
+		fprintf(f, ",%d,%d,%d,", ref_first, answer, ref_first ? -answer : answer);
+		if (sqlite3_column_type(st, 9) != SQLITE_NULL)
+			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 9));
+		fputc('\n', f);
+	}
+	sqlite3_finalize(st);
+	return close_tmp(f, tmp, path, err, err_size);
+}
+
+int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
+{
+	char tmp[4200];
+	FILE *f;
+	sqlite3_stmt *st;
+	if (open_tmp(path, tmp, sizeof tmp, &f, err, err_size))
+		return STY_ERR_ARG;
+	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
+		fclose(f);
+		unlink(tmp);
+		return sty_db_fail(s, err, err_size, "export");
+	}
+	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
+	while (sqlite3_step(st) == SQLITE_ROW) {
+		char cond[64], grp[160];
+		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
+			snprintf(cond, sizeof cond, "%s_T%g", sqlite3_column_text(st, 5), sqlite3_column_double(st, 6));
+		else
+			snprintf(cond, sizeof cond, "%s", sqlite3_column_text(st, 5));
+		snprintf(grp, sizeof grp, "%s/%s", sqlite3_column_text(st, 2), sqlite3_column_text(st, 3));
+		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
+		const char *a = ref_first ? "ref" : cond, *b = ref_first ? cond : "ref";
+		const char *obs = (const char *)sqlite3_column_text(st, 0);
+		if (answer == 0) { /* "same": half a vote each way */
+			fprintf(f, "%s,%s,%s,%s,1\n%s,%s,%s,%s,0\n", obs, grp, a, b, obs, grp, a, b);
+		} else {
+			fprintf(f, "%s,%s,%s,%s,%d\n", obs, grp, a, b, answer < 0 ? 1 : 0); /* answer < 0: first clip better */
+		}
+	}
+	sqlite3_finalize(st);
+	return close_tmp(f, tmp, path, err, err_size);
+}
+
+/* ------------------------------------------------------------------ import */
+
+typedef struct row {
+	char participant[64], scene[64], camera[64], motion[16], method[32];
+	long trial;
+	double T; /* NAN: none */
+	int ref_first, answer, rating;
+	long long rt_ms; /* -1: none */
+} row;
+
+static int split(char *line, char **f, int max)
+{
+	int n = 0;
+	char *p = line;
+	for (;;) {
+		if (n == max)
+			return max + 1;
+		f[n++] = p;
+		char *c = strchr(p, ',');
+		if (!c)
+			break;
+		*c = 0;
+		p = c + 1;
+	}
+	char *nl = strpbrk(f[n - 1], "\r\n");
+	if (nl)
+		*nl = 0;
+	return n;
+}
+
+static int parse_long(const char *s, long lo, long hi, long *out)
+{
+	char *e;
+	errno = 0;
+	long v = strtol(s, &e, 10);
+	if (!*s || *e || errno || v < lo || v > hi)
+		return -1;
+	*out = v;
+	return 0;
+}
+
+static int safe_name(const char *s, size_t max)
+{
+	size_t n = strlen(s);
+	if (n == 0 || n >= max)
+		return 0;
+	for (; *s; s++)
+		if (*s == '"' || *s == '\'' || (unsigned char)*s < 32)
+			return 0;
+	return 1;
+}
+
+static int parse_row(char *line, row *r, char *why, size_t why_size)
+{
+	char *f[12];
+	int n = split(line, f, 11);
+	if (n != 11) {
+		snprintf(why, why_size, "expected 11 columns, found %d", n > 11 ? 12 : n);
+		return -1;
+	}
+	long v;
+	if (!safe_name(f[0], sizeof r->participant) || !safe_name(f[2], sizeof r->scene) ||
+	    !safe_name(f[3], sizeof r->camera) || !safe_name(f[5], sizeof r->method)) {
+		snprintf(why, why_size, "participant, scene, camera and method must be non-empty plain text");
+		return -1;
+	}
+	snprintf(r->participant, sizeof r->participant, "%s", f[0]);
+	snprintf(r->scene, sizeof r->scene, "%s", f[2]);
+	snprintf(r->camera, sizeof r->camera, "%s", f[3]);
+	snprintf(r->method, sizeof r->method, "%s", f[5]);
+	if (parse_long(f[1], 0, 1000000, &v)) {
+		snprintf(why, why_size, "trial '%s' is not a whole number >= 0", f[1]);
+		return -1;
+	}
+	r->trial = v;
+	if (strcmp(f[4], "stationary") && strcmp(f[4], "moving")) {
+		snprintf(why, why_size, "camera_motion '%s' is not stationary or moving", f[4]);
+		return -1;
+	}
+	snprintf(r->motion, sizeof r->motion, "%s", f[4]);
+	r->T = NAN;
+	if (f[6][0]) {
+		char *e;
+		r->T = strtod(f[6], &e);
+		if (*e || !isfinite(r->T) || r->T <= 0) {
+			snprintf(why, why_size, "T '%s' is not a positive number (leave it empty for methods without one)", f[6]);
+			return -1;
+		}
+	}
+	if (parse_long(f[7], 0, 1, &v)) {
+		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[7]);
+		return -1;
+	}
+	r->ref_first = (int)v;
+	if (parse_long(f[8], -2, 2, &v)) {
+		snprintf(why, why_size, "answer '%s' is not an integer from -2 to 2", f[8]);
+		return -1;
+	}
+	r->answer = (int)v;
+	if (parse_long(f[9], -2, 2, &v)) {
+		snprintf(why, why_size, "rating '%s' is not an integer from -2 to 2", f[9]);
+		return -1;
+	}
+	r->rating = (int)v;
+	if (r->rating != (r->ref_first ? -r->answer : r->answer)) {
+		snprintf(why, why_size, "rating %d contradicts answer %d with ref_first %d (rating = ref_first ? -answer : answer)",
+			 r->rating, r->answer, r->ref_first);
+		return -1;
+	}
+	r->rt_ms = -1;
+	if (f[10][0]) {
+		if (parse_long(f[10], 0, 86400000, &v)) {
+			snprintf(why, why_size, "rt_ms '%s' is not a whole number of milliseconds", f[10]);
+			return -1;
+		}
+		r->rt_ms = v;
+	}
+	return 0;
+}
+
+int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_t err_size)
+{
+	*rows_out = 0;
+	FILE *f = fopen(path, "r");
+	if (!f) {
+		snprintf(err, err_size, "%s: %s", path, strerror(errno));
+		return STY_ERR_ARG;
+	}
+	sqlite3_stmt *st;
+	sqlite3_prepare_v2(s->db, "SELECT count(*) FROM participants", -1, &st, NULL);
+	int used = sqlite3_step(st) == SQLITE_ROW && sqlite3_column_int(st, 0) > 0;
+	sqlite3_finalize(st);
+	if (used) {
+		fclose(f);
+		snprintf(err, err_size, "%s already holds participants; import into a new study database", s->path);
+		return STY_ERR_ARG;
+	}
+	char line[4096], why[256];
+	row *rows = NULL;
+	size_t n = 0, lineno = 1;
+	int rc = STY_ERR_ARG;
+	if (!fgets(line, sizeof line, f) || strncmp(line, LONG_HEADER, strlen(LONG_HEADER)) ||
+	    (line[strlen(LONG_HEADER)] != '\n' && line[strlen(LONG_HEADER)] != '\r' && line[strlen(LONG_HEADER)])) {
+		snprintf(err, err_size, "%s:1: the header must be exactly: %s", path, LONG_HEADER);
+		goto done;
+	}
+	/* Validate everything before touching the database. */
+	while (fgets(line, sizeof line, f)) {
+		lineno++;
+		if (!strchr(line, '\n') && !feof(f)) {
+			snprintf(err, err_size, "%s:%zu: line longer than %zu characters", path, lineno, sizeof line - 1);
+			goto done;
+		}
+		if (line[0] == '\n' || (line[0] == '\r' && line[1] == '\n'))
+			continue;
+		row *nr = realloc(rows, (n + 1) * sizeof *nr);
+		if (!nr) {
+			snprintf(err, err_size, "out of memory");
+			goto done;
+		}
+		rows = nr;
+		if (parse_row(line, &rows[n], why, sizeof why)) {
+			snprintf(err, err_size, "%s:%zu: %s; nothing imported", path, lineno, why);
+			goto done;
+		}
+		for (size_t k = 0; k < n; k++)
+			if (rows[k].trial == rows[n].trial && !strcmp(rows[k].participant, rows[n].participant)) {
+				snprintf(err, err_size, "%s:%zu: participant %s has trial %ld twice; nothing imported", path, lineno,
+					 rows[n].participant, rows[n].trial);
+				goto done;
+			}
+		n++;
+	}
+	if (n == 0) {
+		snprintf(err, err_size, "%s: no ratings after the header", path);
+		goto done;
+	}
+	if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
+		rc = sty_db_fail(s, err, err_size, "import");
+		goto done;
+	}
+	int ok = 1;
+	sqlite3_stmt *fc, *ic, *fp, *ip, *it, *ia;
+	sqlite3_prepare_v2(s->db, "SELECT id FROM conditions WHERE scene=? AND camera=? AND camera_motion=? AND method=? AND T IS ?",
+			   -1, &fc, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch)"
+				  " VALUES(?,?,?,?,?,'','',0)", -1, &ic, NULL);
+	sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE label=?", -1, &fp, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO participants(code, label) VALUES(?, ?)", -1, &ip, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind) VALUES(?,?,?,?,'test')", -1,
+			   &it, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at) VALUES(?,?,?,?,'imported')", -1, &ia,
+			   NULL);
+	for (size_t i = 0; ok && i < n; i++) {
+		row *r = &rows[i];
+		sqlite3_int64 cid = -1, pid = -1;
+		sqlite3_reset(fc);
+		sqlite3_bind_text(fc, 1, r->scene, -1, SQLITE_STATIC);
+		sqlite3_bind_text(fc, 2, r->camera, -1, SQLITE_STATIC);
+		sqlite3_bind_text(fc, 3, r->motion, -1, SQLITE_STATIC);
+		sqlite3_bind_text(fc, 4, r->method, -1, SQLITE_STATIC);
+		isnan(r->T) ? sqlite3_bind_null(fc, 5) : sqlite3_bind_double(fc, 5, r->T);
+		if (sqlite3_step(fc) == SQLITE_ROW)
+			cid = sqlite3_column_int64(fc, 0);
+		else {
+			sqlite3_reset(ic);
+			sqlite3_bind_text(ic, 1, r->scene, -1, SQLITE_STATIC);
+			sqlite3_bind_text(ic, 2, r->camera, -1, SQLITE_STATIC);
+			sqlite3_bind_text(ic, 3, r->motion, -1, SQLITE_STATIC);
+			sqlite3_bind_text(ic, 4, r->method, -1, SQLITE_STATIC);
+			isnan(r->T) ? sqlite3_bind_null(ic, 5) : sqlite3_bind_double(ic, 5, r->T);
+			ok = sqlite3_step(ic) == SQLITE_DONE;
+			cid = sqlite3_last_insert_rowid(s->db);
+		}
+		sqlite3_reset(fp);
+		sqlite3_bind_text(fp, 1, r->participant, -1, SQLITE_STATIC);
+		if (sqlite3_step(fp) == SQLITE_ROW)
+			pid = sqlite3_column_int64(fp, 0);
+		else {
+			uint8_t b[16];
+			char code[33];
+			ok = ok && getrandom(b, sizeof b, 0) == (ssize_t)sizeof b;
+			for (int k = 0; k < 16; k++)
+				snprintf(code + 2 * k, 3, "%02x", b[k]);
+			sqlite3_reset(ip);
+			sqlite3_bind_text(ip, 1, code, -1, SQLITE_TRANSIENT);
+			sqlite3_bind_text(ip, 2, r->participant, -1, SQLITE_STATIC);
+			ok = ok && sqlite3_step(ip) == SQLITE_DONE;
+			pid = sqlite3_last_insert_rowid(s->db);
+		}
+		sqlite3_reset(it);
+		sqlite3_bind_int64(it, 1, pid);
+		sqlite3_bind_int64(it, 2, r->trial);
+		sqlite3_bind_int64(it, 3, cid);
+		sqlite3_bind_int(it, 4, r->ref_first);
+		ok = ok && sqlite3_step(it) == SQLITE_DONE;
+		sqlite3_reset(ia);
+		sqlite3_bind_int64(ia, 1, pid);
+		sqlite3_bind_int64(ia, 2, r->trial);
+		sqlite3_bind_int(ia, 3, r->answer);
+		r->rt_ms >= 0 ? sqlite3_bind_int64(ia, 4, r->rt_ms) : sqlite3_bind_null(ia, 4);
+		ok = ok && sqlite3_step(ia) == SQLITE_DONE;
+	}
+	sqlite3_finalize(fc);
+	sqlite3_finalize(ic);
+	sqlite3_finalize(fp);
+	sqlite3_finalize(ip);
+	sqlite3_finalize(it);
+	sqlite3_finalize(ia);
+	if (!ok || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+		rc = sty_db_fail(s, err, err_size, "import");
+		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
+		goto done;
+	}
+	*rows_out = n;
+	rc = STY_OK;
+done:
+	free(rows);
+	fclose(f);
+	return rc;
+}
