@@ -1,0 +1,65 @@
+// study_session.mjs — a simulated participant in Debian's Chromium (playwright-core): opens the participant
+// link, answers every trial by keyboard (cycling 1..5), reloads the page midway and resumes, takes breaks.
+// Then checks through the API and the token-protected export that every trial was answered exactly once.
+//   node study_session.mjs BASE_URL CODE ADMIN_TOKEN EXPECTED_TEST_TRIALS
+import { chromium } from 'playwright-core';
+
+const [base, code, token, expectedArg] = process.argv.slice(2);
+const expected = Number(expectedArg);
+const timer = setTimeout(() => { console.error('study_session: timed out'); process.exit(2); }, 180000);
+let browser, status = 0;
+try {
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync',
+           '--autoplay-policy=no-user-gesture-required'],
+  });
+  const page = await browser.newPage();
+  const log = [];
+  page.on('console', m => log.push('console: ' + m.text()));
+  page.on('pageerror', e => log.push('pageerror: ' + e.message));
+  globalThis.dumpState = async () => log.concat([await page.evaluate(() =>
+    [...document.querySelectorAll('.panel')].map(x => x.id + ':' + getComputedStyle(x).display).join(' ') +
+    ' progress=' + document.getElementById('progress').textContent + ' msg=' + document.getElementById('msg').textContent)]);
+  const visible = id => page.locator('#' + id).isVisible();
+  await page.goto(`${base}/p/${code}`);
+  await page.click('#start');
+  let answered = 0, reloaded = false, breaks = 0;
+  for (let step = 0; step < 200; step++) {
+    await page.waitForFunction(() => ['ask', 'break', 'done'].some(id =>
+      getComputedStyle(document.getElementById(id)).display === 'block'), null, { timeout: 30000 });
+    if (await visible('done')) break;
+    if (await visible('break')) {
+      breaks++;
+      await page.click('#resume');
+      await page.waitForFunction(() => getComputedStyle(document.getElementById('break')).display !== 'block');
+      continue;
+    }
+    const before = await page.locator('#progress').textContent();
+    await page.keyboard.press(String(1 + (answered % 5)));
+    answered++;
+    await page.waitForFunction(b => document.getElementById('progress').textContent !== b ||
+      getComputedStyle(document.getElementById('done')).display === 'block', before, { timeout: 30000 });
+    if (answered === 2 && !reloaded) {          // reload midway: the session resumes where it was
+      reloaded = true;
+      await page.reload();
+      await page.click('#start');
+    }
+  }
+  const state = await (await fetch(`${base}/api/${code}/trial`)).json();
+  const csv = await (await fetch(`${base}/admin/export.csv?token=${token}`)).text();
+  const rows = csv.trim().split('\n').slice(1);
+  const trials = new Set(rows.map(r => r.split(',').slice(0, 2).join(',')));
+  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)); server: ${state.answered}/${state.total} done=${state.done}; export: ${rows.length} test ratings, ${trials.size} distinct`);
+  if (!state.done || state.answered !== state.total || answered !== state.total || rows.length !== expected || trials.size !== rows.length)
+    status = 1;
+} catch (e) {
+  console.error('study_session: ' + String(e.message || e).split('\n')[0]);
+  if (globalThis.dumpState) console.error((await globalThis.dumpState().catch(() => [])).join('\n'));
+  status = 2;
+} finally {
+  clearTimeout(timer);
+  if (browser) await browser.close();
+}
+process.exit(status);
