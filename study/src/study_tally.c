@@ -416,10 +416,10 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			mts[nmt++] = d.c[i];
 		}
 	}
-	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL;
-	const char *names[5] = {"conditions.csv", "anova.csv", "posthoc.csv", "jod.csv", "tables.md"};
-	FILE **files[5] = {&fc, &fa, &fp, &fj, &fmd};
-	for (int k = 0; k < 5; k++) {
+	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL;
+	const char *names[6] = {"conditions.csv", "anova.csv", "posthoc.csv", "jod.csv", "tables.md", "fig3.csv"};
+	FILE **files[6] = {&fc, &fa, &fp, &fj, &fmd, &ff};
+	for (int k = 0; k < 6; k++) {
 		snprintf(path, sizeof path, "%s/%s", td->out, names[k]);
 		if (!(*files[k] = fopen(path, "w"))) {
 			snprintf(err, err_size, "%s: cannot write", path);
@@ -431,6 +431,8 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	fprintf(fa, "method,T,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
 	fprintf(fp, "method,T,factor,level_1,level_2,t,df,p,p_bonferroni\n");
 	fprintf(fj, "method,T,scene,camera,jod,jod_lo,jod_hi,participants\n");
+	fprintf(ff, "method,T,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
+	char methods[1024] = "";
 	fprintf(fmd, "# Study results\n\n## Conditions\n\n| method | T | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
 		     "|---|---|---|---|---|---|---|---|\n");
 	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
@@ -460,6 +462,14 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			csv_num(fc, r.Q_lo, "%.6f"), fputc(',', fc);
 			csv_num(fc, r.Q_hi, "%.6f"), fputc(',', fc);
 			fprintf(fc, "%.6f,%.6f,%.6f,%.6f\n", r.j.p, r.j.p_lo, r.j.p_hi, r.j.jnd);
+			if (i == d.nc && !isnan(mts[m].T)) { /* pooled row: one point of the Fig. 3 plot */
+				fprintf(ff, "%s,%s,%.6f,", mts[m].method, Ts, r.Q);
+				csv_num(ff, r.Q_lo, "%.6f"), fputc(',', ff);
+				csv_num(ff, r.Q_hi, "%.6f");
+				fprintf(ff, ",%.4f,%.4f,%.4f\n", 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi);
+				if (!strstr(methods, mts[m].method) && strlen(methods) + strlen(mts[m].method) + 2 < sizeof methods)
+					strcat(strcat(methods, methods[0] ? " " : ""), mts[m].method);
+			}
 			fprintf(fmd, "| %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", mts[m].method, Ts,
 				sc, ca, r.n, r.Q, r.Q_lo, r.Q_hi, 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi, r.j.jnd);
 			json_array_append_new(jc, json_pack("{s:s, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}", "method",
@@ -585,7 +595,7 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	json_decref(ja);
 	rc = STY_OK;
 close:
-	for (int k = 0; k < 5; k++)
+	for (int k = 0; k < 6; k++)
 		if (*files[k] && fclose(*files[k]) != 0 && rc == STY_OK) {
 			snprintf(err, err_size, "%s/%s: write error", td->out, names[k]);
 			rc = STY_ERR_ARG;
@@ -596,16 +606,19 @@ close:
 		FILE *g = fopen(path, "w");
 		if (g) {
 			fprintf(g,
-				"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10'\n"
+				"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10' noenhanced\n"
 				"set output '%s/fig3.png'\nset grid\nset logscale x 2\nset xlabel 'threshold T'\n"
-				"set ylabel 'Q (mean rating, +2 = reference much better)'\nset y2label 'p_ref (%%)'\n"
+				"set offsets graph 0.06, graph 0.06, 0, 0\nset key outside right top\n"
+				"set title 'Quality Q (+2 = reference much better) and preference for the reference, pooled over scenes and cameras'\n"
+				"set ylabel 'Q [95%% CI]'\nset y2label 'p_ref (%%)'\n"
 				"set yrange [-2:2]; set y2range [0:100]; set ytics nomirror; set y2tics\n"
 				"set arrow from graph 0, second 75 to graph 1, second 75 nohead dt 2\n"
 				"set label '1 JND (p_ref = 75%%)' at graph 0.02, second 77\n"
-				"plot '%s/conditions.csv' using (strcol(3) eq 'all' ? $2 : 1/0):6:7:8 every ::1 with yerrorlines "
-				"title 'Q [95%% CI]', '' using (strcol(3) eq 'all' ? $2 : 1/0):($9*100) every ::1 axes x1y2 "
-				"with linespoints title 'p_ref'\n",
-				td->out, td->out);
+				"methods = '%s'\n"
+				"plot for [m in methods] '%s/fig3.csv' using (strcol(1) eq m ? $2 : 1/0):3:4:5 every ::1 with yerrorlines "
+				"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):6 every ::1 axes x1y2 "
+				"with linespoints dt 3 title 'p_ref '.m\n",
+				td->out, methods, td->out);
 			fclose(g);
 			char cmd[8600];
 			snprintf(cmd, sizeof cmd, "gnuplot '%s' >/dev/null 2>&1", path);
