@@ -39,18 +39,28 @@ static int close_tmp(FILE *f, const char *tmp, const char *path, char *err, size
 	return STY_OK;
 }
 
+/* Opens the temporary output file and the answers query shared by both export formats. */
+static int begin_export(sty *s, const char *path, char *tmp, size_t tmp_size, FILE **f, sqlite3_stmt **st, char *err,
+			size_t err_size)
+{
+	if (open_tmp(path, tmp, tmp_size, f, err, err_size))
+		return STY_ERR_ARG;
+	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, st, NULL)) {
+		fclose(*f);
+		unlink(tmp);
+		return sty_db_fail(s, err, err_size, "export");
+	}
+	return STY_OK;
+}
+
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 {
 	char tmp[4200];
 	FILE *f;
 	sqlite3_stmt *st;
-	if (open_tmp(path, tmp, sizeof tmp, &f, err, err_size))
-		return STY_ERR_ARG;
-	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
-		fclose(f);
-		unlink(tmp);
-		return sty_db_fail(s, err, err_size, "export");
-	}
+	int rc = begin_export(s, path, tmp, sizeof tmp, &f, &st, err, err_size);
+	if (rc)
+		return rc;
 	fprintf(f, "%s\n", LONG_HEADER);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
@@ -73,13 +83,9 @@ int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 	char tmp[4200];
 	FILE *f;
 	sqlite3_stmt *st;
-	if (open_tmp(path, tmp, sizeof tmp, &f, err, err_size))
-		return STY_ERR_ARG;
-	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
-		fclose(f);
-		unlink(tmp);
-		return sty_db_fail(s, err, err_size, "export");
-	}
+	int rc = begin_export(s, path, tmp, sizeof tmp, &f, &st, err, err_size);
+	if (rc)
+		return rc;
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		char cond[64], grp[160];
