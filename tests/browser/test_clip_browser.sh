@@ -3,13 +3,7 @@
 # Debian's Chromium that chosen frames drawn from the <video> equal the PNG frames exactly (max difference 0).
 # A negative control compares each frame with its neighbour's PNG and must find differences, so the
 # comparison can fail. Usage: test_clip_browser.sh TASLAB_BINARY WORK_DIR
-set -euo pipefail
-taslab="$1" work="$2"
-here="$(cd "$(dirname "$0")" && pwd)"
-export ASAN_OPTIONS=detect_leaks=0
-[ -x /usr/bin/chromium ] || { echo "chromium is not installed: run scripts/setup"; exit 1; }
-[ -d "$here/node_modules/playwright-core" ] || { echo "playwright-core is not installed: run scripts/setup"; exit 1; }
-rm -rf "$work" && mkdir -p "$work"
+source "$(dirname "$0")/common.sh"
 "$taslab" render --scene turntable --camera orbit --frames 30:42 --size 96x54 --device lavapipe --quiet --out "$work/run" >/dev/null
 "$taslab" clip "$work/run" --out "$work/clip.webm" 2>/dev/null
 node "$here/clip_fidelity.mjs" "$work/clip.webm" "$work/run/frames" 60 30 30,31,36,41

@@ -2,13 +2,8 @@
 # test_study_browser.sh — browser end-to-end test of the study (ctest): a participant completes a session in
 # Chromium, reloading midway; every answer must be in the database exactly once.
 # Usage: test_study_browser.sh TASLAB_BINARY WORK_DIR
-set -euo pipefail
-taslab="$1" work="$2"
-here="$(cd "$(dirname "$0")" && pwd)"
-export ASAN_OPTIONS=detect_leaks=0
-[ -x /usr/bin/chromium ] || { echo "chromium is not installed: run scripts/setup"; exit 1; }
-[ -d "$here/node_modules/playwright-core" ] || { echo "playwright-core is not installed: run scripts/setup"; exit 1; }
-rm -rf "$work" && mkdir -p "$work/stimuli"
+source "$(dirname "$0")/common.sh"
+mkdir -p "$work/stimuli"
 "$taslab" render --scene turntable --frames 0:6 --size 64x36 --device lavapipe --quiet --no-exr --out "$work/run" >/dev/null
 "$taslab" clip "$work/run" --out "$work/clip.webm" 2>/dev/null
 for set in calm-still:calm:still:stationary calm-walk:calm:walk:moving; do
