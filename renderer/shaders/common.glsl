@@ -31,6 +31,7 @@ struct FrameState {
 	vec4 shadow_params;    // x 1/shadow map size, y PCF radius in texels
 	GpuLight lights[MAX_LIGHTS];
 	mat4 shadow_matrix[MAX_SHADOW_LAYERS]; // world -> light clip space, per shadow layer
+	uvec4 shadow_phys[MAX_SHADOW_LAYERS / 4]; // physical shadow-map layer of each logical layer: chunk << 16 | layer
 };
 
 struct GpuObject {
@@ -52,13 +53,18 @@ layout(std430, set = 0, binding = 1) readonly buffer Objects { GpuObject objects
 layout(std430, set = 0, binding = 2) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = 3) uniform sampler2DArray color_textures; // sRGB formats: decoded on fetch
 layout(set = 0, binding = 4) uniform sampler2DArray data_textures;  // linear formats
-layout(set = 0, binding = 5) uniform sampler2DArrayShadow shadow_maps;
+// Shadow maps live in a pool of physical layers spread over SHADOW_CHUNKS array images (the shadow-map
+// history of temporal forward rendering needs more layers than one allocation holds); the state slot
+// maps its logical layers to physical ones (shadow_phys), so slots share layers that did not change.
+#define SHADOW_CHUNKS 16
+layout(set = 0, binding = 5) uniform sampler2DArrayShadow shadow_maps[SHADOW_CHUNKS];
 
 layout(push_constant) uniform Push {
 	uint slot;          // state slot shaded / rasterised
 	uint object;        // object index
 	uint object_count;  // objects per slot in the Objects ring
 	uint layer;         // shadow pass: shadow layer being rendered
+	uint aux[4];        // method-specific (tfr: previous slot, max age K, frame flags, threshold bits)
 } pc;
 
 GpuObject object_at(uint slot, uint object) { return objects[slot * pc.object_count + object]; }

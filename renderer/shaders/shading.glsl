@@ -44,9 +44,16 @@ float shadow_lookup(uint slot, int layer, vec3 world_pos)
 	if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z >= 1.0)
 		return 1.0;
 	float radius = states[slot].shadow_params.x * states[slot].shadow_params.y;
+	uint phys = states[slot].shadow_phys[layer >> 2][layer & 3];
+	float pl = float(phys & 0xFFFFu);
 	float lit = 0.0;
-	for (int i = 0; i < 16; i++)
-		lit += texture(shadow_maps, vec4(uv + POISSON16[i] * radius, float(layer), ndc.z));
+	// No descriptor indexing on lavapipe: each chunk is sampled with a constant index.
+#define TL_PCF(c) case c: for (int i = 0; i < 16; i++) lit += texture(shadow_maps[c], vec4(uv + POISSON16[i] * radius, pl, ndc.z)); break;
+	switch (int(phys >> 16)) {
+	TL_PCF(0) TL_PCF(1) TL_PCF(2) TL_PCF(3) TL_PCF(4) TL_PCF(5) TL_PCF(6) TL_PCF(7)
+	TL_PCF(8) TL_PCF(9) TL_PCF(10) TL_PCF(11) TL_PCF(12) TL_PCF(13) TL_PCF(14) TL_PCF(15)
+	}
+#undef TL_PCF
 	return lit * (1.0 / 16.0);
 }
 

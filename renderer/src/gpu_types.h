@@ -27,7 +27,10 @@ typedef struct gpu_frame_state {
 	float shadow_params[4];
 	gpu_light lights[SCENE_MAX_LIGHTS];
 	float shadow_matrix[SCENE_MAX_SHADOW_LAYERS][16];
+	uint32_t shadow_phys[SCENE_MAX_SHADOW_LAYERS]; /* chunk << 16 | layer in chunk */
 } gpu_frame_state;
+
+#define GPU_SHADOW_CHUNKS 16
 
 typedef struct gpu_object {
 	float world[16];
@@ -45,10 +48,12 @@ typedef struct gpu_material {
 
 typedef struct gpu_push {
 	uint32_t slot, object, object_count, layer;
+	uint32_t aux[4];
 } gpu_push;
 
 _Static_assert(sizeof(gpu_light) == 64, "std430 GpuLight");
-_Static_assert(sizeof(gpu_frame_state) == 3 * 64 + 4 * 16 + SCENE_MAX_LIGHTS * 64 + SCENE_MAX_SHADOW_LAYERS * 64,
+_Static_assert(sizeof(gpu_frame_state) == 3 * 64 + 4 * 16 + SCENE_MAX_LIGHTS * 64 + SCENE_MAX_SHADOW_LAYERS * 64 +
+		       SCENE_MAX_SHADOW_LAYERS * 4,
 	       "std430 FrameState");
 _Static_assert(sizeof(gpu_object) == 144, "std430 GpuObject");
 _Static_assert(sizeof(gpu_material) == 80, "std430 GpuMaterial");

@@ -6,10 +6,16 @@
 
 static const char *const ref_passes[] = {"shadow", "depth", "shade", "display", "readback"};
 
+static int ref_prepare(render *r, uint32_t frame, char *err, size_t err_size)
+{
+	render_update_state(r, 0, (double)frame / (double)r->desc.fps);
+	return render_shadow_plan(r, 0, err, err_size);
+}
+
 static void ref_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 {
+	(void)frame;
 	uint32_t slot = 0;
-	render_update_state(r, slot, (double)frame / (double)r->desc.fps);
 	render_ts(r, cmd);
 	render_pass_shadows(r, cmd, slot);
 	render_ts(r, cmd);
@@ -37,6 +43,7 @@ const render_method_ops render_method_ref = {
 	.info = {"ref", "forward shading of every visible sample every frame (the reference)", true},
 	.pass_names = ref_passes,
 	.pass_count = sizeof ref_passes / sizeof ref_passes[0],
+	.prepare = ref_prepare,
 	.record = ref_record,
 	.collect = ref_collect,
 };

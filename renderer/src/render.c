@@ -369,7 +369,7 @@ static void draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p
 {
 	const scene *s = r->scene;
 	const scene_object *o = &s->objects[i];
-	gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer};
+	gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer, {r->push_aux[0], r->push_aux[1], r->push_aux[2], r->push_aux[3]}};
 	vkCmdPushConstants(cmd, p->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
 	if (set_cull)
 		vkCmdSetCullMode(cmd, s->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
@@ -404,7 +404,7 @@ static int has_alpha_mode(const render *r, scene_alpha_mode mode)
 /* One depth-only rendering into `view` (cleared to 1): shadow layers and the depth pre-pass. Opaque
  * objects use `pipe`; alpha-masked ones `mask_pipe` (alpha test in the fragment shader); blended
  * objects write no depth and cast no shadow. */
-static void depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
+void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
 			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
 			    int shadow_pass)
 {
@@ -434,24 +434,6 @@ static void depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, ui
 	vkCmdEndRendering(cmd);
 }
 
-void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
-{
-	if (!r->shadow_layers)
-		return;
-	uint32_t n = r->scene->shadow_map_size;
-	vkdev_barrier_image(cmd, &r->shadow, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
-			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	for (uint32_t layer = 0; layer < r->shadow_layers; layer++)
-		depth_only_pass(r, cmd, r->shadow_layer_views[layer], n, n, &r->shadow_pipe, &r->shadow_mask_pipe, slot, layer, 1);
-	vkdev_barrier_image(cmd, &r->shadow, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-			    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-			    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-}
-
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
@@ -461,7 +443,7 @@ void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, 0);
+	render_depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, 0);
 	VkMemoryBarrier2 mb = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
 		.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
@@ -474,6 +456,12 @@ void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 }
 
 void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot)
+{
+	render_pass_shade_with(r, cmd, slot, &r->shade_pipe, VK_NULL_HANDLE);
+}
+
+void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const render_pipeline *opaque,
+			    VkDescriptorSet method_set)
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
 	const scene *s = r->scene;
@@ -507,9 +495,11 @@ void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot)
 	if (r->stats_pool)
 		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
 	vkCmdBeginRendering(cmd, &ri);
-	bind_scene(r, cmd, &r->shade_pipe);
+	bind_scene(r, cmd, opaque);
+	if (method_set)
+		vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, opaque->layout, 1, 1, &method_set, 0, NULL);
 	set_viewport(cmd, w, h);
-	draw_objects(r, cmd, &r->shade_pipe, slot, 0, OPAQUE_BIT | MASK_BIT, 0, 1);
+	draw_objects(r, cmd, opaque, slot, 0, OPAQUE_BIT | MASK_BIT, 0, 1);
 	if (r->blend_count) {
 		/* glTF BLEND: "over" compositing after the opaque surfaces, objects sorted back to front by the
 		 * distance of their bounds centre from the camera (per object, not per triangle). */
@@ -597,6 +587,7 @@ typedef struct pipe_desc {
 	int depth_write, color, bias, blend;
 	VkCompareOp depth_op;
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
+	VkDescriptorSetLayout method_set; /* optional set 1 */
 } pipe_desc;
 
 static VkResult make_graphics(render *r, const pipe_desc *pd, render_pipeline *out)
@@ -610,10 +601,11 @@ static VkResult make_graphics(render *r, const pipe_desc *pd, render_pipeline *o
 	if (res)
 		goto done;
 	VkPushConstantRange pcr = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(gpu_push)};
+	VkDescriptorSetLayout sets[2] = {r->scene_set_layout, pd->method_set};
 	VkPipelineLayoutCreateInfo li = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
-		.setLayoutCount = 1,
-		.pSetLayouts = &r->scene_set_layout,
+		.setLayoutCount = pd->method_set ? 2u : 1u,
+		.pSetLayouts = sets,
 		.pushConstantRangeCount = 1,
 		.pPushConstantRanges = &pcr,
 	};
@@ -777,7 +769,7 @@ static int create_descriptors(render *r, char *err, size_t err_size)
 		{2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, gs, NULL},
 		{3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, gs, NULL},
 		{4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, gs, NULL},
-		{5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, gs, NULL},
+		{5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GPU_SHADOW_CHUNKS, gs, NULL},
 	};
 	VkDescriptorSetLayoutCreateInfo sl = {
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 6, .pBindings = sb};
@@ -790,12 +782,12 @@ static int create_descriptors(render *r, char *err, size_t err_size)
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 2, .pBindings = db};
 	CHECK_VK(vkCreateDescriptorSetLayout(d, &dl, NULL, &r->display_set_layout));
 	VkDescriptorPoolSize ps[3] = {
-		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 16},
-		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 16},
-		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16},
+		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 32},
+		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 64},
+		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 64},
 	};
 	VkDescriptorPoolCreateInfo pi = {
-		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 8, .poolSizeCount = 3, .pPoolSizes = ps};
+		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 16, .poolSizeCount = 3, .pPoolSizes = ps};
 	CHECK_VK(vkCreateDescriptorPool(d, &pi, NULL, &r->pool));
 	VkDescriptorSetAllocateInfo ai = {
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
@@ -811,30 +803,29 @@ static int create_descriptors(render *r, char *err, size_t err_size)
 		{r->objects.buffer, 0, VK_WHOLE_SIZE},
 		{r->materials.buffer, 0, VK_WHOLE_SIZE},
 	};
-	VkDescriptorImageInfo ii[3] = {
+	VkDescriptorImageInfo ii[2] = {
 		{r->tex_sampler, r->color_tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
 		{r->tex_sampler, r->data_tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-		{r->shadow_sampler, r->shadow.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-	};
+	}; /* binding 5 (shadow maps): render_shadow.c */
 	VkDescriptorImageInfo si[2] = {
 		{VK_NULL_HANDLE, r->hdr.view, VK_IMAGE_LAYOUT_GENERAL},
 		{VK_NULL_HANDLE, r->display.view, VK_IMAGE_LAYOUT_GENERAL},
 	};
-	VkWriteDescriptorSet w[8];
+	VkWriteDescriptorSet w[7];
 	for (uint32_t i = 0; i < 3; i++)
 		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
 					      .dstBinding = i, .descriptorCount = 1,
 					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi[i]};
-	for (uint32_t i = 0; i < 3; i++)
+	for (uint32_t i = 0; i < 2; i++)
 		w[3 + i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
 						  .dstBinding = 3 + i, .descriptorCount = 1,
 						  .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
 						  .pImageInfo = &ii[i]};
 	for (uint32_t i = 0; i < 2; i++)
-		w[6 + i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->display_set,
+		w[5 + i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->display_set,
 						  .dstBinding = i, .descriptorCount = 1,
 						  .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &si[i]};
-	vkUpdateDescriptorSets(d, 8, w, 0, NULL);
+	vkUpdateDescriptorSets(d, 7, w, 0, NULL);
 fail:
 	return rc;
 }
@@ -870,38 +861,9 @@ static int create_targets(render *r, char *err, size_t err_size)
 		goto fail;
 	}
 	for (size_t i = 0; i < s->light_count; i++) {
-		r->light_shadow_layer[i] = s->lights[i].casts_shadow ? (int)r->shadow_layers : -1;
+		r->light_shadow_layer[i] = s->lights[i].casts_shadow ? (int)r->shadow.layers : -1;
 		if (s->lights[i].casts_shadow)
-			r->shadow_layers += s->lights[i].kind == SCENE_LIGHT_POINT ? 6 : 1;
-	}
-	uint32_t sn = r->shadow_layers ? s->shadow_map_size : 1;
-	CHECK_VK(vkdev_image_create(r->dev, sn, sn, r->shadow_layers ? r->shadow_layers : 1, 1, VK_FORMAT_D32_SFLOAT,
-				    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-				    VK_IMAGE_ASPECT_DEPTH_BIT, true, "shadow maps", &r->shadow));
-	r->shadow_layer_views = calloc(r->shadow_layers + 1, sizeof *r->shadow_layer_views);
-	if (!r->shadow_layer_views) {
-		rc = RENDER_ERR_NOMEM;
-		snprintf(err, err_size, "out of memory");
-		goto fail;
-	}
-	for (uint32_t l = 0; l < r->shadow_layers; l++) {
-		VkImageViewCreateInfo vi = {
-			.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
-			.image = r->shadow.image,
-			.viewType = VK_IMAGE_VIEW_TYPE_2D,
-			.format = VK_FORMAT_D32_SFLOAT,
-			.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, l, 1},
-		};
-		CHECK_VK(vkCreateImageView(r->dev->device, &vi, NULL, &r->shadow_layer_views[l]));
-	}
-	if (!r->shadow_layers) {
-		/* No shadowed light: the sampled array still needs a defined layout. */
-		VkCommandBuffer cmd;
-		CHECK_VK(vkdev_cmd_begin(r->dev, &cmd));
-		vkdev_barrier_image(cmd, &r->shadow, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-				    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
-				    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-		CHECK_VK(vkdev_cmd_submit_wait(r->dev, cmd));
+			r->shadow.layers += s->lights[i].kind == SCENE_LIGHT_POINT ? 6 : 1;
 	}
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
 				    VK_IMAGE_ASPECT_DEPTH_BIT, false, "depth", &r->depth));
@@ -1048,7 +1010,7 @@ int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, 
 	r->method = m;
 	if (!(r->desc.fps > 0.0f))
 		r->desc.fps = r->scene->fps;
-	r->state_ring = 1;
+	r->state_ring = m->state_ring ? m->state_ring : 1;
 	r->world = calloc(r->scene->object_count, sizeof *r->world);
 	r->light_states = calloc(r->scene->light_count + 1, sizeof *r->light_states);
 	if (!r->world || !r->light_states) {
@@ -1066,7 +1028,8 @@ int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, 
 		r->colour = r->own_colour;
 	}
 	if ((rc = upload_scene(r, err, err_size)) || (rc = create_targets(r, err, err_size)) ||
-	    (rc = create_descriptors(r, err, err_size)) || (rc = create_pipelines(r, err, err_size)))
+	    (rc = create_descriptors(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)) ||
+	    (rc = create_pipelines(r, err, err_size)))
 		goto fail;
 	if (m->init && (rc = m->init(r, err, err_size)))
 		goto fail;
@@ -1108,16 +1071,14 @@ void render_destroy(render **pr)
 		vkDestroyDescriptorSetLayout(d, r->scene_set_layout, NULL);
 	if (r->display_set_layout)
 		vkDestroyDescriptorSetLayout(d, r->display_set_layout, NULL);
-	if (r->shadow_layer_views)
-		for (uint32_t l = 0; l < r->shadow_layers; l++)
-			if (r->shadow_layer_views[l])
-				vkDestroyImageView(d, r->shadow_layer_views[l], NULL);
+	if (r->scene_set)
+		render_shadow_destroy(r);
 	if (r->tex_sampler)
 		vkDestroySampler(d, r->tex_sampler, NULL);
 	if (r->shadow_sampler)
 		vkDestroySampler(d, r->shadow_sampler, NULL);
-	vkdev_image *imgs[] = {&r->color_tex, &r->data_tex, &r->shadow, &r->depth, &r->hdr, &r->display};
-	for (size_t i = 0; i < 6; i++)
+	vkdev_image *imgs[] = {&r->color_tex, &r->data_tex, &r->depth, &r->hdr, &r->display};
+	for (size_t i = 0; i < 5; i++)
 		vkdev_image_destroy(r->dev, imgs[i]);
 	vkdev_buffer *bufs[] = {&r->vertices, &r->indices, &r->materials, &r->states, &r->objects,
 				&r->readback_hdr, &r->readback_display};
@@ -1125,7 +1086,6 @@ void render_destroy(render **pr)
 		vkdev_buffer_destroy(r->dev, bufs[i]);
 	colour_destroy(&r->own_colour);
 	free(r->blend_order);
-	free(r->shadow_layer_views);
 	free(r->light_shadow_layer);
 	free(r->mesh_first_index);
 	free(r->mesh_vertex_offset);
@@ -1141,6 +1101,8 @@ int render_frame(render *r, uint32_t frame, render_image *img, render_stats *st,
 {
 	int rc = 0;
 	VkCommandBuffer cmd = r->cmd;
+	if (r->method->prepare && (rc = r->method->prepare(r, frame, err, err_size)))
+		return rc;
 	CHECK_VK(vkResetCommandBuffer(cmd, 0));
 	VkCommandBufferBeginInfo bi = {
 		.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,

@@ -13,7 +13,11 @@ typedef struct render_method_ops {
 	render_method_info info;
 	const char *const *pass_names; /* timestamp intervals recorded by `record`, in order */
 	uint32_t pass_count;
+	uint32_t state_ring; /* state slots the method needs (0: 1) */
 	int (*init)(render *r, char *err, size_t err_size);
+	/* Before recording frame `frame`: update state slots and plan their shadow maps (may allocate and
+	 * update descriptors, which is why it runs outside the command buffer). */
+	int (*prepare)(render *r, uint32_t frame, char *err, size_t err_size);
 	/* Records the frame into `cmd`; must call render_ts() once before each pass and once at the end. */
 	void (*record)(render *r, VkCommandBuffer cmd, uint32_t frame);
 	/* Fills the method-specific statistics after the frame completed. */
@@ -22,6 +26,24 @@ typedef struct render_method_ops {
 } render_method_ops;
 
 extern const render_method_ops render_method_ref;
+
+/* Shadow maps: a pool of physical layers shared by the state slots (render_shadow.c). */
+typedef struct render_shadow_pool {
+	uint32_t layers;       /* logical layers per slot (lights: 1, point lights: 6) */
+	uint32_t size;         /* shadow map size */
+	uint32_t chunk_layers; /* physical layers per chunk image */
+	uint32_t chunk_count;
+	vkdev_image chunks[GPU_SHADOW_CHUNKS];
+	vkdev_image dummy;     /* bound while there are no chunks */
+	VkImageView *views;    /* per physical layer */
+	uint32_t *refs;        /* per physical layer: slots mapping to it */
+	uint32_t *owner;       /* per physical layer: logical layer whose content it holds */
+	uint32_t *slot_phys;   /* state_ring x layers */
+	uint8_t *todo;         /* state_ring x layers: planned, not rendered yet */
+	uint64_t *last_key;    /* per logical layer: inputs of its last rendering */
+	uint32_t *last_phys;
+	uint64_t rendered, reused; /* layer renderings and shares so far */
+} render_shadow_pool;
 
 typedef struct render_pipeline {
 	VkPipeline pipeline;
@@ -36,6 +58,7 @@ struct render {
 	void *method_state;
 
 	uint32_t state_ring;      /* slots in the state and object rings */
+	uint32_t push_aux[4];     /* copied into gpu_push.aux of every draw */
 	uint32_t current_slot;
 
 	/* scene on the GPU */
@@ -46,9 +69,7 @@ struct render {
 	vkdev_buffer objects;     /* GpuObject x object_count x state_ring, host visible */
 	vkdev_image color_tex, data_tex;
 	VkSampler tex_sampler, shadow_sampler;
-	vkdev_image shadow;       /* D32 array, one layer per light (point lights: 6) */
-	VkImageView *shadow_layer_views;
-	uint32_t shadow_layers;
+	render_shadow_pool shadow; /* D32 layers, one per light (point lights: 6) per slot */
 	int *light_shadow_layer;  /* first shadow layer per light, -1 none */
 
 	/* targets */
@@ -85,10 +106,22 @@ struct render {
 /* Building blocks for methods. */
 void render_ts(render *r, VkCommandBuffer cmd);
 void render_update_state(render *r, uint32_t slot, double time_s);
+/* Shadow maps of a slot: plan (before recording; reuses unchanged layers) then render the planned layers. */
+int render_shadow_init(render *r, char *err, size_t err_size);
+void render_shadow_destroy(render *r);
+int render_shadow_plan(render *r, uint32_t slot, char *err, size_t err_size);
 void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot);
+/* Depth-only rendering of opaque + masked objects into `view` (shadow layers and depth pre-passes). */
+void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
+			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
+			    int shadow_pass);
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot);
 /* Forward shading of every visible sample with depth EQUAL, inside a pipeline-statistics query. */
 void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot);
+/* The same with a method's pipeline for opaque/masked surfaces (and its descriptor set 1); BLEND
+ * surfaces keep the reference shading. */
+void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const render_pipeline *opaque,
+			    VkDescriptorSet method_set);
 void render_pass_display(render *r, VkCommandBuffer cmd);
 void render_pass_readback(render *r, VkCommandBuffer cmd);
 
