@@ -37,6 +37,7 @@ typedef struct cli_render_opts {
 	uint32_t width, height;
 	double fps;           /* 0 = scene */
 	double threshold;
+	double max_age;       /* tfr: K; 0 = 119 */
 	bool validation, no_exr, no_png, trivial_shading, quiet, help;
 } cli_render_opts;
 

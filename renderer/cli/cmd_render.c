@@ -31,6 +31,7 @@ static void render_usage(FILE *out)
 		"  --camera C        camera path name (default: the scene's first)\n"
 		"  --method M        rendering method (default: ref)\n"
 		"  --threshold T     threshold in 8-bit code values for adaptive methods (default 8)\n"
+		"  --max-age K       tfr: reshade samples at the latest at age K (1..119, default 119)\n"
 		"  --frames A:B      frames A..B-1; also A (one frame), :B, A: (default: whole clip)\n"
 		"  --size WxH        frame size (default 960x540)\n"
 		"  --fps F           frame rate; frame f is at t = f/F (default: the scene's, usually 60)\n"
@@ -152,6 +153,22 @@ int cli_render_parse(int argc, char **argv, cli_render_opts *o, char *err, size_
 			if (need_value(argc, argv, &i, &iv, &v, err, err_size) ||
 			    cli_parse_float(v, "--fps", 1, 1000, &o->fps, err, err_size))
 				return -1;
+		} else if (!strcmp(name, "--max-age")) {
+			const char *v;
+			if (need_value(argc, argv, &i, &iv, &v, err, err_size))
+				return -1;
+			char *end;
+			double k = strtod(v, &end);
+			if (*v == 0 || *end || k != (double)(long)k || k < 1) {
+				snprintf(err, err_size, "--max-age: '%s' is not a whole number of frames >= 1", v);
+				return -1;
+			}
+			if (k > RENDER_TFR_MAX_AGE) {
+				snprintf(err, err_size, "--max-age %s: ages beyond K = %d are not kept (use 1..%d)", v,
+					 RENDER_TFR_MAX_AGE, RENDER_TFR_MAX_AGE);
+				return -1;
+			}
+			o->max_age = k;
 		} else if (!strcmp(name, "--threshold")) {
 			const char *v;
 			if (need_value(argc, argv, &i, &iv, &v, err, err_size) ||
@@ -292,6 +309,7 @@ static int render_run(int argc, char **argv)
 		.colour = col,
 		.method = o.method,
 		.threshold = (float)o.threshold,
+		.max_age = (uint32_t)o.max_age,
 		.first = first,
 		.end = end,
 		.width = o.width,

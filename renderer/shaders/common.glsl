@@ -1,4 +1,4 @@
-// common.glsl — GPU data layout shared by all passes. Must match renderer/src/gpu_types.h.
+// common.glsl - GPU data layout shared by all passes. Must match renderer/src/gpu_types.h.
 //
 // Scene state is kept in rings indexed by a *state slot*: slot s holds the scene evaluated at
 // some time t_s (camera, lights, shadow matrices, object transforms). The reference method

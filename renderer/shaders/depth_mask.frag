@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// depth_mask.frag — alpha-tested depth for glTF alphaMode MASK (depth pre-pass and shadow maps):
+// depth_mask.frag - alpha-tested depth for glTF alphaMode MASK (depth pre-pass and shadow maps):
 // discards where base colour alpha (factor times texture) is below the material's alpha cutoff.
 #include "common.glsl"
 

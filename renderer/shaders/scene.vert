@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// scene.vert — transforms object-space vertices with the state slot's matrices. Used by the depth
+// scene.vert - transforms object-space vertices with the state slot's matrices. Used by the depth
 // pre-pass and the shading pass alike; the position is computed `precise` (no contraction or
 // reassociation) so both pipelines produce bit-identical depth and the shading pass can test with
 // EQUAL and shade each visible sample exactly once. (`invariant gl_Position` would say the same, but

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// shade.frag — reference forward shading (method `ref`): every visible sample, every frame.
+// shade.frag - reference forward shading (method `ref`): every visible sample, every frame.
 // Writes scene-linear radiance (times exposure) with coverage in alpha. Specialised per alpha mode:
 // ALPHA_BLEND outputs the material alpha for "over" blending (glTF alphaMode BLEND).
 #include "shading.glsl"

@@ -1,4 +1,4 @@
-// shading.glsl — forward PBR shading of one surface sample (glTF 2.0 metal-roughness).
+// shading.glsl - forward PBR shading of one surface sample (glTF 2.0 metal-roughness).
 //
 // BRDF as used by the paper's test scenes (sec. 3: "physically based materials [Schlick 1994]"):
 // GGX / Trowbridge-Reitz normal distribution, height-correlated Smith visibility (Heitz 2014),

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// shadow.vert — renders depth from a light's view into shadow layer pc.layer (depth only, no FS).
+// shadow.vert - renders depth from a light's view into shadow layer pc.layer (depth only, no FS).
 #include "common.glsl"
 
 layout(location = 0) in vec3 in_position;

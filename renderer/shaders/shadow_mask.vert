@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// shadow_mask.vert — shadow.vert plus the UV that depth_mask.frag needs for alpha-tested casters.
+// shadow_mask.vert - shadow.vert plus the UV that depth_mask.frag needs for alpha-tested casters.
 #include "common.glsl"
 
 layout(location = 0) in vec3 in_position;

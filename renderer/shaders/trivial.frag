@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// trivial.frag — benchmark stand-in for shade.frag: same inputs and outputs, base colour only.
+// trivial.frag - benchmark stand-in for shade.frag: same inputs and outputs, base colour only.
 // scripts/bench-render swaps it in to measure the share of frame time spent in shading.
 #include "common.glsl"
 

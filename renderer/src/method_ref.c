@@ -34,6 +34,7 @@ static void ref_collect(render *r, render_stats *st)
 	(void)r;
 	/* Every visible sample is its own reuse unit and is shaded every frame. */
 	st->shaded_samples = st->visible_samples;
+	st->reused_samples = 0;
 	st->visible_units = st->visible_samples;
 	st->shaded_units = st->visible_samples;
 	st->new_units = -1; /* no temporal tracking in ref */

@@ -10,7 +10,10 @@
 #include <string.h>
 
 #include "shaders/depth_mask_frag.h"
+#include "shaders/common_glsl.h"
 #include "shaders/display_comp_in.h"
+#include "shaders/shading_glsl.h"
+#include "shaders/tas_glsl.h"
 #include "shaders/scene_vert.h"
 #include "shaders/shade_frag.h"
 #include "shaders/shadow_mask_vert.h"
@@ -28,10 +31,9 @@
 		}                                                                                          \
 	} while (0)
 
-static const render_method_ops *const method_table[] = {&render_method_ref};
+static const render_method_ops *const method_table[] = {&render_method_ref, &render_method_tfr};
 
 static const render_method_info planned[] = {
-	{"tfr", "temporal forward rendering oracle at threshold T (DESIGN section 4)", false},
 	{"rrc", "reverse reprojection cache with round-robin tile refresh", false},
 	{"tarc", "temporally adaptive reprojection caching (paper sec. 6.1)", false},
 	{"sa", "shading atlas, visible blocks shaded every frame", false},
@@ -718,21 +720,102 @@ done:
 	return res;
 }
 
+VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
+				    render_pipeline *out)
+{
+	pipe_desc shade = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = 15u, .color = 1,
+			   .depth_op = VK_COMPARE_OP_EQUAL, .fs = fs, .fs_size = fs_size, .method_set = method_set};
+	return make_graphics(r, &shade, out);
+}
+
+void render_pipeline_destroy(render *r, render_pipeline *p)
+{
+	if (p->pipeline)
+		vkDestroyPipeline(r->dev->device, p->pipeline, NULL);
+	if (p->layout)
+		vkDestroyPipelineLayout(r->dev->device, p->layout, NULL);
+	p->pipeline = VK_NULL_HANDLE;
+	p->layout = VK_NULL_HANDLE;
+}
+
+/* Run-time shader sources: `#include "common.glsl"` / `"shading.glsl"` / `"tas.glsl"` lines are replaced
+ * by the embedded files (each once; they are include-guarded) and the marker `// @OCIO_DISPLAY@` by the
+ * OpenColorIO function `ocio_display` of the active view transform (colour.h). */
+static int append(char **buf, size_t *len, size_t *cap, const char *s, size_t n)
+{
+	if (*len + n + 1 > *cap) {
+		size_t c = (*cap ? *cap * 2 : 65536) + n;
+		char *b = realloc(*buf, c);
+		if (!b)
+			return -1;
+		*buf = b;
+		*cap = c;
+	}
+	memcpy(*buf + *len, s, n);
+	*len += n;
+	(*buf)[*len] = 0;
+	return 0;
+}
+
+static int expand_source(const render *r, const char *src, char **buf, size_t *len, size_t *cap, int depth)
+{
+	static const struct {
+		const char *name;
+		const char *text;
+	} files[] = {{"common.glsl", common_glsl}, {"shading.glsl", shading_glsl}, {"tas.glsl", tas_glsl}};
+	const char *p = src;
+	while (*p) {
+		size_t n = strcspn(p, "\n");
+		const char *line = p, *repl = NULL;
+		if (!strncmp(line, "#include \"", 10)) {
+			for (size_t i = 0; i < sizeof files / sizeof files[0]; i++)
+				if (!strncmp(line + 10, files[i].name, strlen(files[i].name)))
+					repl = files[i].text;
+			if (!repl || depth > 4)
+				return -1;
+			if (expand_source(r, repl, buf, len, cap, depth + 1))
+				return -1;
+		} else if (!strncmp(line, "#extension GL_GOOGLE_include_directive", 38)) {
+			/* resolved here */
+		} else if (!strncmp(line, "// @OCIO_DISPLAY@", 17)) {
+			const char *fn = colour_glsl(r->colour);
+			if (append(buf, len, cap, fn, strlen(fn)))
+				return -1;
+		} else if (append(buf, len, cap, line, n)) {
+			return -1;
+		}
+		p += n;
+		if (*p == '\n')
+			p++;
+		if (append(buf, len, cap, "\n", 1))
+			return -1;
+	}
+	return 0;
+}
+
+int render_compile(const render *r, const char *template_src, shc_stage stage, uint32_t **spv, size_t *spv_size,
+		   char *err, size_t err_size)
+{
+	char *src = NULL;
+	size_t len = 0, cap = 0;
+	if (expand_source(r, template_src, &src, &len, &cap, 0)) {
+		free(src);
+		snprintf(err, err_size, "out of memory or unknown include assembling a shader");
+		return RENDER_ERR_NOMEM;
+	}
+	int bad = shc_compile(src, stage, spv, spv_size, err, err_size);
+	free(src);
+	return bad ? RENDER_ERR_ARG : 0;
+}
+
 /* Display pass: display.comp.in with the OpenColorIO function of the active view transform inserted. */
 static VkResult make_display_pipeline(render *r, char *err, size_t err_size)
 {
-	const char *marker = "// @OCIO_DISPLAY@";
-	const char *at = strstr(display_comp_in, marker);
-	const char *fn = colour_glsl(r->colour);
-	size_t n = strlen(display_comp_in) + strlen(fn) + 1;
-	char *src = malloc(n);
 	uint32_t *spv = NULL;
 	size_t spv_size = 0;
-	if (!src || !at)
+	int bad = render_compile(r, display_comp_in, SHC_STAGE_COMPUTE, &spv, &spv_size, err, err_size);
+	if (bad == RENDER_ERR_NOMEM)
 		return VK_ERROR_OUT_OF_HOST_MEMORY;
-	snprintf(src, n, "%.*s%s%s", (int)(at - display_comp_in), display_comp_in, fn, at + strlen(marker));
-	int bad = shc_compile(src, SHC_STAGE_COMPUTE, &spv, &spv_size, err, err_size);
-	free(src);
 	if (bad)
 		return VK_ERROR_INITIALIZATION_FAILED;
 	VkShaderModule cm;
@@ -984,7 +1067,7 @@ int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, 
 		const render_method_info *all = render_methods(&n);
 		for (size_t i = 0; i < n; i++)
 			if (desc->method && !strcmp(all[i].name, desc->method)) {
-				snprintf(err, err_size, "method '%s' is not implemented yet (available: ref)", desc->method);
+				snprintf(err, err_size, "method '%s' is not implemented yet (available: ref, tfr)", desc->method);
 				return RENDER_ERR_ARG;
 			}
 		snprintf(err, err_size, "unknown method '%s' (see 'taslab render --help' for the list)",
@@ -1140,7 +1223,7 @@ int render_frame(render *r, uint32_t frame, render_image *img, render_stats *st,
 	for (size_t i = 0; i < (size_t)w * h; i++)
 		visible += r->hdr_packed[i * 4 + 3] != 0; /* half-float coverage: 0 or 1.0 */
 	st->visible_samples = visible;
-	st->shaded_samples = st->visible_units = st->shaded_units = st->new_units = -1;
+	st->shaded_samples = st->reused_samples = st->visible_units = st->shaded_units = st->new_units = -1;
 	st->fs_invocations = st->cs_invocations = -1;
 	if (r->stats_pool) {
 		uint64_t v[2];

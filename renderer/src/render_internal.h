@@ -7,6 +7,7 @@
 #define TASLAB_RENDER_INTERNAL_H
 
 #include "gpu_types.h"
+#include "shader_compile.h"
 #include "taslab/render.h"
 
 typedef struct render_method_ops {
@@ -26,6 +27,7 @@ typedef struct render_method_ops {
 } render_method_ops;
 
 extern const render_method_ops render_method_ref;
+extern const render_method_ops render_method_tfr;
 
 /* Shadow maps: a pool of physical layers shared by the state slots (render_shadow.c). */
 typedef struct render_shadow_pool {
@@ -124,5 +126,14 @@ void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const
 			    VkDescriptorSet method_set);
 void render_pass_display(render *r, VkCommandBuffer cmd);
 void render_pass_readback(render *r, VkCommandBuffer cmd);
+
+/* Compiles a run-time shader template (includes and the OCIO display function resolved, see render.c). */
+int render_compile(const render *r, const char *template_src, shc_stage stage, uint32_t **spv, size_t *spv_size,
+		   char *err, size_t err_size);
+/* Shading pipeline like the reference one (scene.vert, depth EQUAL) with fragment shader `fs` and an
+ * optional descriptor set 1. */
+VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
+				    render_pipeline *out);
+void render_pipeline_destroy(render *r, render_pipeline *p);
 
 #endif

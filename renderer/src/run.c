@@ -104,7 +104,7 @@ int run_writer_frame(run_writer *w, const render_image *img, const render_stats 
 				  "reuse_fraction,fs_invocations,cs_invocations,gpu_ms_total");
 		for (uint32_t p = 0; p < st->pass_count; p++)
 			fprintf(w->stats, ",gpu_ms_%s", st->pass_names[p]);
-		fprintf(w->stats, "\n");
+		fprintf(w->stats, ",reused_samples\n"); /* taslab addition: visible samples shown from reuse */
 	}
 	if (w->info.write_exr) {
 		snprintf(val[0], sizeof val[0], "%u", st->frame);
@@ -141,6 +141,7 @@ int run_writer_frame(run_writer *w, const render_image *img, const render_stats 
 	csv_ms(f, st->gpu_ms_total);
 	for (uint32_t p = 0; p < st->pass_count; p++)
 		fputc(',', f), csv_ms(f, st->gpu_ms[p]);
+	fputc(',', f), csv_int(f, st->reused_samples);
 	fputc('\n', f);
 	if (ferror(f)) {
 		snprintf(err, err_size, "%s: write error", w->stats_tmp);

@@ -29,6 +29,7 @@ int run_render(const run_render_desc *d, char *err, size_t err_size)
 		.fps = d->fps,
 		.method = d->method,
 		.threshold = d->threshold,
+		.max_age = d->max_age,
 		.trivial_shading = d->trivial_shading,
 		.colour = d->colour,
 	};

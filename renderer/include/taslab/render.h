@@ -28,6 +28,7 @@ extern "C" {
 #endif
 
 #define RENDER_MAX_PASSES 8
+#define RENDER_TFR_MAX_AGE 119 /* K: TFR keeps shading inputs of up to 119 past frames (paper sec. 5) */
 
 typedef struct render render;
 
@@ -47,6 +48,7 @@ typedef struct render_desc {
 	float fps;              /* frame f is at t = f / fps; 0 = the scene's fps */
 	const char *method;     /* name from render_methods() */
 	float threshold;        /* T in 8-bit code values, for methods that use one */
+	uint32_t max_age;       /* tfr: K, the largest age before a forced reshade (1..119; 0 = 119) */
 	bool trivial_shading;   /* benchmark only: swap the shading for base colour output */
 	const struct colour *colour; /* display transform (borrowed); NULL: the built-in ACES default */
 } render_desc;
@@ -56,6 +58,7 @@ typedef struct render_stats {
 	uint32_t frame;
 	double time_s;
 	int64_t visible_samples, shaded_samples;
+	int64_t reused_samples;                 /* visible samples shown from earlier shading */
 	int64_t visible_units, shaded_units, new_units;
 	int64_t fs_invocations, cs_invocations; /* pipeline statistics over the method's shading passes */
 	double gpu_ms_total;

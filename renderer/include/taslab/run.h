@@ -50,6 +50,7 @@ typedef struct run_render_desc {
 	const struct colour *colour;
 	const char *method;
 	float threshold;
+	uint32_t max_age; /* tfr: K (0 = RENDER_TFR_MAX_AGE) */
 	uint32_t first, end;
 	uint32_t width, height;
 	float fps;
