@@ -26,6 +26,13 @@ int cli_parse_frames(const char *s, uint32_t *a, uint32_t *b_inout, bool *b_give
 /* A finite number within [lo, hi]; `what` names the option in messages. */
 int cli_parse_float(const char *s, const char *what, double lo, double hi, double *out, char *err, size_t err_size);
 
+/* Analysis frames: comma-separated F, A:B (half-open) or A:B:STEP; every frame must be < `end` (the
+ * clip's frame count). At most `max` frames into `frames`. */
+int cli_parse_frame_list(const char *s, uint32_t end, uint32_t *frames, size_t max, size_t *n, char *err, size_t err_size);
+/* Comma-separated numbers within [lo, hi], at most `max`. */
+int cli_parse_float_list(const char *s, const char *what, double lo, double hi, float *out, size_t max, size_t *n,
+			 char *err, size_t err_size);
+
 /* For commands without options: handles --help (returns CLI_EXIT_OK after printing usage) and rejects
  * any other argument (CLI_EXIT_USAGE); returns -1 when the command should run. */
 int cli_no_args(int argc, char **argv, void (*usage)(FILE *out));
@@ -54,6 +61,7 @@ extern const cli_command cli_cmd_tonemap;
 extern const cli_command cli_cmd_clip;
 extern const cli_command cli_cmd_pair;
 extern const cli_command cli_cmd_metrics; /* metrics/cli */
+extern const cli_command cli_cmd_analyze; /* metrics/cli */
 extern const cli_command cli_cmd_study;   /* study/cli */
 
 #endif

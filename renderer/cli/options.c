@@ -127,3 +127,66 @@ int cli_no_args(int argc, char **argv, void (*usage)(FILE *out))
 	}
 	return -1;
 }
+
+int cli_parse_frame_list(const char *s, uint32_t end, uint32_t *frames, size_t max, size_t *n, char *err, size_t err_size)
+{
+	*n = 0;
+	const char *p = s;
+	while (*p) {
+		uint32_t a, b, step = 1;
+		const char *e;
+		if (parse_u32(p, &e, &a))
+			goto bad;
+		b = a + 1;
+		if (*e == ':') {
+			if (parse_u32(e + 1, &e, &b))
+				goto bad;
+			if (*e == ':' && (parse_u32(e + 1, &e, &step) || step == 0))
+				goto bad;
+			if (b <= a)
+				goto bad;
+		}
+		if (*e && *e != ',')
+			goto bad;
+		for (uint32_t f = a; f < b; f += step) {
+			if (f >= end) {
+				snprintf(err, err_size, "analysis frame %u is outside the clip (frames 0..%u)", f, end - 1);
+				return -1;
+			}
+			if (*n == max) {
+				snprintf(err, err_size, "at most %zu analysis frames", max);
+				return -1;
+			}
+			frames[(*n)++] = f;
+		}
+		p = *e ? e + 1 : e;
+	}
+	if (*n)
+		return 0;
+bad:
+	snprintf(err, err_size, "bad frame list '%s' (expected comma-separated F, A:B or A:B:STEP, e.g. 60,120 or 60:300:60)", s);
+	return -1;
+}
+
+int cli_parse_float_list(const char *s, const char *what, double lo, double hi, float *out, size_t max, size_t *n,
+			 char *err, size_t err_size)
+{
+	char buf[512], *save = NULL;
+	*n = 0;
+	snprintf(buf, sizeof buf, "%s", s);
+	for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+		double v;
+		if (*n == max) {
+			snprintf(err, err_size, "%s: at most %zu values", what, max);
+			return -1;
+		}
+		if (cli_parse_float(tok, what, lo, hi, &v, err, err_size))
+			return -1;
+		out[(*n)++] = (float)v;
+	}
+	if (!*n) {
+		snprintf(err, err_size, "%s: empty list", what);
+		return -1;
+	}
+	return 0;
+}

@@ -9,6 +9,7 @@ static const cli_command *const commands[] = {
 	&cli_cmd_render,
 	&cli_cmd_pair,
 	&cli_cmd_metrics,
+	&cli_cmd_analyze,
 	&cli_cmd_study,
 	&cli_cmd_clip,
 	&cli_cmd_tonemap,

@@ -36,6 +36,9 @@ struct Surface {
 	vec3 emissive;
 };
 
+// Shadow-map chunks the renderer may use (render_shadow.c), set when the pipeline is created.
+layout(constant_id = 1) const int SHADOW_CHUNKS_USED = 1;
+
 float shadow_lookup(uint slot, int layer, vec3 world_pos)
 {
 	vec4 lc = states[slot].shadow_matrix[layer] * vec4(world_pos, 1.0);
@@ -47,12 +50,14 @@ float shadow_lookup(uint slot, int layer, vec3 world_pos)
 	uint phys = states[slot].shadow_phys[layer >> 2][layer & 3];
 	float pl = float(phys & 0xFFFFu);
 	float lit = 0.0;
-	// No descriptor indexing on lavapipe: each chunk is sampled with a constant index.
-#define TL_PCF(c) case c: for (int i = 0; i < 16; i++) lit += texture(shadow_maps[c], vec4(uv + POISSON16[i] * radius, pl, ndc.z)); break;
-	switch (int(phys >> 16)) {
+	// No descriptor indexing on lavapipe: each chunk is sampled with a constant index, and only the
+	// SHADOW_CHUNKS_USED chunks the pool can ever use are compiled in (a SIMD CPU driver pays for every
+	// branch some lane might take, so a 16-way switch would cost 16 lookups).
+#define TL_PCF(c) if ((c) < SHADOW_CHUNKS_USED && (SHADOW_CHUNKS_USED == 1 || chunk == (c))) \
+	for (int i = 0; i < 16; i++) lit += texture(shadow_maps[c], vec4(uv + POISSON16[i] * radius, pl, ndc.z));
+	int chunk = int(phys >> 16);
 	TL_PCF(0) TL_PCF(1) TL_PCF(2) TL_PCF(3) TL_PCF(4) TL_PCF(5) TL_PCF(6) TL_PCF(7)
 	TL_PCF(8) TL_PCF(9) TL_PCF(10) TL_PCF(11) TL_PCF(12) TL_PCF(13) TL_PCF(14) TL_PCF(15)
-	}
 #undef TL_PCF
 	return lit * (1.0 / 16.0);
 }

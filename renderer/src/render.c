@@ -14,6 +14,7 @@
 #include "shaders/display_comp_in.h"
 #include "shaders/shading_glsl.h"
 #include "shaders/tas_glsl.h"
+#include "shaders/tfa_glsl.h"
 #include "shaders/scene_vert.h"
 #include "shaders/shade_frag.h"
 #include "shaders/shadow_mask_vert.h"
@@ -613,14 +614,19 @@ static VkResult make_graphics(render *r, const pipe_desc *pd, render_pipeline *o
 	};
 	if ((res = vkCreatePipelineLayout(r->dev->device, &li, NULL, &out->layout)))
 		goto done;
-	VkBool32 spec_value = pd->fs_alpha_blend ? VK_TRUE : VK_FALSE;
-	VkSpecializationMapEntry spec_entry = {0, 0, sizeof spec_value};
-	VkSpecializationInfo spec = {1, &spec_entry, sizeof spec_value, &spec_value};
+	/* Specialisation: 0 = shade.frag's ALPHA_BLEND, 1 = SHADOW_CHUNKS_USED (shading.glsl); entries for
+	 * constants a shader does not declare are ignored. */
+	struct {
+		VkBool32 blend;
+		int32_t chunks;
+	} spec_values = {pd->fs_alpha_blend ? VK_TRUE : VK_FALSE, (int32_t)r->shadow.chunks_max};
+	VkSpecializationMapEntry spec_entries[2] = {{0, 0, sizeof(VkBool32)}, {1, sizeof(VkBool32), sizeof(int32_t)}};
+	VkSpecializationInfo spec = {2, spec_entries, sizeof spec_values, &spec_values};
 	VkPipelineShaderStageCreateInfo stages[2] = {
 		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_VERTEX_BIT,
 		 .module = vm, .pName = "main"},
 		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
-		 .module = fm, .pName = "main", .pSpecializationInfo = pd->fs_alpha_blend ? &spec : NULL},
+		 .module = fm, .pName = "main", .pSpecializationInfo = &spec},
 	};
 	VkVertexInputBindingDescription bind = {0, sizeof(scene_vertex), VK_VERTEX_INPUT_RATE_VERTEX};
 	const VkVertexInputAttributeDescription all_attrs[4] = {
@@ -762,7 +768,7 @@ static int expand_source(const render *r, const char *src, char **buf, size_t *l
 	static const struct {
 		const char *name;
 		const char *text;
-	} files[] = {{"common.glsl", common_glsl}, {"shading.glsl", shading_glsl}, {"tas.glsl", tas_glsl}};
+	} files[] = {{"common.glsl", common_glsl}, {"shading.glsl", shading_glsl}, {"tas.glsl", tas_glsl}, {"tfa.glsl", tfa_glsl}};
 	const char *p = src;
 	while (*p) {
 		size_t n = strcspn(p, "\n");
@@ -1056,7 +1062,6 @@ fail:
 
 int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, size_t err_size)
 {
-	int rc = 0;
 	*out = NULL;
 	const render_method_ops *m = NULL;
 	for (size_t i = 0; i < sizeof method_table / sizeof method_table[0]; i++)
@@ -1074,6 +1079,14 @@ int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, 
 			 desc->method ? desc->method : "(none)");
 		return RENDER_ERR_ARG;
 	}
+	return render_create_ops(dev, desc, m, out, err, err_size);
+}
+
+int render_create_ops(vkdev *dev, const render_desc *desc, const render_method_ops *m, render **out, char *err,
+		      size_t err_size)
+{
+	int rc = 0;
+	*out = NULL;
 	if (!desc->scene || desc->camera < 0 || (size_t)desc->camera >= desc->scene->camera_count) {
 		snprintf(err, err_size, "no such camera path");
 		return RENDER_ERR_ARG;

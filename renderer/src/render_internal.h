@@ -35,6 +35,7 @@ typedef struct render_shadow_pool {
 	uint32_t size;         /* shadow map size */
 	uint32_t chunk_layers; /* physical layers per chunk image */
 	uint32_t chunk_count;
+	uint32_t chunks_max;   /* chunks the pool may need (shaders are specialised for it) */
 	vkdev_image chunks[GPU_SHADOW_CHUNKS];
 	vkdev_image dummy;     /* bound while there are no chunks */
 	VkImageView *views;    /* per physical layer */
@@ -127,6 +128,9 @@ void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const
 void render_pass_display(render *r, VkCommandBuffer cmd);
 void render_pass_readback(render *r, VkCommandBuffer cmd);
 
+/* render_create with a method that is not in the public table (analysis passes). */
+int render_create_ops(vkdev *dev, const render_desc *desc, const render_method_ops *m, render **out, char *err,
+		      size_t err_size);
 /* Compiles a run-time shader template (includes and the OCIO display function resolved, see render.c). */
 int render_compile(const render *r, const char *template_src, shc_stage stage, uint32_t **spv, size_t *spv_size,
 		   char *err, size_t err_size);

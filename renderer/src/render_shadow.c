@@ -18,7 +18,7 @@
 #include <string.h>
 
 #define NO_PHYS UINT32_MAX
-#define CHUNK_BYTES_MAX ((VkDeviceSize)1 << 30)
+#define CHUNK_BYTES_MAX ((VkDeviceSize)1 << 30) /* when the device does not report maxMemoryAllocationSize */
 
 static uint64_t fnv(uint64_t h, const void *data, size_t n)
 {
@@ -111,7 +111,7 @@ static VkResult make_chunk(render *r, uint32_t size, uint32_t layers, const char
 static int add_chunk(render *r, char *err, size_t err_size)
 {
 	render_shadow_pool *p = &r->shadow;
-	if (p->chunk_count == GPU_SHADOW_CHUNKS) {
+	if (p->chunk_count == p->chunks_max) { /* cannot happen: chunks_max covers the worst case */
 		snprintf(err, err_size,
 			 "the shadow-map history needs more than %u layers of %ux%u (%u logical layers x %u slots); "
 			 "lower shadow_map_size in the scene",
@@ -154,14 +154,29 @@ int render_shadow_init(render *r, char *err, size_t err_size)
 	p->size = s->shadow_map_size;
 	uint32_t max_layers = r->dev->props.limits.maxImageArrayLayers;
 	VkDeviceSize layer_B = (VkDeviceSize)p->size * p->size * 4;
-	uint32_t need = p->layers * r->state_ring * (r->state_ring > 1 ? 1 : 2);
-	p->chunk_layers = (uint32_t)(CHUNK_BYTES_MAX / layer_B);
+	/* Worst case: every slot's layers distinct, plus one slot's worth while a plan holds old and new. */
+	uint32_t need = p->layers * (r->state_ring + 1);
+	VkPhysicalDeviceMaintenance3Properties m3 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+	VkPhysicalDeviceProperties2 pp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &m3};
+	vkGetPhysicalDeviceProperties2(r->dev->physical, &pp);
+	VkDeviceSize chunk_B = m3.maxMemoryAllocationSize ? m3.maxMemoryAllocationSize / 16 * 15 : CHUNK_BYTES_MAX;
+	p->chunk_layers = (uint32_t)(chunk_B / layer_B);
 	if (p->chunk_layers > max_layers)
 		p->chunk_layers = max_layers;
 	if (p->chunk_layers > need)
 		p->chunk_layers = need;
 	if (p->chunk_layers < 1)
 		p->chunk_layers = 1;
+	p->chunks_max = (need + p->chunk_layers - 1) / p->chunk_layers;
+	if (p->chunks_max < 1)
+		p->chunks_max = 1;
+	if (p->chunks_max > GPU_SHADOW_CHUNKS) {
+		snprintf(err, err_size,
+			 "the shadow-map history would need up to %u layers of %ux%u (%u per frame x %u frames), more than %u "
+			 "allocations of %u layers; lower shadow_map_size in the scene",
+			 need, p->size, p->size, p->layers, r->state_ring, GPU_SHADOW_CHUNKS, p->chunk_layers);
+		return RENDER_ERR_NOMEM;
+	}
 	size_t phys_max = (size_t)GPU_SHADOW_CHUNKS * p->chunk_layers;
 	p->views = calloc(phys_max, sizeof *p->views);
 	p->refs = calloc(phys_max, sizeof *p->refs);

@@ -1,0 +1,86 @@
+/* analyze.h — temporal forward rendering (TFR) analysis of single frames (DESIGN section 4, paper
+ * secs. 4.1 and 5): temporal coherence of shading, visibility coherence, and gradient predictors.
+ *
+ * For an analysis frame t every visible sample (surface point x) is shaded as it was k frames ago,
+ * s_k, for k = 0..120 (object transforms, lights, camera and shadow maps all at t - k), one full-frame
+ * shading pass per k on the Vulkan device; per-pixel state (first exceedance k1, next exceedance k2,
+ * gradients) stays on the device and only counters and, on request, gradient images are read back.
+ *
+ *  - coherence (Fig. 4): per T, the number of samples with d(s_j, s_0) <= T for all j <= k, k = 0..120;
+ *  - visibility coherence (sec. 4.1): samples at t that were visible at t - 1 (reprojection + object
+ *    and depth test);
+ *  - predictors (Figs. 7, 9): k1 = first k >= 1 with d(s_k, s_0) > T (none within K = 119: unchanged),
+ *    true deadline D = k1; gradients at t - k1: single-frame d(s_k1, s_k1+1), long-range
+ *    d(s_k1, s_k2)/(k2 - k1), instantaneous |ds/dt| by a symmetric difference of +-h frames (our
+ *    stand-in for the paper's analytic derivatives); each unfiltered and with the spatial max filter
+ *    (8x8 max downsample, then 9x9 max kernel: 72x72 pixels). Predicted deadline d = T/g clamped to
+ *    [1, 118]: late if d > D, early if d < D - 1, else on time.
+ *
+ * Times t - k before 0 are evaluated like any other time (animations are functions of time). */
+#ifndef TASLAB_ANALYZE_H
+#define TASLAB_ANALYZE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/colour.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define ANALYZE_MAX_T 8
+#define ANALYZE_K 119      /* largest deadline searched (paper sec. 5: deadlines 1..118 predicted) */
+#define ANALYZE_HISTORY 120 /* s_1..s_120 are evaluated (coherence up to k = 120) */
+
+enum { ANALYZE_SINGLE, ANALYZE_LONG, ANALYZE_INST, ANALYZE_SINGLE_F, ANALYZE_LONG_F, ANALYZE_INST_F, ANALYZE_PREDICTORS };
+enum { ANALYZE_LATE, ANALYZE_EARLY, ANALYZE_ON_TIME, ANALYZE_UNCHANGED, ANALYZE_CLASSES };
+
+/* Names: "single", "long", "inst", "single_filtered", ... and "late", "early", "on_time", "unchanged". */
+const char *analyze_predictor_name(int p);
+const char *analyze_class_name(int c);
+
+typedef struct analyze_desc {
+	const struct scene *scene;
+	int camera;
+	uint32_t width, height;
+	float fps;                   /* 0 = the scene's */
+	const float *thresholds;     /* T values (> 0), 1..ANALYZE_MAX_T */
+	size_t threshold_count;
+	float inst_step;             /* h in frames for the instantaneous derivative (0 = 0.125) */
+	bool predictors;             /* evaluate the instantaneous derivatives (needed for predictors only) */
+	bool keep_gradients;         /* read back the gradient images (analyze_result.gradients) */
+	const struct colour *colour; /* display transform (NULL: the built-in default) */
+} analyze_desc;
+
+typedef struct analyze_result {
+	uint32_t frame;
+	uint32_t width, height;
+	size_t threshold_count;
+	uint64_t visible;            /* visible samples at t */
+	uint64_t visible_prev;       /* of those, visible at t - 1 */
+	/* unchanged[i][k]: samples with d(s_j, s_0) <= T_i for all 1 <= j <= k (k = 0: all visible). */
+	uint64_t unchanged[ANALYZE_MAX_T][ANALYZE_HISTORY + 1];
+	uint64_t classes[ANALYZE_MAX_T][ANALYZE_PREDICTORS][ANALYZE_CLASSES];
+	/* keep_gradients: width*height*threshold_count*4 floats, per T a plane of (single, long, inst, D)
+	 * with g in code values per frame and D = true deadline (0: unchanged or background);
+	 * filtered: (width/8 rounded up)*(height/8 rounded up)*threshold_count*4 (single, long, inst, 0). */
+	float *gradients, *gradients_filtered;
+	uint32_t filtered_width, filtered_height;
+} analyze_result;
+
+typedef struct analyze analyze;
+
+int analyze_create(vkdev *dev, const analyze_desc *desc, analyze **out, char *err, size_t err_size);
+void analyze_destroy(analyze **a);
+/* Analyses frame `frame` (t = frame / fps). `out` is overwritten; free its arrays with analyze_result_free. */
+int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, size_t err_size);
+void analyze_result_free(analyze_result *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
