@@ -301,7 +301,7 @@ void render_update_state(render *r, uint32_t slot, double time_s)
 					       : l->kind == SCENE_LIGHT_POINT	  ? GPU_LIGHT_POINT
 										  : GPU_LIGHT_SPOT);
 		for (int c = 0; c < 3; c++)
-			g->color[c] = l->color[c] * l->intensity;
+			g->color[c] = l->color[c] * r->light_states[i].intensity;
 		float co = cosf(l->outer_cone_deg * TLM_PI / 180.0f), ci = cosf(l->inner_cone_deg * TLM_PI / 180.0f);
 		g->cone_shadow[0] = co;
 		g->cone_shadow[1] = 1.0f / fmaxf(ci - co, 1e-4f);

@@ -130,6 +130,7 @@ static int jv3(jp *c, json_t *obj, const char *key, const char *path, tlm_vec3 d
 
 static int jstr(jp *c, json_t *obj, const char *key, const char *path, const char *def, const char **out)
 {
+	*out = def ? def : ""; /* defined on every path (errors too), which the optimiser cannot see through jfail */
 	json_t *v = json_object_get(obj, key);
 	char p[PATH_MAX_LEN];
 	subpath(p, path, key);
@@ -147,6 +148,7 @@ static int jstr(jp *c, json_t *obj, const char *key, const char *path, const cha
 
 static int jbool(jp *c, json_t *obj, const char *key, const char *path, bool def, bool *out)
 {
+	*out = def;
 	json_t *v = json_object_get(obj, key);
 	char p[PATH_MAX_LEN];
 	subpath(p, path, key);
@@ -658,6 +660,56 @@ static int parse_assets(jp *c, scene *s, json_t *root)
 	return 0;
 }
 
+/* "intensity_keys": {"times": [...strictly increasing], "values": [...>= 0]} */
+static int parse_intensity_keys(jp *c, json_t *light, const char *p, scene_light *l)
+{
+	char pk[PATH_MAX_LEN], pp[PATH_MAX_LEN];
+	json_t *k = json_object_get(light, "intensity_keys");
+	if (!k)
+		return 0;
+	subpath(pk, p, "intensity_keys");
+	static const char *const allowed[] = {"times", "values", NULL};
+	if (!json_is_object(k))
+		return jfail(c, pk, "expected an object with \"times\" and \"values\"");
+	if (jkeys(c, k, pk, allowed))
+		return SCENE_ERR_SCHEMA;
+	json_t *t = json_object_get(k, "times"), *v = json_object_get(k, "values");
+	size_t n = json_array_size(t);
+	if (!json_is_array(t) || !json_is_array(v) || n == 0 || json_array_size(v) != n)
+		return jfail(c, pk, "needs \"times\" and \"values\": arrays of equal, non-zero length");
+	l->intensity_times = calloc(n, sizeof(float));
+	l->intensity_values = calloc(n, sizeof(float));
+	if (!l->intensity_times || !l->intensity_values)
+		return SCENE_ERR_NOMEM;
+	l->intensity_key_count = n;
+	for (size_t i = 0; i < n; i++) {
+		json_t *ti = json_array_get(t, i), *vi = json_array_get(v, i);
+		subidx(pp, pk, i);
+		if (!json_is_number(ti) || !json_is_number(vi))
+			return jfail(c, pp, "times and values must be numbers");
+		l->intensity_times[i] = (float)json_number_value(ti);
+		l->intensity_values[i] = (float)json_number_value(vi);
+		if (l->intensity_values[i] < 0 || (i && l->intensity_times[i] <= l->intensity_times[i - 1]))
+			return jfail(c, pp, "values must be >= 0 and times strictly increasing");
+	}
+	return 0;
+}
+
+static float light_intensity(const scene_light *l, float t)
+{
+	size_t n = l->intensity_key_count;
+	if (!n)
+		return l->intensity;
+	if (t <= l->intensity_times[0])
+		return l->intensity_values[0];
+	for (size_t i = 1; i < n; i++)
+		if (t < l->intensity_times[i]) {
+			float u = (t - l->intensity_times[i - 1]) / (l->intensity_times[i] - l->intensity_times[i - 1]);
+			return l->intensity_values[i - 1] + u * (l->intensity_values[i] - l->intensity_values[i - 1]);
+		}
+	return l->intensity_values[n - 1];
+}
+
 static int parse_lights(jp *c, scene *s, json_t *root)
 {
 	json_t *a = json_object_get(root, "lights");
@@ -673,7 +725,7 @@ static int parse_lights(jp *c, scene *s, json_t *root)
 	for (size_t i = 0; i < json_array_size(a); i++) {
 		static const char *const k[] = {"name", "type", "color", "intensity", "range", "inner_cone_deg",
 						"outer_cone_deg", "casts_shadow", "shadow_extent", "shadow_center",
-						"position", "direction", "animation", NULL};
+						"position", "direction", "animation", "intensity_keys", NULL};
 		json_t *d = json_array_get(a, i);
 		char p[PATH_MAX_LEN], pp[PATH_MAX_LEN];
 		subidx(p, "$.lights", i);
@@ -694,7 +746,7 @@ static int parse_lights(jp *c, scene *s, json_t *root)
 			return SCENE_ERR_SCHEMA;
 		s->light_count = i + 1;
 		l->base.s = tlm_v3(1, 1, 1);
-		if (parse_motions(c, d, p, &l->motion_count, &l->motions))
+		if (parse_motions(c, d, p, &l->motion_count, &l->motions) || parse_intensity_keys(c, d, p, l))
 			return SCENE_ERR_SCHEMA;
 		static const char *kinds[] = {NULL, "directional", "point", "spot"};
 		for (int kk = 1; kk < SCENE_LIGHT_COUNT; kk++)
@@ -1073,6 +1125,8 @@ void scene_destroy(scene **ps)
 		for (size_t j = 0; j < s->lights[i].motion_count; j++)
 			anim_motion_finish(&s->lights[i].motions[j]);
 		free(s->lights[i].motions);
+		free(s->lights[i].intensity_times);
+		free(s->lights[i].intensity_values);
 	}
 	for (size_t i = 0; i < s->camera_count; i++)
 		free(s->cameras[i].keys);
@@ -1112,6 +1166,7 @@ void scene_eval(const scene *s, float t, tlm_mat4 *world, scene_light_state *lig
 			tlm_trs trs = eval_trs(l->base, l->motions, l->motion_count, t);
 			lights[i].position = trs.t;
 			lights[i].direction = tlm_v3_normalize_or(tlm_quat_rotate(trs.r, tlm_v3(0, 0, -1)), tlm_v3(0, -1, 0));
+			lights[i].intensity = light_intensity(l, t);
 		}
 }
 

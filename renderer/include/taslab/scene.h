@@ -107,6 +107,10 @@ typedef struct scene_light {
 	tlm_trs base;
 	size_t motion_count;
 	anim_motion *motions;
+	/* "intensity_keys": piecewise-linear intensity over time (held before the first / after the last
+	 * key); none = constant `intensity`. */
+	size_t intensity_key_count;
+	float *intensity_times, *intensity_values;
 } scene_light;
 
 typedef enum scene_camera_motion {
@@ -156,6 +160,7 @@ typedef struct scene {
 typedef struct scene_light_state {
 	tlm_vec3 position;
 	tlm_vec3 direction; /* unit, the way the light points */
+	float intensity;
 } scene_light_state;
 
 typedef struct scene_camera_state {

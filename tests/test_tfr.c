@@ -1,0 +1,332 @@
+/* test_tfr.c — temporal forward rendering (method tfr) and the TFR analysis (taslab/analyze.h) on lavapipe
+ * with the validation layer (any message fails), against facts that follow from the definitions in
+ * DESIGN section 4:
+ *  - static scene: TFR frames equal ref frames bit for bit, every sample is reused after the first frame
+ *    until the age limit K forces a reshade (checked with K = 3: reshades exactly at frames 0, 3, 6);
+ *    the analysis finds every sample unchanged and no late/early/on-time predictions;
+ *  - light intensity ramping linearly (display transform made linear with a raw OCIO config): all three
+ *    gradients equal the true slope, so every predicted deadline is on time (d in [D-1, D]);
+ *  - shadow of a box sliding across a floor: unfiltered predictors are late for some samples, the
+ *    spatially max-filtered ones for none (the paper's finding, sec. 5, Figs. 7 vs 9);
+ *  - monotonicity of the coherence curves in k and T;
+ *  - a moving shadow: TFR frames stay within T of ref (+1 for 8-bit rounding), reshaded + reused = visible;
+ *  - bad input (T <= 0, ages beyond K = 119, analysis frames outside the clip) gives clear errors. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+#include "taslab/analyze.h"
+#include "taslab/colour.h"
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+
+static scene *load(const char *name)
+{
+	char path[4096], err[1024];
+	scene *s = NULL;
+	snprintf(path, sizeof path, "%s/tests/data/%s.json", TASLAB_SOURCE_DIR, name);
+	if (scene_load(path, &s, err, sizeof err))
+		fail_msg("%s", err);
+	return s;
+}
+
+static vkdev *device(void)
+{
+	char err[1024];
+	vkdev *dev = NULL;
+	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	if (vkdev_create(&d, &dev, err, sizeof err))
+		fail_msg("%s", err);
+	return dev;
+}
+
+/* Renders frames [0, n) with a method; keeps the display images and stats. */
+static void render_frames(vkdev *dev, const scene *s, const char *method, float T, uint32_t max_age, uint32_t w,
+			  uint32_t h, uint32_t n, uint8_t **frames, render_stats *stats)
+{
+	char err[1024];
+	render *r = NULL;
+	render_desc d = {.scene = s, .camera = 0, .width = w, .height = h, .method = method, .threshold = T,
+			 .max_age = max_age};
+	if (render_create(dev, &d, &r, err, sizeof err))
+		fail_msg("%s", err);
+	for (uint32_t f = 0; f < n; f++) {
+		render_image img;
+		if (render_frame(r, f, &img, &stats[f], err, sizeof err))
+			fail_msg("%s", err);
+		frames[f] = malloc((size_t)w * h * 4);
+		memcpy(frames[f], img.display_rgba, (size_t)w * h * 4);
+	}
+	render_destroy(&r);
+}
+
+static int max_diff(const uint8_t *a, const uint8_t *b, size_t pixels)
+{
+	int m = 0;
+	for (size_t i = 0; i < pixels * 4; i++) {
+		if (i % 4 == 3)
+			continue;
+		int d = abs((int)a[i] - (int)b[i]);
+		m = d > m ? d : m;
+	}
+	return m;
+}
+
+static void test_tfr_static_equals_ref_and_ages(void **state)
+{
+	(void)state;
+	scene *s = load("tfr_static");
+	vkdev *dev = device();
+	enum { N = 8, W = 96, H = 64 };
+	uint8_t *ref[N], *tfr[N], *tk[N];
+	render_stats rs[N], ts[N], ks[N];
+	render_frames(dev, s, "ref", 0, 0, W, H, N, ref, rs);
+	render_frames(dev, s, "tfr", 8, 0, W, H, N, tfr, ts);
+	render_frames(dev, s, "tfr", 8, 3, W, H, N, tk, ks);
+	for (int f = 0; f < N; f++) {
+		assert_int_equal(max_diff(ref[f], tfr[f], W * H), 0); /* s_a = s_0 exactly when nothing changes */
+		assert_int_equal(max_diff(ref[f], tk[f], W * H), 0);
+		assert_true(ts[f].visible_samples > 1000);
+		/* reshaded + reused = visible (coplanar duplicates would add a few; the test scene has none) */
+		assert_int_equal(ts[f].shaded_samples + ts[f].reused_samples, ts[f].visible_samples);
+		assert_int_equal(ts[f].shaded_samples, f == 0 ? ts[f].visible_samples : 0);
+		assert_int_equal(ts[f].new_units, f == 0 ? ts[f].visible_samples : 0);
+		/* K = 3: a = K forces the reshade at frames 0, 3, 6 */
+		assert_int_equal(ks[f].shaded_samples, f % 3 == 0 ? ks[f].visible_samples : 0);
+		free(ref[f]);
+		free(tfr[f]);
+		free(tk[f]);
+	}
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+static void run_analysis(const char *scene_name, const colour *col, uint32_t frame, const float *T, size_t nT,
+			 uint32_t w, uint32_t h, bool predictors, analyze_result *out)
+{
+	char err[1024];
+	scene *s = load(scene_name);
+	vkdev *dev = device();
+	analyze *a = NULL;
+	analyze_desc d = {.scene = s, .camera = 0, .width = w, .height = h, .thresholds = T, .threshold_count = nT,
+			  .predictors = predictors, .colour = col};
+	if (analyze_create(dev, &d, &a, err, sizeof err) || analyze_frame(a, frame, out, err, sizeof err))
+		fail_msg("%s", err);
+	analyze_destroy(&a);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+static void test_analysis_static(void **state)
+{
+	(void)state;
+	const float T[] = {2, 8};
+	analyze_result r;
+	run_analysis("tfr_static", NULL, 30, T, 2, 64, 48, true, &r);
+	assert_true(r.visible > 1000);
+	assert_int_equal(r.visible_prev, r.visible); /* static: every sample was visible at t - 1 */
+	for (int i = 0; i < 2; i++) {
+		assert_int_equal(r.unchanged[i][ANALYZE_HISTORY], r.visible);
+		for (int p = 0; p < ANALYZE_PREDICTORS; p++) {
+			assert_int_equal(r.classes[i][p][ANALYZE_LATE], 0);
+			assert_int_equal(r.classes[i][p][ANALYZE_EARLY], 0);
+			assert_int_equal(r.classes[i][p][ANALYZE_ON_TIME], 0);
+			assert_int_equal(r.classes[i][p][ANALYZE_UNCHANGED], r.visible);
+		}
+	}
+}
+
+/* A raw OCIO config: display values = scene-linear values (clamped), so shading that is linear in time
+ * gives display values linear in time. */
+static colour *raw_colour(void)
+{
+	const char *dir = tu_tmpdir("tfr_raw_ocio");
+	char path[4096], err[1024];
+	snprintf(path, sizeof path, "%s/raw.ocio", dir);
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	fputs("ocio_profile_version: 2\n"
+	      "roles:\n  default: raw\n  scene_linear: raw\n"
+	      "displays:\n  linear:\n    - !<View> {name: Raw, colorspace: raw}\n"
+	      "colorspaces:\n  - !<ColorSpace>\n    name: raw\n    isdata: false\n",
+	      f);
+	fclose(f);
+	colour *c = NULL;
+	colour_desc cd = {.config_path = path, .display = "linear", .view = "Raw"};
+	if (colour_create(&cd, &c, err, sizeof err))
+		fail_msg("%s", err);
+	return c;
+}
+
+static void test_analysis_linear_ramp_on_time(void **state)
+{
+	(void)state;
+	colour *col = raw_colour();
+	const float T[] = {2, 4, 8};
+	analyze_result r;
+	run_analysis("tfr_ramp", col, 60, T, 3, 64, 48, true, &r);
+	colour_destroy(&col);
+	assert_true(r.visible > 2000);
+	for (int i = 0; i < 3; i++) {
+		uint64_t changed = r.visible - r.classes[i][0][ANALYZE_UNCHANGED];
+		print_message("T=%g: %llu samples with a deadline within K\n", (double)T[i], (unsigned long long)changed);
+		assert_true(changed > 200); /* the ramp reaches T within 119 frames for many samples */
+		for (int p = ANALYZE_SINGLE; p <= ANALYZE_INST; p++) {
+			uint64_t late = r.classes[i][p][ANALYZE_LATE], early = r.classes[i][p][ANALYZE_EARLY];
+			print_message("  %-6s late %llu early %llu on time %llu\n", analyze_predictor_name(p),
+				      (unsigned long long)late, (unsigned long long)early,
+				      (unsigned long long)r.classes[i][p][ANALYZE_ON_TIME]);
+			if (p == ANALYZE_LONG) {
+				/* Long-range needs a second exceedance k2 within the 120 frames; on a ramp k2 - k1 = D,
+				 * so samples with D > 60 have none and are predicted unchanged (late). Never early. */
+				assert_int_equal(early, 0);
+				assert_true(r.classes[i][p][ANALYZE_ON_TIME] > 0);
+				continue;
+			}
+			/* Predicted deadline within one frame of the true one for (nearly) all: float rounding of
+			 * the display values (about 1e-7 relative, i.e. a few 1e-4 relative in g for the 1/8-frame
+			 * symmetric difference) may tip samples whose T/g lies next to an integer; allow 1%. */
+			assert_true((late + early) * 100 <= changed);
+		}
+	}
+}
+
+static void test_analysis_moving_shadow(void **state)
+{
+	(void)state;
+	const float T[] = {2, 8, 32};
+	analyze_result r;
+	run_analysis("tfr_shadow", NULL, 120, T, 3, 96, 64, true, &r);
+	for (int i = 0; i < 3; i++)
+		for (int p = 0; p < ANALYZE_PREDICTORS; p++)
+			print_message("T=%-2g %-16s late %6llu early %6llu on time %6llu unchanged %6llu\n", (double)T[i],
+				      analyze_predictor_name(p), (unsigned long long)r.classes[i][p][0],
+				      (unsigned long long)r.classes[i][p][1], (unsigned long long)r.classes[i][p][2],
+				      (unsigned long long)r.classes[i][p][3]);
+	/* T = 8 (the paper's): unfiltered single-frame and long-range differences miss the arriving shadow
+	 * edge (late), the filtered ones do not. */
+	int t8 = 1;
+	assert_true(r.classes[t8][ANALYZE_SINGLE][ANALYZE_LATE] > 0);
+	assert_true(r.classes[t8][ANALYZE_LONG][ANALYZE_LATE] > 0);
+	assert_int_equal(r.classes[t8][ANALYZE_SINGLE_F][ANALYZE_LATE], 0);
+	assert_int_equal(r.classes[t8][ANALYZE_LONG_F][ANALYZE_LATE], 0);
+	/* Filtering trades late for early shading. */
+	assert_true(r.classes[t8][ANALYZE_LONG_F][ANALYZE_EARLY] >= r.classes[t8][ANALYZE_LONG][ANALYZE_EARLY]);
+	/* Monotonicity: unchanged fraction never increases with k and never decreases with T. */
+	for (int i = 0; i < 3; i++)
+		for (int k = 1; k <= ANALYZE_HISTORY; k++) {
+			assert_true(r.unchanged[i][k] <= r.unchanged[i][k - 1]);
+			if (i)
+				assert_true(r.unchanged[i][k] >= r.unchanged[i - 1][k]);
+		}
+	assert_true(r.unchanged[0][ANALYZE_HISTORY] < r.visible); /* the shadow does change something */
+	assert_int_equal(r.unchanged[0][0], r.visible);
+	/* Visibility coherence: the box moves a tenth of a pixel per frame here, so (nearly) every sample
+	 * was visible at t - 1. */
+	assert_true(r.visible_prev <= r.visible);
+	assert_true(r.visible_prev * 100 >= r.visible * 99);
+}
+
+static void test_tfr_moving_shadow_within_T(void **state)
+{
+	(void)state;
+	scene *s = load("tfr_shadow");
+	vkdev *dev = device();
+	enum { N = 24, W = 96, H = 64 };
+	uint8_t *ref[N], *tfr[N];
+	render_stats rs[N], ts[N];
+	render_frames(dev, s, "ref", 0, 0, W, H, N, ref, rs);
+	render_frames(dev, s, "tfr", 8, 0, W, H, N, tfr, ts);
+	int64_t reshaded = 0, disoccluded = 0;
+	for (int f = 0; f < N; f++) {
+		int d = max_diff(ref[f], tfr[f], W * H);
+		assert_true(d <= 9); /* d(shown, s_0) <= T = 8 in float; +1 for rounding to 8 bits */
+		assert_int_equal(ts[f].shaded_samples + ts[f].reused_samples, ts[f].visible_samples);
+		if (f) {
+			reshaded += ts[f].shaded_samples;
+			disoccluded += ts[f].new_units;
+		}
+		free(ref[f]);
+		free(tfr[f]);
+	}
+	assert_true(reshaded > 0);    /* the shadow edge forces reshades */
+	assert_true(disoccluded > 0); /* the moving box uncovers floor */
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+static void expect_cli_error(const char *args, const char *needle)
+{
+	char cmd[8192], out[8192];
+	snprintf(cmd, sizeof cmd, "%s %s", TASLAB_BINARY, args);
+	int st = tu_run(cmd, out, sizeof out);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
+		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
+}
+
+static void test_bad_input(void **state)
+{
+	(void)state;
+	char args[8192], err[1024];
+	const char *dir = tu_tmpdir("tfr_bad");
+	snprintf(args, sizeof args, "analyze coherence --scene %s/tests/data/tfr_static.json --frames 240 --out %s/a",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "outside the clip");
+	snprintf(args, sizeof args, "analyze predictors --scene %s/tests/data/tfr_static.json --frames 10:300:50 --out %s/a",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "outside the clip");
+	snprintf(args, sizeof args, "analyze coherence --scene %s/tests/data/tfr_static.json --frames 10 --thresholds 8,0 --out %s/a",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "--thresholds");
+	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --max-age 120 --out %s/r",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "beyond K = 119");
+	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --threshold -1 --out %s/r",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "--threshold");
+	char path[4096];
+	snprintf(path, sizeof path, "%s/a/coherence.json", dir);
+	assert_false(tu_file_exists(path));
+	snprintf(path, sizeof path, "%s/r/manifest.json", dir);
+	assert_false(tu_file_exists(path));
+
+	/* The library refuses the same (errors as values). */
+	scene *s = load("tfr_static");
+	vkdev *dev = device();
+	render *r = NULL;
+	render_desc rd = {.scene = s, .width = 32, .height = 32, .method = "tfr", .threshold = 0};
+	assert_int_equal(render_create(dev, &rd, &r, err, sizeof err), RENDER_ERR_ARG);
+	assert_non_null(strstr(err, "threshold"));
+	rd.threshold = 8;
+	rd.max_age = 120;
+	assert_int_equal(render_create(dev, &rd, &r, err, sizeof err), RENDER_ERR_ARG);
+	assert_non_null(strstr(err, "beyond K"));
+	analyze *a = NULL;
+	const float bad_T[] = {8, -2};
+	analyze_desc ad = {.scene = s, .width = 32, .height = 32, .thresholds = bad_T, .threshold_count = 2};
+	assert_int_equal(analyze_create(dev, &ad, &a, err, sizeof err), RENDER_ERR_ARG);
+	assert_non_null(strstr(err, "T must be > 0"));
+	assert_null(a);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_bad_input),
+		cmocka_unit_test(test_tfr_static_equals_ref_and_ages),
+		cmocka_unit_test(test_tfr_moving_shadow_within_T),
+		cmocka_unit_test(test_analysis_static),
+		cmocka_unit_test(test_analysis_linear_ramp_on_time),
+		cmocka_unit_test(test_analysis_moving_shadow),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
