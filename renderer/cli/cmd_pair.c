@@ -68,11 +68,15 @@ static int parse_variants(const char *list, variant *v, size_t *n, char *err, si
 		while (i < nm && strcmp(m[i].name, tok))
 			i++;
 		if (i == nm || !m[i].available) {
-			snprintf(err, err_size, "--variants: %s method '%s' (available: ref; see 'taslab render --help')",
+			snprintf(err, err_size, "--variants: %s method '%s' (available: ref, tfr; see 'taslab render --help')",
 				 i == nm ? "unknown" : "not yet implemented", tok);
 			return -1;
 		}
 		snprintf(x->method, sizeof x->method, "%s", tok);
+		if (isnan(x->T) && !strcmp(tok, "tfr")) {
+			snprintf(err, err_size, "--variants: tfr needs a threshold, e.g. tfr@8");
+			return -1;
+		}
 		if (isnan(x->T))
 			snprintf(x->name, sizeof x->name, "%s", tok);
 		else
