@@ -76,6 +76,34 @@ static void test_render_options(void **state)
 	assert_true(o.help);
 }
 
+static void test_analysis_lists(void **state)
+{
+	(void)state;
+	char err[256];
+	uint32_t f[16];
+	size_t n;
+	assert_int_equal(cli_parse_frame_list("60,120", 300, f, 16, &n, err, sizeof err), 0);
+	assert_int_equal(n, 2);
+	assert_int_equal(f[1], 120);
+	assert_int_equal(cli_parse_frame_list("120:300:60,7", 300, f, 16, &n, err, sizeof err), 0);
+	assert_int_equal(n, 4); /* 120, 180, 240 (half-open), 7 */
+	assert_int_equal(f[2], 240);
+	assert_int_equal(f[3], 7);
+	assert_int_equal(cli_parse_frame_list("300", 300, f, 16, &n, err, sizeof err), -1);
+	assert_non_null(strstr(err, "outside the clip"));
+	assert_int_equal(cli_parse_frame_list("0:20", 300, f, 16, &n, err, sizeof err), -1); /* more than 16 */
+	const char *bad[] = {"", "a", "5:3", "1:9:0", "1,,2", "-3", "4x"};
+	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+		assert_int_equal(cli_parse_frame_list(bad[i], 300, f, 16, &n, err, sizeof err), -1);
+	float t[8];
+	assert_int_equal(cli_parse_float_list("2,4,8.5", "--thresholds: T", 1e-6, 255, t, 8, &n, err, sizeof err), 0);
+	assert_int_equal(n, 3);
+	assert_true(t[2] == 8.5f);
+	assert_int_equal(cli_parse_float_list("8,0", "--thresholds: T", 1e-6, 255, t, 8, &n, err, sizeof err), -1);
+	assert_non_null(strstr(err, "--thresholds"));
+	assert_int_equal(cli_parse_float_list("1,2,3,4,5,6,7,8,9", "T", 1e-6, 255, t, 8, &n, err, sizeof err), -1);
+}
+
 static void test_resolve_scene(void **state)
 {
 	(void)state;
@@ -93,6 +121,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_size), cmocka_unit_test(test_frames),
 		cmocka_unit_test(test_render_options), cmocka_unit_test(test_resolve_scene),
+		cmocka_unit_test(test_analysis_lists),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -56,6 +56,21 @@ static int write_json(json_t *j, const char *dir, const char *name, char *err, s
 	return 0;
 }
 
+/* Plots: DIR/NAME.gp is written by the caller into the returned file, then plot_run draws it (gnuplot). */
+static FILE *plot_open(const char *dir, const char *name, char *script, size_t size)
+{
+	snprintf(script, size, "%s/%s.gp", dir, name);
+	return fopen(script, "w");
+}
+
+static void plot_run(FILE *g, const char *script)
+{
+	char perr[512];
+	fclose(g);
+	if (mtr_gnuplot(script, perr, sizeof perr))
+		fprintf(stderr, "taslab: %s\n", perr);
+}
+
 static json_t *meta_json(const analyze_result *frames, size_t n, const mtr_tfr_meta *m)
 {
 	json_t *fr = json_array(), *ts = json_array();
@@ -127,8 +142,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 	}
 	if (plots) {
 		char script[4200];
-		snprintf(script, sizeof script, "%s/coherence.gp", dir);
-		FILE *g = fopen(script, "w");
+		FILE *g = plot_open(dir, "coherence", script, sizeof script);
 		if (g) {
 			fprintf(g, "set terminal pngcairo size 900,560\nset output '%s/coherence.png'\nset datafile separator ','\n"
 				   "set title 'Temporal coherence of shading (TFR, cf. paper Fig. 4)'\nset xlabel 'frames k'\n"
@@ -139,10 +153,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 				fprintf(g, "%s'%s/coherence.csv' using ($1==%g ? $2 : 1/0):5 with lines lw 2 title 'T = %g'",
 					i ? ", " : "", dir, (double)meta->thresholds[i], (double)meta->thresholds[i]);
 			fprintf(g, "\n");
-			fclose(g);
-			char perr[512];
-			if (mtr_gnuplot(script, perr, sizeof perr))
-				fprintf(stderr, "taslab: %s\n", perr);
+			plot_run(g, script);
 		}
 	}
 	json_t *j = meta_json(frames, n, meta);
@@ -207,8 +218,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 	if (plots) {
 		/* Stacked bars: one group per T, bars single/long/inst, unfiltered then filtered (Figs. 7, 9). */
 		char script[4200];
-		snprintf(script, sizeof script, "%s/predictors.gp", dir);
-		FILE *g = fopen(script, "w");
+		FILE *g = plot_open(dir, "predictors", script, sizeof script);
 		if (g) {
 			fprintf(g, "set terminal pngcairo size 1200,560\nset output '%s/predictors.png'\nset datafile separator ','\n"
 				   "set title 'Gradient predictors on TFR histories (cf. paper Figs. 7, 9): bars per T = single, long, inst; "
@@ -221,10 +231,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 				   "lc rgb '#ff9f1c', '' every ::1 using 11 title 'on time' lc rgb '#2ca02c', '' every ::1 using 12 "
 				   "title 'unchanged' lc rgb '#bbbbbb'\n",
 				dir, dir);
-			fclose(g);
-			char perr[512];
-			if (mtr_gnuplot(script, perr, sizeof perr))
-				fprintf(stderr, "taslab: %s\n", perr);
+			plot_run(g, script);
 		}
 	}
 	json_t *j = meta_json(frames, n, meta);

@@ -254,9 +254,7 @@ void analyze_destroy(analyze **pa)
 	vkdev_buffer_destroy(a->dev, &a->readback_g);
 	vkdev_buffer_destroy(a->dev, &a->readback_l2);
 	if (a->r && getenv("TASLAB_DEBUG_SHADOWS"))
-		fprintf(stderr, "shadow layers rendered %llu, shared %llu; derivative passes %llu\n",
-			(unsigned long long)a->r->shadow.rendered, (unsigned long long)a->r->shadow.reused,
-			(unsigned long long)a->inst_passes);
+		fprintf(stderr, "analysis: derivative passes %llu\n", (unsigned long long)a->inst_passes);
 	render_destroy(&a->r);
 	free(a);
 	*pa = NULL;

@@ -42,6 +42,23 @@ static const char *const tfr_passes[] = {"shadow", "depth", "shade", "display", 
 		}                                                                                  \
 	} while (0)
 
+/* The shading pipeline (tfr.frag.in with the OCIO display function), specialised for the shadow chunks
+ * in use; re-created when the shadow history grows into another chunk. */
+static int tfr_rebuild(render *r, char *err, size_t err_size)
+{
+	tfr_state *t = r->method_state;
+	uint32_t *spv = NULL;
+	size_t spv_size = 0;
+	render_pipeline_destroy(r, &t->pipe);
+	int rc = render_compile(r, tfr_frag_in, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	if (rc)
+		return rc;
+	VkResult vr = render_make_shade_pipeline(r, spv, spv_size, t->set_layout, &t->pipe);
+	free(spv);
+	CHECK(vr, "shading pipeline");
+	return 0;
+}
+
 static int tfr_init(render *r, char *err, size_t err_size)
 {
 	if (!(r->desc.threshold > 0.0f)) {
@@ -96,14 +113,9 @@ static int tfr_init(render *r, char *err, size_t err_size)
 		};
 		vkUpdateDescriptorSets(d, 3, w, 0, NULL);
 	}
-	uint32_t *spv = NULL;
-	size_t spv_size = 0;
-	int rc = render_compile(r, tfr_frag_in, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	int rc = tfr_rebuild(r, err, err_size);
 	if (rc)
 		return rc;
-	VkResult vr = render_make_shade_pipeline(r, spv, spv_size, t->set_layout, &t->pipe);
-	free(spv);
-	CHECK(vr, "shading pipeline");
 	VkCommandBuffer cmd;
 	CHECK(vkdev_cmd_begin(r->dev, &cmd), "command buffer");
 	for (int i = 0; i < 2; i++)
@@ -206,4 +218,5 @@ const render_method_ops render_method_tfr = {
 	.record = tfr_record,
 	.collect = tfr_collect,
 	.finish = tfr_finish,
+	.rebuild = tfr_rebuild,
 };

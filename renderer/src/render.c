@@ -619,7 +619,7 @@ static VkResult make_graphics(render *r, const pipe_desc *pd, render_pipeline *o
 	struct {
 		VkBool32 blend;
 		int32_t chunks;
-	} spec_values = {pd->fs_alpha_blend ? VK_TRUE : VK_FALSE, (int32_t)r->shadow.chunks_max};
+	} spec_values = {pd->fs_alpha_blend ? VK_TRUE : VK_FALSE, (int32_t)r->shadow.chunks_compiled};
 	VkSpecializationMapEntry spec_entries[2] = {{0, 0, sizeof(VkBool32)}, {1, sizeof(VkBool32), sizeof(int32_t)}};
 	VkSpecializationInfo spec = {2, spec_entries, sizeof spec_values, &spec_values};
 	VkPipelineShaderStageCreateInfo stages[2] = {
@@ -978,6 +978,41 @@ fail:
 	return rc;
 }
 
+/* The reference shading pipelines (opaque/masked and BLEND); they sample shadow maps, so they are
+ * re-created when the shadow pool outgrows the chunk count they were specialised for. */
+static VkResult make_shade_pipelines(render *r)
+{
+	pipe_desc shade = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = 15u, .color = 1,
+			   .depth_op = VK_COMPARE_OP_EQUAL, .fs = shade_frag, .fs_size = sizeof shade_frag};
+	if (r->desc.trivial_shading) {
+		shade.fs = trivial_frag;
+		shade.fs_size = sizeof trivial_frag;
+	}
+	VkResult res = make_graphics(r, &shade, &r->shade_pipe);
+	if (!res && has_alpha_mode(r, SCENE_ALPHA_BLEND)) {
+		pipe_desc sb = shade;
+		sb.depth_op = VK_COMPARE_OP_LESS_OR_EQUAL;
+		sb.blend = 1;
+		sb.fs_alpha_blend = !r->desc.trivial_shading;
+		res = make_graphics(r, &sb, &r->shade_blend_pipe);
+	}
+	return res;
+}
+
+/* After render_shadow_plan added chunks beyond what the shading pipelines were specialised for. */
+static int rebuild_shading(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	render_pipeline_destroy(r, &r->shade_pipe);
+	render_pipeline_destroy(r, &r->shade_blend_pipe);
+	r->shadow.chunks_compiled = r->shadow.chunk_count;
+	CHECK_VK(make_shade_pipelines(r));
+	if (r->method->rebuild)
+		rc = r->method->rebuild(r, err, err_size);
+fail:
+	return rc;
+}
+
 static int create_pipelines(render *r, char *err, size_t err_size)
 {
 	int rc = 0;
@@ -986,15 +1021,9 @@ static int create_pipelines(render *r, char *err, size_t err_size)
 			    .depth_op = VK_COMPARE_OP_LESS, .bias = 1};
 	pipe_desc depth = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = ALL, .depth_write = 1,
 			   .depth_op = VK_COMPARE_OP_LESS};
-	pipe_desc shade = {.vs = scene_vert, .vs_size = sizeof scene_vert, .attributes = ALL, .color = 1,
-			   .depth_op = VK_COMPARE_OP_EQUAL, .fs = shade_frag, .fs_size = sizeof shade_frag};
-	if (r->desc.trivial_shading) {
-		shade.fs = trivial_frag;
-		shade.fs_size = sizeof trivial_frag;
-	}
 	CHECK_VK(make_graphics(r, &shadow, &r->shadow_pipe));
 	CHECK_VK(make_graphics(r, &depth, &r->depth_pipe));
-	CHECK_VK(make_graphics(r, &shade, &r->shade_pipe));
+	CHECK_VK(make_shade_pipelines(r));
 	if (has_alpha_mode(r, SCENE_ALPHA_MASK)) {
 		pipe_desc sm = shadow, dm = depth;
 		sm.vs = shadow_mask_vert, sm.vs_size = sizeof shadow_mask_vert, sm.attributes = POS | UV;
@@ -1004,11 +1033,6 @@ static int create_pipelines(render *r, char *err, size_t err_size)
 		CHECK_VK(make_graphics(r, &dm, &r->depth_mask_pipe));
 	}
 	if (has_alpha_mode(r, SCENE_ALPHA_BLEND)) {
-		pipe_desc sb = shade;
-		sb.depth_op = VK_COMPARE_OP_LESS_OR_EQUAL;
-		sb.blend = 1;
-		sb.fs_alpha_blend = !r->desc.trivial_shading;
-		CHECK_VK(make_graphics(r, &sb, &r->shade_blend_pipe));
 		for (size_t i = 0; i < r->scene->object_count; i++) {
 			const scene_object *o = &r->scene->objects[i];
 			r->blend_count += o->mesh >= 0 && r->scene->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND;
@@ -1124,8 +1148,12 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method_o
 		r->colour = r->own_colour;
 	}
 	if ((rc = upload_scene(r, err, err_size)) || (rc = create_targets(r, err, err_size)) ||
-	    (rc = create_descriptors(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)) ||
-	    (rc = create_pipelines(r, err, err_size)))
+	    (rc = create_descriptors(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)))
+		goto fail;
+	/* Shading pipelines are specialised for the shadow chunks in use: methods driven by render_frame
+	 * start with one and are rebuilt when the pool grows; others get the worst case up front. */
+	r->shadow.chunks_compiled = m->prepare && (m == &render_method_ref || m->rebuild) ? 1 : r->shadow.chunks_max;
+	if ((rc = create_pipelines(r, err, err_size)))
 		goto fail;
 	if (m->init && (rc = m->init(r, err, err_size)))
 		goto fail;
@@ -1167,6 +1195,10 @@ void render_destroy(render **pr)
 		vkDestroyDescriptorSetLayout(d, r->scene_set_layout, NULL);
 	if (r->display_set_layout)
 		vkDestroyDescriptorSetLayout(d, r->display_set_layout, NULL);
+	if (r->scene_set && getenv("TASLAB_DEBUG_SHADOWS")) /* shadow pool report (README "Renderer decisions") */
+		fprintf(stderr, "shadow pool: %llu layer renderings, %llu shared, %u of %u chunks of %u layers\n",
+			(unsigned long long)r->shadow.rendered, (unsigned long long)r->shadow.reused, r->shadow.chunk_count,
+			r->shadow.chunks_max, r->shadow.chunk_layers);
 	if (r->scene_set)
 		render_shadow_destroy(r);
 	if (r->tex_sampler)
@@ -1198,6 +1230,8 @@ int render_frame(render *r, uint32_t frame, render_image *img, render_stats *st,
 	int rc = 0;
 	VkCommandBuffer cmd = r->cmd;
 	if (r->method->prepare && (rc = r->method->prepare(r, frame, err, err_size)))
+		return rc;
+	if (r->shadow.chunk_count > r->shadow.chunks_compiled && (rc = rebuild_shading(r, err, err_size)))
 		return rc;
 	CHECK_VK(vkResetCommandBuffer(cmd, 0));
 	VkCommandBufferBeginInfo bi = {

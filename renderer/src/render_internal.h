@@ -24,6 +24,8 @@ typedef struct render_method_ops {
 	/* Fills the method-specific statistics after the frame completed. */
 	void (*collect)(render *r, render_stats *st);
 	void (*finish)(render *r);
+	/* Re-creates the method's shading pipelines (after the shadow pool grew; see render_frame). */
+	int (*rebuild)(render *r, char *err, size_t err_size);
 } render_method_ops;
 
 extern const render_method_ops render_method_ref;
@@ -35,7 +37,8 @@ typedef struct render_shadow_pool {
 	uint32_t size;         /* shadow map size */
 	uint32_t chunk_layers; /* physical layers per chunk image */
 	uint32_t chunk_count;
-	uint32_t chunks_max;   /* chunks the pool may need (shaders are specialised for it) */
+	uint32_t chunks_max;   /* chunks the pool may need */
+	uint32_t chunks_compiled; /* chunks the shading pipelines are specialised for (SHADOW_CHUNKS_USED) */
 	vkdev_image chunks[GPU_SHADOW_CHUNKS];
 	vkdev_image dummy;     /* bound while there are no chunks */
 	VkImageView *views;    /* per physical layer */
