@@ -13,7 +13,6 @@
 
 #include "render_internal.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -260,39 +259,6 @@ void analyze_destroy(analyze **pa)
 	*pa = NULL;
 }
 
-static VkResult begin(analyze *a, VkCommandBuffer *cmd)
-{
-	render *r = a->r;
-	*cmd = r->cmd;
-	VkResult res = vkResetCommandBuffer(r->cmd, 0);
-	VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
-				       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT};
-	if (!res)
-		res = vkBeginCommandBuffer(r->cmd, &bi);
-	return res;
-}
-
-/* Each shading pass runs inside the frame pipeline's statistics query; reset it before every use. */
-static void reset_query(analyze *a, VkCommandBuffer cmd)
-{
-	if (a->r->stats_pool)
-		vkCmdResetQueryPool(cmd, a->r->stats_pool, 0, 1);
-}
-
-static VkResult submit(analyze *a)
-{
-	render *r = a->r;
-	VkResult res = vkEndCommandBuffer(r->cmd);
-	VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO, .commandBufferCount = 1, .pCommandBuffers = &r->cmd};
-	if (!res)
-		res = vkResetFences(r->dev->device, 1, &r->fence);
-	if (!res)
-		res = vkQueueSubmit(r->dev->queue, 1, &si, r->fence);
-	if (!res)
-		res = vkWaitForFences(r->dev->device, 1, &r->fence, VK_TRUE, UINT64_MAX);
-	return res;
-}
-
 /* State slot `slot` at frame time `f` (may be fractional or negative), with its shadow maps planned. */
 static int set_slot(analyze *a, uint32_t slot, double f, char *err, size_t err_size)
 {
@@ -314,7 +280,7 @@ int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, si
 	int rc = 0;
 	render *r = a->r;
 	uint32_t w = r->desc.width, h = r->desc.height;
-	VkCommandBuffer cmd;
+	VkCommandBuffer cmd = r->cmd;
 	memset(out, 0, sizeof *out);
 	tfa_buffer *buf = a->buf.mapped;
 	memset(buf, 0, sizeof *buf);
@@ -329,7 +295,7 @@ int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, si
 	if ((rc = set_slot(a, 0, frame, err, err_size)))
 		goto fail;
 	render_update_state(r, 1, ((double)frame - 1.0) / (double)r->desc.fps);
-	CHECK(begin(a, &cmd), "command buffer");
+	CHECK(render_cmd_begin(r), "command buffer");
 	VkClearColorValue zero = {{0}};
 	for (int i = 0; i < IMG_COUNT; i++) {
 		VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, a->img[i].layers};
@@ -337,17 +303,15 @@ int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, si
 	}
 	barrier_all(cmd);
 	render_pass_depth(r, cmd, 1);
-	reset_query(a, cmd);
 	render_pass_shade_with(r, cmd, 1, &a->vis_pipe, a->set);
 	barrier_all(cmd);
 	render_pass_shadows(r, cmd, 0);
 	render_pass_depth(r, cmd, 0);
 	r->push_aux[0] = 0;
 	r->push_aux[1] = hbits;
-	reset_query(a, cmd);
 	render_pass_shade_with(r, cmd, 0, &a->step_pipe, a->set);
 	barrier_all(cmd);
-	CHECK(submit(a), "k = 0 submission");
+	CHECK(render_cmd_submit_wait(r), "k = 0 submission");
 
 	/* k = 1..120: shading of t's visible samples with the inputs of t - k; when some sample finds its
 	 * first exceedance at k, a second pass evaluates the instantaneous derivatives at t - k (the states
@@ -356,34 +320,32 @@ int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, si
 		double fk = (double)frame - (double)k;
 		if ((rc = set_slot(a, 2, fk, err, err_size)))
 			goto fail;
-		CHECK(begin(a, &cmd), "command buffer");
+		CHECK(render_cmd_begin(r), "command buffer");
 		render_pass_shadows(r, cmd, 2);
 		r->push_aux[0] = k;
 		r->push_aux[1] = hbits;
 		r->push_aux[2] = 0;
-		reset_query(a, cmd);
 		render_pass_shade_with(r, cmd, 0, &a->step_pipe, a->set);
 		barrier_all(cmd);
-		CHECK(submit(a), "history step submission");
+		CHECK(render_cmd_submit_wait(r), "history step submission");
 		if (!buf->need_inst)
 			continue;
 		buf->need_inst = 0;
 		a->inst_passes++;
 		if ((rc = set_slot(a, 3, fk + a->h, err, err_size)) || (rc = set_slot(a, 4, fk - a->h, err, err_size)))
 			goto fail;
-		CHECK(begin(a, &cmd), "command buffer");
+		CHECK(render_cmd_begin(r), "command buffer");
 		render_pass_shadows(r, cmd, 3);
 		render_pass_shadows(r, cmd, 4);
 		r->push_aux[2] = 1;
-		reset_query(a, cmd);
 		render_pass_shade_with(r, cmd, 0, &a->step_pipe, a->set);
 		barrier_all(cmd);
-		CHECK(submit(a), "derivative pass submission");
+		CHECK(render_cmd_submit_wait(r), "derivative pass submission");
 	}
 	memset(r->push_aux, 0, sizeof r->push_aux);
 
 	/* Gradients, filter, classification. */
-	CHECK(begin(a, &cmd), "command buffer");
+	CHECK(render_cmd_begin(r), "command buffer");
 	dispatch(a, cmd, COMP_GRAD, w, h);
 	dispatch(a, cmd, COMP_MAXDOWN, a->lw, a->lh);
 	dispatch(a, cmd, COMP_MAXK, a->lw, a->lh);
@@ -412,7 +374,7 @@ int analyze_frame(analyze *a, uint32_t frame, analyze_result *out, char *err, si
 			       .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT};
 	VkDependencyInfo di = {.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO, .memoryBarrierCount = 1, .pMemoryBarriers = &mb};
 	vkCmdPipelineBarrier2(cmd, &di);
-	CHECK(submit(a), "resolve submission");
+	CHECK(render_cmd_submit_wait(r), "resolve submission");
 
 	out->frame = frame;
 	out->width = w;

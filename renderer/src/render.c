@@ -495,8 +495,10 @@ void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const
 		.pColorAttachments = &ca,
 		.pDepthAttachment = &da,
 	};
-	if (r->stats_pool)
+	if (r->stats_pool) { /* reset here so any number of shading passes may run per command buffer */
+		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
 		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
+	}
 	vkCmdBeginRendering(cmd, &ri);
 	bind_scene(r, cmd, opaque);
 	if (method_set)
@@ -1225,6 +1227,27 @@ void render_destroy(render **pr)
 	*pr = NULL;
 }
 
+VkResult render_cmd_begin(render *r)
+{
+	VkCommandBufferBeginInfo bi = {
+		.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+		.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
+	};
+	VkResult res = vkResetCommandBuffer(r->cmd, 0);
+	return res ? res : vkBeginCommandBuffer(r->cmd, &bi);
+}
+
+VkResult render_cmd_submit_wait(render *r)
+{
+	VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO, .commandBufferCount = 1, .pCommandBuffers = &r->cmd};
+	VkResult res = vkEndCommandBuffer(r->cmd);
+	if (!res)
+		res = vkResetFences(r->dev->device, 1, &r->fence);
+	if (!res)
+		res = vkQueueSubmit(r->dev->queue, 1, &si, r->fence);
+	return res ? res : vkWaitForFences(r->dev->device, 1, &r->fence, VK_TRUE, UINT64_MAX);
+}
+
 int render_frame(render *r, uint32_t frame, render_image *img, render_stats *st, char *err, size_t err_size)
 {
 	int rc = 0;
@@ -1233,23 +1256,12 @@ int render_frame(render *r, uint32_t frame, render_image *img, render_stats *st,
 		return rc;
 	if (r->shadow.chunk_count > r->shadow.chunks_compiled && (rc = rebuild_shading(r, err, err_size)))
 		return rc;
-	CHECK_VK(vkResetCommandBuffer(cmd, 0));
-	VkCommandBufferBeginInfo bi = {
-		.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
-		.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
-	};
-	CHECK_VK(vkBeginCommandBuffer(cmd, &bi));
+	CHECK_VK(render_cmd_begin(r));
 	if (r->ts_pool)
 		vkCmdResetQueryPool(cmd, r->ts_pool, 0, RENDER_MAX_PASSES + 1);
-	if (r->stats_pool)
-		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
 	r->ts_count = 0;
 	r->method->record(r, cmd, frame);
-	CHECK_VK(vkEndCommandBuffer(cmd));
-	VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO, .commandBufferCount = 1, .pCommandBuffers = &cmd};
-	CHECK_VK(vkResetFences(r->dev->device, 1, &r->fence));
-	CHECK_VK(vkQueueSubmit(r->dev->queue, 1, &si, r->fence));
-	CHECK_VK(vkWaitForFences(r->dev->device, 1, &r->fence, VK_TRUE, UINT64_MAX));
+	CHECK_VK(render_cmd_submit_wait(r));
 
 	uint32_t w = r->desc.width, h = r->desc.height;
 	for (uint32_t y = 0; y < h; y++) {

@@ -109,6 +109,10 @@ struct render {
 	scene_light_state *light_states;
 };
 
+/* The render's command buffer: reset + begin; end + submit + wait on its fence (render_frame, analysis). */
+VkResult render_cmd_begin(render *r);
+VkResult render_cmd_submit_wait(render *r);
+
 /* Building blocks for methods. */
 void render_ts(render *r, VkCommandBuffer cmd);
 void render_update_state(render *r, uint32_t slot, double time_s);
