@@ -1,7 +1,10 @@
 /* test_cli_options.c — option parsing of the taslab CLI (no process spawned). */
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
+#include "commands.h"
+#include "taslab/method.h"
 #include "test_util.h"
 
 static void test_size(void **state)
@@ -45,35 +48,184 @@ static void test_frames(void **state)
 	}
 }
 
+/* Parses argv with command `name`'s table into opts (a buffer of CLI_OPTS_MAX_B) and ctx; returns the tl_err. */
+static _Alignas(max_align_t) unsigned char opts_buf[CLI_OPTS_MAX_B];
+static cli_ctx ctx;
+
+static int parse(const char *name, int argc, char **argv)
+{
+	const cli_command *c = cli_find_command(name);
+	assert_non_null(c);
+	memset(&ctx, 0, sizeof ctx);
+	return cli_parse_command(c, argc, argv, opts_buf, &ctx);
+}
+
+#define PARSE_OK(name, ...)                                                                                        \
+	do {                                                                                                       \
+		char *argv_[] = {__VA_ARGS__};                                                                     \
+		int rc_ = parse(name, (int)(sizeof argv_ / sizeof argv_[0]), argv_);                               \
+		if (rc_)                                                                                           \
+			fail_msg("%s: %s", name, ctx.err);                                                         \
+	} while (0)
+/* Fails unless parsing fails with TL_ERR_ARG and a message containing `needle`. */
+#define PARSE_BAD(name, needle, ...)                                                                               \
+	do {                                                                                                       \
+		char *argv_[] = {__VA_ARGS__};                                                                     \
+		int rc_ = parse(name, (int)(sizeof argv_ / sizeof argv_[0]), argv_);                               \
+		if (rc_ != TL_ERR_ARG && rc_ != TL_ERR_UNSUPPORTED)                                                \
+			fail_msg("%s: expected a usage error, got %d (%s)", name, rc_, ctx.err);                   \
+		if (!strstr(ctx.err, needle))                                                                      \
+			fail_msg("%s: message '%s' lacks '%s'", name, ctx.err, needle);                            \
+		assert_null(strchr(ctx.err, '\n'));                                                                \
+	} while (0)
+
 static void test_render_options(void **state)
 {
 	(void)state;
-	char err[256];
-	cli_render_opts o;
-	char *ok[] = {"render", "--scene", "turntable", "--size=96x54", "--frames", "0:3", "--validation", "--out", "x"};
-	assert_int_equal(cli_render_parse(9, ok, &o, err, sizeof err), 0);
-	assert_string_equal(o.scene, "turntable");
-	assert_string_equal(o.method, "ref");
-	assert_true(o.width == 96 && o.height == 54 && o.validation);
-	char *unknown_method[] = {"render", "--scene", "s", "--method", "magic"};
-	assert_int_equal(cli_render_parse(5, unknown_method, &o, err, sizeof err), -1);
-	assert_non_null(strstr(err, "magic"));
-	char *planned[] = {"render", "--scene", "s", "--method", "tasa"};
-	assert_int_equal(cli_render_parse(5, planned, &o, err, sizeof err), -1);
-	assert_non_null(strstr(err, "not implemented"));
-	char *no_scene[] = {"render", "--size", "96x54"};
-	assert_int_equal(cli_render_parse(3, no_scene, &o, err, sizeof err), -1);
-	assert_non_null(strstr(err, "--scene"));
-	char *missing_val[] = {"render", "--scene"};
-	assert_int_equal(cli_render_parse(2, missing_val, &o, err, sizeof err), -1);
-	char *unknown_opt[] = {"render", "--scene", "s", "--colour"};
-	assert_int_equal(cli_render_parse(4, unknown_opt, &o, err, sizeof err), -1);
-	assert_non_null(strstr(err, "--colour"));
-	char *bad_thr[] = {"render", "--scene", "s", "--threshold", "-3"};
-	assert_int_equal(cli_render_parse(5, bad_thr, &o, err, sizeof err), -1);
-	char *help[] = {"render", "--help"};
-	assert_int_equal(cli_render_parse(2, help, &o, err, sizeof err), 0);
-	assert_true(o.help);
+	render_opts *o = (render_opts *)opts_buf;
+	PARSE_OK("render", "render", "--scene", "turntable", "--size=96x54", "--frames", "0:3", "--validation", "--out", "x");
+	assert_string_equal(ctx.setup_opts.scene, "turntable");
+	assert_string_equal(o->config.method->name, "ref");
+	assert_true(ctx.setup_opts.size[0] == 96 && ctx.setup_opts.size[1] == 54 && ctx.setup_opts.validation);
+	PARSE_OK("render", "render", "--scene=s", "--method=tfr", "--threshold=4", "--max-age", "3");
+	assert_true(method_config_threshold(&o->config) == 4 && method_config_number(&o->config, "max-age") == 3);
+	PARSE_OK("render", "render", "--scene", "s", "--method", "tfr@16"); /* a variant token */
+	assert_true(method_config_threshold(&o->config) == 16);
+	PARSE_OK("render", "render", "--scene", "s", "--method", "tfr"); /* --threshold's default */
+	assert_true(method_config_threshold(&o->config) == 8);
+	PARSE_BAD("render", "magic", "render", "--scene", "s", "--method", "magic");
+	PARSE_BAD("render", "not implemented", "render", "--scene", "s", "--method", "tasa");
+	PARSE_BAD("render", "--scene", "render", "--size", "96x54");
+	PARSE_BAD("render", "needs a value", "render", "--scene");
+	PARSE_BAD("render", "--colour", "render", "--scene", "s", "--colour");
+	PARSE_BAD("render", "--threshold", "render", "--scene", "s", "--method", "tfr", "--threshold", "-3");
+	PARSE_BAD("render", "not an option of ref", "render", "--scene", "s", "--max-age", "3");
+	PARSE_BAD("render", "whole number", "render", "--scene", "s", "--method", "tfr", "--max-age", "2.5");
+	PARSE_BAD("render", "takes no value", "render", "--scene", "s", "--validation=1");
+	PARSE_BAD("render", "unexpected argument", "render", "--scene", "s", "stray");
+	PARSE_BAD("render", "--frames", "render", "--scene", "s", "--frames", "9:3");
+	PARSE_BAD("render", "--fps", "render", "--scene", "s", "--fps", "0");
+	PARSE_OK("render", "render", "--help");
+	assert_true(ctx.help);
+}
+
+static void test_pair_options(void **state)
+{
+	(void)state;
+	pair_opts *o = (pair_opts *)opts_buf;
+	PARSE_OK("pair", "pair", "--scene", "calm", "--out", "d", "--variants", "ref,tfr@2,tfr@8");
+	assert_int_equal(o->count, 3);
+	assert_true(method_config_threshold(&o->configs[2]) == 8);
+	PARSE_OK("pair", "pair", "--scene", "calm", "--out", "d"); /* default: the catch pair */
+	assert_int_equal(o->count, 1);
+	PARSE_BAD("pair", "tfr@8", "pair", "--scene", "calm", "--out", "d", "--variants", "tfr");
+	PARSE_BAD("pair", "listed twice", "pair", "--scene", "calm", "--out", "d", "--variants", "tfr@8,tfr@8");
+	PARSE_BAD("pair", "empty entry", "pair", "--scene", "calm", "--out", "d", "--variants", "tfr@8,,ref");
+	PARSE_BAD("pair", "takes no '@'", "pair", "--scene", "calm", "--out", "d", "--variants", "ref@8");
+	PARSE_BAD("pair", "--out", "pair", "--scene", "calm");
+}
+
+static void test_tool_options(void **state)
+{
+	(void)state;
+	PARSE_OK("tonemap", "tonemap", "run", "--out", "x", "--view", "v");
+	assert_int_equal(ctx.npos, 1);
+	PARSE_BAD("tonemap", "INPUT", "tonemap", "--out", "x");
+	PARSE_BAD("tonemap", "unexpected argument", "tonemap", "a", "b");
+	PARSE_OK("clip", "clip", "run", "--out=c.webm");
+	PARSE_BAD("clip", "--out", "clip", "run");
+	PARSE_BAD("scenes", "unexpected argument", "scenes", "extra");
+	PARSE_BAD("devices", "unknown option", "devices", "--all");
+}
+
+static void test_metrics_options(void **state)
+{
+	(void)state;
+	metrics_diff_opts *d = (metrics_diff_opts *)opts_buf;
+	PARSE_OK("metrics diff", "diff", "--ref", "a", "--test", "b", "--out", "o", "--threads", "2", "--heatmaps");
+	assert_true(d->threads == 2 && d->heatmaps && !strcmp(d->format, "png"));
+	PARSE_BAD("metrics diff", "--ref", "diff", "--ref", "a", "--out", "o");
+	PARSE_BAD("metrics diff", "--format", "diff", "--ref", "a", "--test", "b", "--out", "o", "--format", "jpg");
+	PARSE_BAD("metrics diff", "--threads", "diff", "--ref", "a", "--test", "b", "--out", "o", "--threads", "1.5");
+	PARSE_OK("metrics runs", "runs", "--out", "o", "r1", "r2");
+	assert_int_equal(ctx.npos, 2);
+	PARSE_BAD("metrics runs", "RUN", "runs", "--out", "o");
+	metrics_jnd_opts *j = (metrics_jnd_opts *)opts_buf;
+	PARSE_OK("metrics jnd", "jnd", "--n", "40", "--ref-preferred", "22", "--ties", "6");
+	assert_true(j->n == 40 && j->confidence == 0.95);
+	PARSE_BAD("metrics jnd", "--n", "jnd", "--n", "10", "--ref-preferred", "12");
+}
+
+static void test_analyze_options(void **state)
+{
+	(void)state;
+	analyze_opts *o = (analyze_opts *)opts_buf;
+	PARSE_OK("analyze coherence", "coherence", "--scene", "calm", "--frames", "120:300:60", "--out", "a");
+	assert_int_equal(o->nT, 6);
+	assert_true(ctx.setup_opts.size[0] == 480 && ctx.setup_opts.size[1] == 270);
+	PARSE_OK("analyze predictors", "predictors", "--scene", "calm", "--frames", "60,120", "--out", "a", "--thresholds",
+		 "4,8", "--step", "0.25", "--images");
+	assert_true(o->nT == 2 && o->step == 0.25 && o->images);
+	PARSE_BAD("analyze coherence", "--frames", "coherence", "--scene", "calm", "--out", "a");
+	PARSE_BAD("analyze coherence", "--thresholds", "coherence", "--scene", "calm", "--frames", "1", "--out", "a",
+		  "--thresholds", "8,0");
+	PARSE_BAD("analyze coherence", "empty entry", "coherence", "--scene", "calm", "--frames", "1", "--out", "a",
+		  "--thresholds", "8,,16");
+	PARSE_BAD("analyze predictors", "--step", "predictors", "--scene", "calm", "--frames", "1", "--out", "a", "--step",
+		  "2");
+}
+
+static void test_study_options(void **state)
+{
+	(void)state;
+	study_opts *o = (study_opts *)opts_buf;
+	PARSE_OK("study design", "design", "--db", "s.db", "--stimuli", "st", "--participants", "24", "--seed", "7");
+	assert_true(o->participants == 24 && o->seed == 7);
+	PARSE_BAD("study design", "--participants", "design", "--db", "s.db", "--stimuli", "st", "--participants", "2.5");
+	PARSE_BAD("study design", "--participants", "design", "--db", "s.db", "--stimuli", "st", "--participants", "0");
+	PARSE_BAD("study design", "--training", "design", "--db", "s.db", "--stimuli", "st", "--participants", "2",
+		  "--training", "1e9");
+	PARSE_BAD("study design", "--db", "design", "--stimuli", "st", "--participants", "2");
+	PARSE_OK("study serve", "serve", "--db", "s.db", "--port", "0");
+	assert_int_equal(o->port, 0);
+	PARSE_BAD("study serve", "--port", "serve", "--db", "s.db", "--port", "18080.7");
+	PARSE_BAD("study serve", "--port", "serve", "--db", "s.db", "--port", "70000");
+	PARSE_BAD("study serve", "--threads", "serve", "--db", "s.db", "--threads", "100000");
+	PARSE_BAD("study tally", "--bootstrap", "tally", "--db", "s.db", "--out", "o", "--bootstrap", "1e9");
+	PARSE_BAD("study tally", "--out", "tally", "--db", "s.db");
+	PARSE_OK("study import", "import", "--db", "s.db", "r.csv");
+	PARSE_BAD("study import", "RATINGS.csv", "import", "--db", "s.db");
+	PARSE_BAD("study links", "unexpected argument", "links", "--db", "s.db", "stray");
+	PARSE_BAD("study export", "unknown option", "export", "--db", "s.db", "--out", "x.csv", "--pwcmp-x", "y");
+}
+
+static void test_help_from_tables(void **state)
+{
+	(void)state;
+	/* Every command's and subcommand's help is generated from its tables and mentions each option. */
+	for (const cli_command *const *c = cli_commands; *c; c++) {
+		const cli_command *const *subs = (*c)->subcommands;
+		for (size_t k = 0; subs ? subs[k] != NULL : k == 0; k++) {
+			const cli_command *cmd = subs ? subs[k] : *c;
+			assert_true(cmd->opts_size <= CLI_OPTS_MAX_B);
+			char *text = NULL;
+			size_t len = 0;
+			FILE *f = open_memstream(&text, &len);
+			cli_print_help(f, cmd);
+			fclose(f);
+			assert_non_null(strstr(text, "usage: taslab"));
+			for (const cli_opt *o = cmd->options; o && o->type != CLI_OPT_END; o++)
+				if (o->type != CLI_INCLUDE) {
+					char flag[80];
+					snprintf(flag, sizeof flag, "--%s", o->name);
+					if (!strstr(text, flag))
+						fail_msg("%s --help lacks %s", cmd->name, flag);
+				}
+			free(text);
+			if (!subs)
+				break;
+		}
+	}
 }
 
 static void test_analysis_lists(void **state)
@@ -120,7 +272,10 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_size), cmocka_unit_test(test_frames),
-		cmocka_unit_test(test_render_options), cmocka_unit_test(test_resolve_scene),
+		cmocka_unit_test(test_render_options), cmocka_unit_test(test_pair_options),
+		cmocka_unit_test(test_tool_options), cmocka_unit_test(test_metrics_options),
+		cmocka_unit_test(test_analyze_options), cmocka_unit_test(test_study_options),
+		cmocka_unit_test(test_help_from_tables), cmocka_unit_test(test_resolve_scene),
 		cmocka_unit_test(test_analysis_lists),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

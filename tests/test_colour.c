@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "taslab/colour.h"
+#include "taslab/colour_gpu.h"
 #include "taslab/vkdev.h"
-#include "test_util.h"
+#include "test_vk.h"
 
 /* 28 levels per channel: 0, then 1e-4 .. 64 log-spaced (HDR up to 6 stops over 1.0). */
 #define LEVELS 28

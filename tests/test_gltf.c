@@ -11,7 +11,7 @@
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
-#include "test_util.h"
+#include "test_vk.h"
 
 #define SHARED TASLAB_SHARED_DIR "/scenes"
 #define EPS 1e-4f
@@ -193,11 +193,11 @@ static void test_every_model_renders(void **state)
 	for (size_t i = 0; i < sizeof models / sizeof models[0]; i++) {
 		scene *s = load(models[i]);
 		render *r = NULL;
-		render_desc rd = {.scene = s, .camera = 0, .width = 64, .height = 36, .method = "ref"};
+		render_desc rd = {.scene = s, .camera = 0, .width = 64, .height = 36};
 		if (render_create(dev, &rd, &r, err, sizeof err))
 			fail_msg("%s: %s", models[i], err);
-		render_image img;
-		render_stats st;
+		frame_image img;
+		frame_stats st;
 		if (render_frame(r, 30, &img, &st, err, sizeof err))
 			fail_msg("%s: %s", models[i], err);
 		if (st.visible_samples < 64 * 36 / 20)

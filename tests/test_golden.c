@@ -15,7 +15,7 @@
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
-#include "test_util.h"
+#include "test_vk.h"
 
 #define W 96
 #define H 54
@@ -43,11 +43,11 @@ static void check_golden(const char *camera, uint32_t frame)
 	int cam = scene_find_camera(scn, camera);
 	assert_true(cam >= 0);
 	render *r = NULL;
-	render_desc d = {.scene = scn, .camera = cam, .width = W, .height = H, .method = "ref"};
+	render_desc d = {.scene = scn, .camera = cam, .width = W, .height = H};
 	if (render_create(dev, &d, &r, err, sizeof err))
 		fail_msg("%s", err);
-	render_image img;
-	render_stats st;
+	frame_image img;
+	frame_stats st;
 	if (render_frame(r, frame, &img, &st, err, sizeof err))
 		fail_msg("%s", err);
 	snprintf(path, sizeof path, "%s/tests/golden/turntable_%s_%06u_%ux%u.png", TASLAB_SOURCE_DIR, camera, frame, W, H);

@@ -299,7 +299,8 @@ static void make_run(const char *dir, const char *method, double T, const char *
 	assert_int_equal(system(p), 0);
 	snprintf(p, sizeof p, "%s/manifest.json", dir);
 	FILE *f = fopen(p, "w");
-	fprintf(f, "{\"inputs\": {\"method\": \"%s\", \"scene\": \"s\", \"camera\": \"c\", \"threshold\": %g}}", method, T);
+	fprintf(f, "{\"inputs\": {\"method\": \"%s\", \"scene\": \"s\", \"camera\": \"c\", \"threshold\": %g, "
+		   "\"frames\": [0, 3], \"size\": [8, 8], \"fps\": 60}}", method, T);
 	fclose(f);
 	snprintf(p, sizeof p, "%s/stats.csv", dir);
 	f = fopen(p, "w");

@@ -8,7 +8,7 @@
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
-#include "test_util.h"
+#include "test_vk.h"
 
 #define W 96
 #define H 54
@@ -31,19 +31,19 @@ static int teardown(void **state)
 typedef struct frame_copy {
 	uint8_t display[W * H * 4];
 	uint16_t hdr[W * H * 4];
-	render_stats st;
+	frame_stats st;
 } frame_copy;
 
 static void render_frames(int camera, const uint32_t *frames, size_t n, frame_copy *out, bool trivial)
 {
 	char err[1024];
 	render *r = NULL;
-	render_desc d = {.scene = scn, .camera = camera, .width = W, .height = H, .method = "ref",
+	render_desc d = {.scene = scn, .camera = camera, .width = W, .height = H,
 			 .trivial_shading = trivial};
 	if (render_create(dev, &d, &r, err, sizeof err))
 		fail_msg("render_create: %s", err);
 	for (size_t i = 0; i < n; i++) {
-		render_image img;
+		frame_image img;
 		if (render_frame(r, frames[i], &img, &out[i].st, err, sizeof err))
 			fail_msg("render_frame: %s", err);
 		assert_int_equal(img.width, W);
@@ -86,7 +86,7 @@ static void test_statistics(void **state)
 	static frame_copy f[1];
 	uint32_t fr[1] = {30};
 	render_frames(1, fr, 1, f, false);
-	render_stats *st = &f[0].st;
+	frame_stats *st = &f[0].st;
 	assert_int_equal(st->frame, 30);
 	assert_float_equal(st->time_s, 30.0 / scn->fps, 1e-9);
 	/* The stationary overview sees geometry and sky: 0 < visible < all pixels. */
@@ -126,15 +126,18 @@ static void test_bad_arguments(void **state)
 	(void)state;
 	char err[256];
 	render *r = NULL;
-	render_desc d = {.scene = scn, .camera = 0, .width = W, .height = H, .method = "nope"};
-	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+	method_config nope;
+	assert_int_equal(method_config_init(&nope, "nope", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "unknown method"));
+	render_desc d = {.scene = scn, .camera = 0, .width = W, .height = H, .method = &nope};
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), TL_ERR_ARG); /* an uninitialised config */
 	assert_null(r);
-	d.method = "ref";
+	d.method = NULL; /* ref */
 	d.camera = 99;
-	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), TL_ERR_ARG);
 	d.camera = 0;
 	d.width = 0;
-	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), RENDER_ERR_ARG);
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), TL_ERR_ARG);
 }
 
 static void test_builtin_scenes_render(void **state)
@@ -156,9 +159,9 @@ static void test_builtin_scenes_render(void **state)
 			fail_msg("%s", err);
 		for (size_t c = 0; c < s->camera_count; c++) {
 			render *r = NULL;
-			render_desc rd = {.scene = s, .camera = (int)c, .width = 48, .height = 27, .method = "ref"};
-			render_image img;
-			render_stats st;
+			render_desc rd = {.scene = s, .camera = (int)c, .width = 48, .height = 27};
+			frame_image img;
+			frame_stats st;
 			if (render_create(dev, &rd, &r, err, sizeof err) || render_frame(r, 60, &img, &st, err, sizeof err))
 				fail_msg("%s/%s: %s", s->name, s->cameras[c].name, err);
 			if (st.visible_samples < 48 * 27 / 4)

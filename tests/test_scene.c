@@ -99,7 +99,7 @@ static void test_errors(void **state)
 	(void)state;
 	scene *s = NULL;
 	char err[512];
-	assert_int_equal(scene_load("/nonexistent/x.json", &s, err, sizeof err), SCENE_ERR_IO);
+	assert_int_equal(scene_load("/nonexistent/x.json", &s, err, sizeof err), TL_ERR_INPUT);
 	assert_non_null(strstr(err, "/nonexistent/x.json"));
 	expect_error("{\"taslab_scene\": 1, ", "not valid JSON", NULL);
 	expect_error("[1, 2]", "$", "object");

@@ -16,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "test_util.h"
+#include "test_vk.h"
 
 #include "taslab/analyze.h"
 #include "taslab/colour.h"
@@ -46,16 +46,27 @@ static vkdev *device(void)
 
 /* Renders frames [0, n) with a method; keeps the display images and stats. */
 static void render_frames(vkdev *dev, const scene *s, const char *method, float T, uint32_t max_age, uint32_t w,
-			  uint32_t h, uint32_t n, uint8_t **frames, render_stats *stats)
+			  uint32_t h, uint32_t n, uint8_t **frames, frame_stats *stats)
 {
 	char err[1024];
 	render *r = NULL;
-	render_desc d = {.scene = s, .camera = 0, .width = w, .height = h, .method = method, .threshold = T,
-			 .max_age = max_age};
+	method_config mc;
+	char val[32];
+	if (method_config_init(&mc, method, err, sizeof err))
+		fail_msg("%s", err);
+	if (!strcmp(method, "tfr")) {
+		snprintf(val, sizeof val, "%.9g", (double)T);
+		if (method_config_set(&mc, "threshold", val, err, sizeof err))
+			fail_msg("%s", err);
+		snprintf(val, sizeof val, "%u", max_age ? max_age : 119);
+		if (method_config_set(&mc, "max-age", val, err, sizeof err))
+			fail_msg("%s", err);
+	}
+	render_desc d = {.scene = s, .camera = 0, .width = w, .height = h, .method = &mc};
 	if (render_create(dev, &d, &r, err, sizeof err))
 		fail_msg("%s", err);
 	for (uint32_t f = 0; f < n; f++) {
-		render_image img;
+		frame_image img;
 		if (render_frame(r, f, &img, &stats[f], err, sizeof err))
 			fail_msg("%s", err);
 		frames[f] = malloc((size_t)w * h * 4);
@@ -83,7 +94,7 @@ static void test_tfr_static_equals_ref_and_ages(void **state)
 	vkdev *dev = device();
 	enum { N = 8, W = 96, H = 64 };
 	uint8_t *ref[N], *tfr[N], *tk[N];
-	render_stats rs[N], ts[N], ks[N];
+	frame_stats rs[N], ts[N], ks[N];
 	render_frames(dev, s, "ref", 0, 0, W, H, N, ref, rs);
 	render_frames(dev, s, "tfr", 8, 0, W, H, N, tfr, ts);
 	render_frames(dev, s, "tfr", 8, 3, W, H, N, tk, ks);
@@ -240,7 +251,7 @@ static void test_tfr_moving_shadow_within_T(void **state)
 	vkdev *dev = device();
 	enum { N = 24, W = 96, H = 64 };
 	uint8_t *ref[N], *tfr[N];
-	render_stats rs[N], ts[N];
+	frame_stats rs[N], ts[N];
 	render_frames(dev, s, "ref", 0, 0, W, H, N, ref, rs);
 	render_frames(dev, s, "tfr", 8, 0, W, H, N, tfr, ts);
 	int64_t reshaded = 0, disoccluded = 0;
@@ -287,7 +298,7 @@ static void test_bad_input(void **state)
 	expect_cli_error(args, "--thresholds");
 	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --max-age 120 --out %s/r",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "beyond K = 119");
+	expect_cli_error(args, "--max-age 120: out of range [1, 119]");
 	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --threshold -1 --out %s/r",
 		 TASLAB_SOURCE_DIR, dir);
 	expect_cli_error(args, "--threshold");
@@ -301,17 +312,19 @@ static void test_bad_input(void **state)
 	scene *s = load("tfr_static");
 	vkdev *dev = device();
 	render *r = NULL;
-	render_desc rd = {.scene = s, .width = 32, .height = 32, .method = "tfr", .threshold = 0};
-	assert_int_equal(render_create(dev, &rd, &r, err, sizeof err), RENDER_ERR_ARG);
+	method_config mc;
+	assert_int_equal(method_config_init(&mc, "tfr", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_set(&mc, "threshold", "0", err, sizeof err), TL_ERR_ARG);
 	assert_non_null(strstr(err, "threshold"));
-	rd.threshold = 8;
-	rd.max_age = 120;
-	assert_int_equal(render_create(dev, &rd, &r, err, sizeof err), RENDER_ERR_ARG);
-	assert_non_null(strstr(err, "beyond K"));
+	assert_int_equal(method_config_set(&mc, "max-age", "120", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "max-age"));
+	assert_int_equal(method_config_parse_variant(&mc, "tfr", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "tfr@8"));
+	(void)r;
 	analyze *a = NULL;
 	const float bad_T[] = {8, -2};
 	analyze_desc ad = {.scene = s, .width = 32, .height = 32, .thresholds = bad_T, .threshold_count = 2};
-	assert_int_equal(analyze_create(dev, &ad, &a, err, sizeof err), RENDER_ERR_ARG);
+	assert_int_equal(analyze_create(dev, &ad, &a, err, sizeof err), TL_ERR_ARG);
 	assert_non_null(strstr(err, "T must be > 0"));
 	assert_null(a);
 	vkdev_destroy(&dev);

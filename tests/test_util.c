@@ -2,27 +2,15 @@
 #include "test_util.h"
 
 #include <arpa/inet.h>
-#include <dlfcn.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 #include <stdio.h>
 
-#include "taslab/scene.h"
-#include "taslab/vkdev.h"
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-/* Keep Mesa's lavapipe driver and the validation layer loaded until exit: the Vulkan loader
- * dlcloses them, after which LeakSanitizer cannot attribute their allocations to a module (and so
- * cannot apply lsan.supp); pinned, their global state stays reachable and our own leaks still show. */
-__attribute__((constructor)) static void tu_pin_vulkan_libraries(void)
-{
-	dlopen("libvulkan_lvp.so", RTLD_NOW | RTLD_NODELETE);
-	dlopen("libVkLayer_khronos_validation.so", RTLD_NOW | RTLD_NODELETE);
-}
 
 const char *tu_tmpdir(const char *name)
 {
@@ -90,26 +78,6 @@ int tu_count_lines(const char *s)
 	for (; *s; s++)
 		n += *s == '\n';
 	return n;
-}
-
-int tu_open_scene_and_device(const char *name, scene **scn, vkdev **dev)
-{
-	char err[1024], path[4096];
-	snprintf(path, sizeof path, "%s/scenes/%s.json", TASLAB_SOURCE_DIR, name);
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
-	if (scene_load(path, scn, err, sizeof err) || vkdev_create(&d, dev, err, sizeof err)) {
-		fprintf(stderr, "%s\n", err);
-		return -1;
-	}
-	return 0;
-}
-
-int tu_close_scene_and_device(scene **scn, vkdev **dev)
-{
-	uint32_t msgs = *dev ? vkdev_validation_messages(*dev) : 0;
-	vkdev_destroy(dev);
-	scene_destroy(scn);
-	return msgs ? -1 : 0;
 }
 
 int tu_http(int port, const char *method, const char *path, const char *headers, const char *body, char *resp,

@@ -24,11 +24,4 @@ int tu_count_lines(const char *s);
 int tu_http(int port, const char *method, const char *path, const char *headers, const char *body, char *resp,
 	    size_t resp_size);
 
-struct scene;
-struct vkdev;
-/* Loads scenes/NAME.json and opens lavapipe with the validation layer; 0 or -1 (message printed). */
-int tu_open_scene_and_device(const char *name, struct scene **scn, struct vkdev **dev);
-/* Frees both; returns -1 when the device saw any validation message, so a group teardown fails. */
-int tu_close_scene_and_device(struct scene **scn, struct vkdev **dev);
-
 #endif

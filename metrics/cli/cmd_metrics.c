@@ -1,196 +1,231 @@
-/* cmd_metrics.c — `taslab metrics diff|jnd`: frame-sequence comparison and JND maths (metrics/). */
+/* cmd_metrics.c — `taslab metrics diff|runs|jnd`: frame-sequence comparison, run statistics (Table 1,
+ * Fig. 12) and JND maths (metrics/). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
+#include "commands.h"
 #include "taslab/colour.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
 #include "taslab/metrics_runs.h"
 
-static void metrics_usage(FILE *out)
+/* ---- diff ---- */
+
+static const cli_opt diff_options[] = {
+	{.name = "ref", .arg = "A",
+	 .help = "reference frames: a run folder or a folder of images",
+	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, ref)},
+	{.name = "test", .arg = "B",
+	 .help = "test frames (same frame names and sizes)",
+	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, test)},
+	{.name = "out", .arg = "DIR",
+	 .help = "output folder",
+	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, out)},
+	{.name = "format", .arg = "png|exr",
+	 .help = "compare the display PNGs (default) or the EXRs through the display transform",
+	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, format)},
+	{.name = "heatmaps", .arg = NULL,
+	 .help = "DIR/heatmaps/NNNNNN.png: max-RGB difference maps with a legend",
+	 .type = CLI_FLAG, .offset = offsetof(metrics_diff_opts, heatmaps)},
+	{.name = "heatmap-max", .arg = "V",
+	 .help = "colour scale maximum in code values (default 64)",
+	 .type = CLI_DOUBLE, .offset = offsetof(metrics_diff_opts, heatmap_max), .lo = 1e-6, .hi = 1e6},
+	{.name = "plots", .arg = NULL,
+	 .help = "DIR/plots/frames.png, exceed.png, distribution.png (gnuplot)",
+	 .type = CLI_FLAG, .offset = offsetof(metrics_diff_opts, plots)},
+	{.name = "threads", .arg = "N",
+	 .help = "worker threads (default: all cores)",
+	 .type = CLI_UINT, .offset = offsetof(metrics_diff_opts, threads), .lo = 1, .hi = 64},
+	{0},
+};
+
+static void diff_defaults(void *opts, cli_setup_opts *setup)
 {
-	fprintf(out,
-		"usage: taslab metrics diff --ref A --test B --out DIR [options]\n"
-		"       taslab metrics runs --out DIR [--baseline RUN] RUN...\n"
-		"       taslab metrics jnd --n N --ref-preferred R [--ties K] [--confidence 0.95]\n\n"
-		"diff: compares two frame sequences (run folders or folders of images, same frame names and sizes)\n"
-		"  and writes DIR/frames.csv (frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,\n"
-		"  exceed_2..exceed_64,psnr,ssim,flicker_mean) and DIR/summary.json (the same, pooled over frames).\n"
-		"  --format png|exr    compare the display PNGs (default) or the EXRs through the display transform\n"
-		"  --ocio-config F, --display D, --view V   display transform for --format exr\n"
-		"  --heatmaps          DIR/heatmaps/NNNNNN.png: max-RGB difference maps with a legend\n"
-		"  --heatmap-max V     colour scale maximum in code values (default 64)\n"
-		"  --plots             DIR/plots/frames.png, exceed.png, distribution.png (gnuplot)\n"
-		"  DIR/distribution.csv: the pooled distribution of d in 1-code-value bins (always written)\n"
-		"  --threads N         worker threads (default: all cores)\n"
-		"runs: from each run's stats.csv: reuse %%, shader invocations and their reduction against the\n"
-		"  baseline (default: the first ref run) in the paper's Table 1 layout, median GPU frame time and\n"
-		"  speedup against ref (same scene and camera), late/early/on-time/unchanged sums when present;\n"
-		"  writes DIR/runs.csv, runs.json, table1.md and per-T plots (reduction, reuse, speedup .png).\n"
-		"jnd: p_ref = (R + K/2)/N with a Wilson interval, JND = Phi^-1(p)/Phi^-1(0.75) (p clamped half an\n"
-		"  observation from 0 and 1 so the JND stays finite); prints JSON.\n");
+	(void)setup;
+	((metrics_diff_opts *)opts)->format = "png";
 }
 
-static int diff_cmd(int argc, char **argv)
+static int diff_validate(void *opts, cli_ctx *ctx)
 {
-	mtr_diff_desc d = {0};
-	colour_desc cd = {0};
-	char err[1024];
-	for (int i = 2; i < argc; i++) {
-		const char *a = argv[i];
-		const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-		if (!strcmp(a, "--heatmaps"))
-			d.heatmaps = true;
-		else if (!strcmp(a, "--plots"))
-			d.plots = true;
-		else if (v && !strcmp(a, "--ref"))
-			d.ref = v, i++;
-		else if (v && !strcmp(a, "--test"))
-			d.test = v, i++;
-		else if (v && !strcmp(a, "--out"))
-			d.out = v, i++;
-		else if (v && !strcmp(a, "--ocio-config"))
-			cd.config_path = v, i++;
-		else if (v && !strcmp(a, "--display"))
-			cd.display = v, i++;
-		else if (v && !strcmp(a, "--view"))
-			cd.view = v, i++;
-		else if (v && !strcmp(a, "--format")) {
-			if (strcmp(v, "png") && strcmp(v, "exr")) {
-				fprintf(stderr, "taslab metrics: --format is png or exr, not '%s'\n", v);
-				return CLI_EXIT_USAGE;
-			}
-			d.format = !strcmp(v, "exr") ? MTR_FORMAT_EXR : MTR_FORMAT_PNG;
-			i++;
-		} else if (v && (!strcmp(a, "--heatmap-max") || !strcmp(a, "--threads"))) {
-			double x;
-			if (cli_parse_float(v, a, !strcmp(a, "--threads") ? 1 : 1e-6, !strcmp(a, "--threads") ? 64 : 1e6, &x, err,
-					    sizeof err)) {
-				fprintf(stderr, "taslab metrics: %s\n", err);
-				return CLI_EXIT_USAGE;
-			}
-			if (!strcmp(a, "--threads"))
-				d.threads = (int)x;
-			else
-				d.heatmap_max = x;
-			i++;
-		} else {
-			fprintf(stderr, "taslab metrics diff: unexpected argument '%s' (see 'taslab metrics --help')\n", a);
-			return CLI_EXIT_USAGE;
-		}
-	}
-	if (!d.ref || !d.test || !d.out) {
-		fprintf(stderr, "taslab metrics diff: --ref, --test and --out are required (see 'taslab metrics --help')\n");
-		return CLI_EXIT_USAGE;
-	}
-	colour *c = NULL;
-	if (d.format == MTR_FORMAT_EXR) {
-		if (colour_create(&cd, &c, err, sizeof err)) {
-			fprintf(stderr, "taslab metrics: %s\n", err);
-			return CLI_EXIT_USAGE;
-		}
-		d.colour = c;
-	}
+	metrics_diff_opts *o = opts;
+	if (!o->ref || !o->test || !o->out)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"--ref, --test and --out are required (see 'taslab metrics diff --help')");
+	if (strcmp(o->format, "png") && strcmp(o->format, "exr"))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--format is png or exr, not '%s'", o->format);
+	return TL_OK;
+}
+
+static int diff_main(void *opts, cli_ctx *ctx)
+{
+	metrics_diff_opts *o = opts;
+	mtr_diff_desc d = {.ref = o->ref, .test = o->test, .out = o->out, .heatmaps = o->heatmaps, .plots = o->plots,
+			   .heatmap_max = o->heatmap_max, .threads = (int)o->threads,
+			   .format = !strcmp(o->format, "exr") ? MTR_FORMAT_EXR : MTR_FORMAT_PNG, .colour = ctx->setup.colour};
 	mtr_diff_result r;
-	int rc = mtr_diff_run(&d, &r, err, sizeof err);
-	colour_destroy(&c);
-	if (rc) {
-		fprintf(stderr, "taslab metrics: %s\n", err);
-		return CLI_EXIT_FAILURE;
-	}
+	int rc = mtr_diff_run(&d, &r, ctx->err, sizeof ctx->err);
+	if (rc)
+		return rc;
 	fprintf(stderr,
 		"taslab: %zu frame pairs in %.2f s (%.1f pairs/s): max-RGB mean %.3f, p99 %.3f, max %.0f; exceed_8 %.5f; "
 		"PSNR %.2f dB, SSIM %.5f -> %s/frames.csv, summary.json\n",
 		r.frames, r.seconds, r.frames / r.seconds, r.pooled.mean, r.pooled.p99, r.pooled.max, r.pooled.exceed[2],
-		r.pooled.psnr, r.pooled.ssim, d.out);
-	return CLI_EXIT_OK;
+		r.pooled.psnr, r.pooled.ssim, o->out);
+	return TL_OK;
 }
 
-static int jnd_cmd(int argc, char **argv)
+static const cli_command metrics_diff = {
+	.name = "metrics diff",
+	.summary = "compare two frame sequences: max-RGB, exceedance, PSNR, SSIM, flicker",
+	.synopsis = "taslab metrics diff --ref A --test B --out DIR [options]",
+	.description = "Compares two frame sequences (run folders or folders of images, same frame names and sizes) and\n"
+		       "writes DIR/frames.csv (frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,\n"
+		       "exceed_2..exceed_64,psnr,ssim,flicker_mean), DIR/summary.json (the same, pooled over frames) and\n"
+		       "DIR/distribution.csv (the pooled distribution of d in 1-code-value bins).",
+	.options = diff_options,
+	.opts_size = sizeof(metrics_diff_opts),
+	.defaults = diff_defaults,
+	.validate = diff_validate,
+	.needs = CLI_NEED_COLOUR, /* --format exr compares through the display transform */
+	.run = diff_main,
+};
+
+/* ---- runs ---- */
+
+static const cli_opt runs_options[] = {
+	{.name = "out", .arg = "DIR",
+	 .help = "output folder",
+	 .type = CLI_STRING, .offset = offsetof(metrics_runs_opts, out)},
+	{.name = "baseline", .arg = "RUN",
+	 .help = "the run invocation reductions are relative to (default: the first ref run)",
+	 .type = CLI_STRING, .offset = offsetof(metrics_runs_opts, baseline)},
+	{0},
+};
+
+static int runs_validate(void *opts, cli_ctx *ctx)
 {
-	double n = -1, r = -1, k = 0, conf = 0.95;
-	char err[256];
-	for (int i = 2; i < argc; i++) {
-		double *dst = !strcmp(argv[i], "--n") ? &n : !strcmp(argv[i], "--ref-preferred") ? &r
-						: !strcmp(argv[i], "--ties") ? &k : !strcmp(argv[i], "--confidence") ? &conf : NULL;
-		if (!dst || i + 1 >= argc || cli_parse_float(argv[i + 1], argv[i], 0, 1e12, dst, err, sizeof err)) {
-			fprintf(stderr, "taslab metrics jnd: bad argument '%s' (see 'taslab metrics --help')\n", argv[i]);
-			return CLI_EXIT_USAGE;
-		}
-		i++;
-	}
-	mtr_jnd j;
-	if (n <= 0 || r < 0 || mtr_jnd_from_counts(r, k, n, conf, &j)) {
-		fprintf(stderr, "taslab metrics jnd: need --n > 0, 0 <= --ref-preferred + --ties <= --n, 0 < --confidence < 1\n");
-		return CLI_EXIT_USAGE;
-	}
-	printf("{\"n\": %g, \"p_ref\": %.6f, \"p_ref_lo\": %.6f, \"p_ref_hi\": %.6f, \"jnd\": %.6f, \"jnd_lo\": %.6f, "
-	       "\"jnd_hi\": %.6f, \"clamped\": %s}\n",
-	       n, j.p, j.p_lo, j.p_hi, j.jnd, j.jnd_lo, j.jnd_hi, j.clamped ? "true" : "false");
-	return CLI_EXIT_OK;
+	metrics_runs_opts *o = opts;
+	if (!o->out)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out DIR is required (see 'taslab metrics runs --help')");
+	return TL_OK;
 }
 
-static int runs_cmd(int argc, char **argv)
+static int runs_main(void *opts, cli_ctx *ctx)
 {
-	const char *out = NULL, *baseline = NULL;
-	const char *runs[256];
-	size_t n = 0;
-	char err[1024];
-	for (int i = 2; i < argc; i++) {
-		if (!strcmp(argv[i], "--out") && i + 1 < argc)
-			out = argv[++i];
-		else if (!strcmp(argv[i], "--baseline") && i + 1 < argc)
-			baseline = argv[++i];
-		else if (argv[i][0] != '-' && n < 256)
-			runs[n++] = argv[i];
-		else {
-			fprintf(stderr, "taslab metrics runs: unexpected argument '%s' (see 'taslab metrics --help')\n", argv[i]);
-			return CLI_EXIT_USAGE;
-		}
-	}
+	metrics_runs_opts *o = opts;
+	const char *runs[CLI_MAX_POS + 1];
+	size_t n = ctx->npos;
+	memcpy(runs, ctx->pos, n * sizeof *runs);
 	int base = -1;
-	if (baseline) {
-		runs[n] = baseline;
+	if (o->baseline) {
+		runs[n] = o->baseline;
 		base = (int)n++;
 	}
-	if (!out || n == 0) {
-		fprintf(stderr, "taslab metrics runs: need --out DIR and at least one run folder\n");
-		return CLI_EXIT_USAGE;
-	}
 	mtr_run_summary *s = calloc(n, sizeof *s);
-	if (!s || mtr_runs_summarise(runs, n, base, s, err, sizeof err) || mtr_runs_write(s, n, out, err, sizeof err)) {
-		fprintf(stderr, "taslab metrics runs: %s\n", s ? err : "out of memory");
-		free(s);
-		return CLI_EXIT_FAILURE;
+	if (!s)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_NOMEM, "out of memory");
+	int rc = mtr_runs_summarise(runs, n, base, s, ctx->err, sizeof ctx->err);
+	if (!rc)
+		rc = mtr_runs_write(s, n, o->out, ctx->err, sizeof ctx->err);
+	if (!rc) {
+		char note[512];
+		if (mtr_runs_plot(s, n, o->out, note, sizeof note))
+			fprintf(stderr, "taslab metrics runs: note: %s\n", note);
+		for (size_t i = 0; i < n; i++)
+			fprintf(stderr,
+				"%-40s %-5s T=%-3g reuse %6.2f%%  invocations %.0f (reduction %.1f%%)  %.1f ms  speedup %.2fx\n",
+				s[i].path, s[i].method, s[i].threshold, 100 * s[i].reuse_mean, s[i].invocations,
+				100 * s[i].invocation_reduction, s[i].gpu_ms_median, s[i].speedup_vs_ref);
 	}
-	if (mtr_runs_plot(s, n, out, err, sizeof err))
-		fprintf(stderr, "taslab metrics runs: note: %s\n", err);
-	for (size_t i = 0; i < n; i++)
-		fprintf(stderr, "%-40s %-5s T=%-3g reuse %6.2f%%  invocations %.0f (reduction %.1f%%)  %.1f ms  speedup %.2fx\n",
-			s[i].path, s[i].method, s[i].threshold, 100 * s[i].reuse_mean, s[i].invocations,
-			100 * s[i].invocation_reduction, s[i].gpu_ms_median, s[i].speedup_vs_ref);
 	free(s);
-	return CLI_EXIT_OK;
+	return rc;
 }
 
-static int metrics_run(int argc, char **argv)
+static const cli_command metrics_runs = {
+	.name = "metrics runs",
+	.summary = "reuse, Table 1 reductions and speedups from runs' stats.csv",
+	.synopsis = "taslab metrics runs --out DIR [--baseline RUN] RUN...",
+	.description = "From each run's stats.csv: reuse %, shader invocations and their reduction against the baseline\n"
+		       "(default: the first ref run) in the paper's Table 1 layout, median GPU frame time and speedup against\n"
+		       "ref (same scene and camera), late/early/on-time/unchanged sums when present; writes DIR/runs.csv,\n"
+		       "runs.json, table1.md and per-T plots (reduction, reuse, speedup .png).",
+	.options = runs_options,
+	.opts_size = sizeof(metrics_runs_opts),
+	.validate = runs_validate,
+	.min_pos = 1,
+	.max_pos = CLI_MAX_POS - 1,
+	.pos_help = "RUN... (run folders)",
+	.run = runs_main,
+};
+
+/* ---- jnd ---- */
+
+static const cli_opt jnd_options[] = {
+	{.name = "n", .arg = "N",
+	 .help = "answers in all (> 0)",
+	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, n), .lo = 1e-9, .hi = 1e12},
+	{.name = "ref-preferred", .arg = "R",
+	 .help = "answers preferring the reference",
+	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, ref_preferred), .lo = 0, .hi = 1e12},
+	{.name = "ties", .arg = "K",
+	 .help = "answers 'same'",
+	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, ties), .lo = 0, .hi = 1e12},
+	{.name = "confidence", .arg = "C",
+	 .help = "confidence of the interval (default 0.95)",
+	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, confidence), .lo = 1e-9, .hi = 1 - 1e-9},
+	{0},
+};
+
+static void jnd_defaults(void *opts, cli_setup_opts *setup)
 {
-	if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-		metrics_usage(argc < 2 ? stderr : stdout);
-		return argc < 2 ? CLI_EXIT_USAGE : CLI_EXIT_OK;
-	}
-	if (!strcmp(argv[1], "diff"))
-		return diff_cmd(argc, argv);
-	if (!strcmp(argv[1], "jnd"))
-		return jnd_cmd(argc, argv);
-	if (!strcmp(argv[1], "runs"))
-		return runs_cmd(argc, argv);
-	fprintf(stderr, "taslab metrics: unknown subcommand '%s' (diff, runs or jnd; see 'taslab metrics --help')\n", argv[1]);
-	return CLI_EXIT_USAGE;
+	(void)setup;
+	metrics_jnd_opts *o = opts;
+	o->n = -1;
+	o->ref_preferred = -1;
+	o->confidence = 0.95;
 }
 
-const cli_command cli_cmd_metrics = {"metrics", "compare frame sequences (max-RGB, PSNR, SSIM, flicker), JND maths",
-				     metrics_run, metrics_usage};
+static int jnd_validate(void *opts, cli_ctx *ctx)
+{
+	metrics_jnd_opts *o = opts;
+	if (o->n <= 0 || o->ref_preferred < 0 || o->ref_preferred + o->ties > o->n)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"need --n > 0 and --ref-preferred with 0 <= --ref-preferred + --ties <= --n");
+	return TL_OK;
+}
+
+static int jnd_main(void *opts, cli_ctx *ctx)
+{
+	metrics_jnd_opts *o = opts;
+	mtr_jnd j;
+	if (mtr_jnd_from_counts(o->ref_preferred, o->ties, o->n, o->confidence, &j))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "counts out of range");
+	printf("{\"n\": %g, \"p_ref\": %.6f, \"p_ref_lo\": %.6f, \"p_ref_hi\": %.6f, \"jnd\": %.6f, \"jnd_lo\": %.6f, "
+	       "\"jnd_hi\": %.6f, \"clamped\": %s}\n",
+	       o->n, j.p, j.p_lo, j.p_hi, j.jnd, j.jnd_lo, j.jnd_hi, j.clamped ? "true" : "false");
+	return TL_OK;
+}
+
+static const cli_command metrics_jnd = {
+	.name = "metrics jnd",
+	.summary = "p_ref with a Wilson interval and the JND from answer counts",
+	.synopsis = "taslab metrics jnd --n N --ref-preferred R [--ties K] [--confidence 0.95]",
+	.description = "p_ref = (R + K/2)/N with a Wilson interval, JND = Phi^-1(p)/Phi^-1(0.75) (p clamped half an\n"
+		       "observation from 0 and 1 so the JND stays finite); prints JSON.",
+	.options = jnd_options,
+	.opts_size = sizeof(metrics_jnd_opts),
+	.defaults = jnd_defaults,
+	.validate = jnd_validate,
+	.run = jnd_main,
+};
+
+static const cli_command *const metrics_subs[] = {&metrics_diff, &metrics_runs, &metrics_jnd, NULL};
+
+const cli_command cli_cmd_metrics = {
+	.name = "metrics",
+	.summary = "compare frame sequences (max-RGB, PSNR, SSIM, flicker), run statistics, JND maths",
+	.synopsis = "taslab metrics diff|runs|jnd [options]",
+	.subcommands = metrics_subs,
+};

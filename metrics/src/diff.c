@@ -14,7 +14,10 @@
 #include <unistd.h>
 
 #include "taslab/imageio.h"
-#include "taslab/run.h"
+#include "taslab/tl_clock.h"
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
 #include "plot.h"
 
 typedef struct sequence {
@@ -161,12 +164,6 @@ static void csv_num(FILE *f, double v)
 
 static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
-static double now_s(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int write_plots(const char *out, char *err, size_t err_size)
 {
@@ -215,7 +212,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	uint64_t hist[256] = {0}; /* pooled distribution of d, 1 code value per bin (last bin: 255) */
 	uint64_t hist_total = 0;
 	FILE *csv = NULL;
-	char path[4096], tmp_csv[4096];
+	tl_atomic csv_file = {0};
+	char path[4096];
 	memset(res, 0, sizeof *res);
 	memset(&rb, 0, sizeof rb);
 	if (d->format == MTR_FORMAT_EXR && !d->colour) {
@@ -237,25 +235,29 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 			goto done;
 		}
 	snprintf(path, sizeof path, "%s/%s", d->out, d->heatmaps ? "heatmaps" : "");
-	if (run_mkdirs(path, err, err_size))
+	if ((rc = tl_mkdirs(path, err, err_size)))
 		goto done;
 	if (d->plots) {
 		snprintf(path, sizeof path, "%s/plots", d->out);
-		if (run_mkdirs(path, err, err_size))
+		if ((rc = tl_mkdirs(path, err, err_size)))
 			goto done;
 	}
+	rc = TL_ERR_INPUT;
 	snprintf(path, sizeof path, "%s/summary.json", d->out);
 	unlink(path); /* an old summary must not look like this comparison's result */
 	stats = calloc(ra.n, sizeof *stats);
-	snprintf(tmp_csv, sizeof tmp_csv, "%s/.frames.csv.tmp%ld", d->out, (long)getpid());
-	csv = fopen(tmp_csv, "w");
-	if (!stats || !csv) {
-		snprintf(err, err_size, "%s: cannot write frames.csv", d->out);
+	if (!stats) {
+		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 		goto done;
 	}
+	snprintf(path, sizeof path, "%s/frames.csv", d->out);
+	if ((rc = tl_atomic_open(&csv_file, path, err, err_size)))
+		goto done;
+	rc = TL_ERR_INPUT;
+	csv = csv_file.f;
 	fprintf(csv, "frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,exceed_16,"
 		     "exceed_32,exceed_64,psnr,ssim,flicker_mean\n");
-	double t0 = now_s(), compute = 0;
+	double t0 = tl_clock_s(), compute = 0;
 	loader l = {d, &ra, &rb, 0, &cur};
 	load_pair(&l);
 	for (size_t i = 0; i < ra.n; i++) {
@@ -279,10 +281,10 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		mtr_image a = {cur.w, cur.h, cur.a}, b = {cur.w, cur.h, cur.b};
 		mtr_image ap = {prev.w, prev.h, prev.a}, bp = {prev.w, prev.h, prev.b};
 		int have_prev = prev.a && prev.w == cur.w && prev.h == cur.h;
-		double tc = now_s();
+		double tc = tl_clock_s();
 		int crc = mtr_frame_compare(&a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, d->threads, &stats[i],
 					    err, err_size);
-		compute += now_s() - tc;
+		compute += tl_clock_s() - tc;
 		if (!crc)
 			for (size_t px = 0; px < (size_t)cur.w * cur.h; px++) {
 				int bin = (int)map[px];
@@ -320,20 +322,12 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		cur = next;
 		memset(&next, 0, sizeof next);
 	}
-	if (fclose(csv) != 0) {
-		csv = NULL;
-		snprintf(err, err_size, "%s: write error", tmp_csv);
-		goto done;
-	}
 	csv = NULL;
-	snprintf(path, sizeof path, "%s/frames.csv", d->out);
-	if (rename(tmp_csv, path)) {
-		snprintf(err, err_size, "%s: %s", path, strerror(errno));
+	if ((rc = tl_atomic_commit(&csv_file, err, err_size)))
 		goto done;
-	}
 	res->frames = ra.n;
 	mtr_pool(stats, ra.n, &res->pooled);
-	res->seconds = now_s() - t0;
+	res->seconds = tl_clock_s() - t0;
 	res->compute_seconds = compute;
 	const mtr_frame_stats *p = &res->pooled;
 	json_t *ex = json_object();
@@ -352,38 +346,31 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	json_object_set_new(j, "flicker_mean", num_or_null(p->flicker_mean));
 	json_object_set_new(j, "pooling", json_string("mean over frames; maxrgb_max: max; psnr: from the mean MSE; "
 						      "flicker_mean: over frames 2..n"));
-	char tmp_json[4096];
-	snprintf(tmp_json, sizeof tmp_json, "%s/.summary.json.tmp%ld", d->out, (long)getpid());
-	snprintf(path, sizeof path, "%s/summary.json", d->out);
-	int jr = json_dump_file(j, tmp_json, JSON_INDENT(2)) || rename(tmp_json, path);
-	json_decref(j);
-	if (jr) {
-		unlink(tmp_json);
-		snprintf(err, err_size, "%s: cannot write", path);
-		goto done;
-	}
+	/* distribution.csv first: summary.json, written last, means the folder is complete. */
+	tl_atomic hf;
 	snprintf(path, sizeof path, "%s/distribution.csv", d->out);
-	FILE *hf = fopen(path, "w");
-	if (!hf) {
-		snprintf(err, err_size, "%s: cannot write", path);
+	if ((rc = tl_atomic_open(&hf, path, err, err_size))) {
+		json_decref(j);
 		goto done;
 	}
-	fprintf(hf, "d_from,d_to,count,fraction\n");
+	fprintf(hf.f, "d_from,d_to,count,fraction\n");
 	for (int b = 0; b < 256; b++)
-		fprintf(hf, "%d,%d,%llu,%.9g\n", b, b + 1, (unsigned long long)hist[b],
+		fprintf(hf.f, "%d,%d,%llu,%.9g\n", b, b + 1, (unsigned long long)hist[b],
 			hist_total ? (double)hist[b] / (double)hist_total : 0.0);
-	if (fclose(hf)) {
-		snprintf(err, err_size, "%s: write error", path);
+	if ((rc = tl_atomic_commit(&hf, err, err_size))) {
+		json_decref(j);
 		goto done;
 	}
+	snprintf(path, sizeof path, "%s/summary.json", d->out);
+	rc = tl_json_write(path, j, err, err_size);
+	json_decref(j);
+	if (rc)
+		goto done;
 	if (d->plots && write_plots(d->out, err, err_size))
 		fprintf(stderr, "taslab metrics: note: %s\n", err);
 	rc = 0;
 done:
-	if (csv) {
-		fclose(csv);
-		unlink(tmp_csv);
-	}
+	tl_atomic_abort(&csv_file);
 	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b);
 	free(map);
 	free(stats);

@@ -140,17 +140,17 @@ int mtr_frame_compare(const mtr_image *a, const mtr_image *b, const mtr_image *a
 {
 	if (!a->width || !a->height || !same_size(a, b)) {
 		snprintf(err, err_size, "image sizes differ: %ux%u vs %ux%u", a->width, a->height, b->width, b->height);
-		return MTR_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	if ((a_prev == NULL) != (b_prev == NULL) || (a_prev && (!same_size(a, a_prev) || !same_size(a, b_prev)))) {
 		snprintf(err, err_size, "previous frames missing or of another size");
-		return MTR_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	size_t n = (size_t)a->width * a->height;
 	float *own = NULL;
 	if (!map && !(map = own = malloc(n * sizeof *map))) {
 		snprintf(err, err_size, "out of memory");
-		return MTR_ERR_NOMEM;
+		return TL_ERR_NOMEM;
 	}
 	int nt = thread_count(threads, a->height);
 	diff_ctx *c = calloc(1, sizeof *c);
@@ -160,7 +160,7 @@ int mtr_frame_compare(const mtr_image *a, const mtr_image *b, const mtr_image *a
 		free(sorted);
 		free(own);
 		snprintf(err, err_size, "out of memory");
-		return MTR_ERR_NOMEM;
+		return TL_ERR_NOMEM;
 	}
 	c->a = a, c->b = b, c->ap = a_prev, c->bp = b_prev, c->map = map;
 	parallel_rows(a->height, nt, diff_band, c);
@@ -194,7 +194,7 @@ int mtr_frame_compare(const mtr_image *a, const mtr_image *b, const mtr_image *a
 	free(sorted);
 	free(c);
 	free(own);
-	return MTR_OK;
+	return TL_OK;
 }
 
 /* Quickselect: the k-th smallest of v[0..n-1] (0-based), partially reordering v. */
@@ -415,7 +415,7 @@ double mtr_jnd_from_p(double p)
 int mtr_jnd_from_counts(double n_ref, double n_tie, double n, double confidence, mtr_jnd *out)
 {
 	if (!(n > 0) || n_ref < 0 || n_tie < 0 || n_ref + n_tie > n + 1e-9 || !(confidence > 0 && confidence < 1))
-		return MTR_ERR_ARG;
+		return TL_ERR_ARG;
 	double p = (n_ref + 0.5 * n_tie) / n;
 	/* Wilson score interval (Wilson 1927) for a proportion observed in n trials. */
 	double z = gsl_cdf_ugaussian_Pinv(0.5 + 0.5 * confidence);
@@ -431,5 +431,5 @@ int mtr_jnd_from_counts(double n_ref, double n_tie, double n, double confidence,
 	out->jnd = mtr_jnd_from_p(pc);
 	out->jnd_lo = mtr_jnd_from_p(fmin(fmax(out->p_lo, lo), hi));
 	out->jnd_hi = mtr_jnd_from_p(fmin(fmax(out->p_hi, lo), hi));
-	return MTR_OK;
+	return TL_OK;
 }

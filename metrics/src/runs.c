@@ -10,9 +10,11 @@
 #include <unistd.h>
 
 #include "taslab/run.h"
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
 #include "plot.h"
 
-#define MAX_COLS 64
 
 static int cmpd(const void *a, const void *b)
 {
@@ -20,141 +22,77 @@ static int cmpd(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-static int col_index(char cols[][48], int ncols, const char *name)
+static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t err_size)
 {
-	for (int i = 0; i < ncols; i++)
-		if (!strcmp(cols[i], name))
-			return i;
-	return -1;
-}
-
-static int summarise_one(const char *run, mtr_run_summary *s, double **gpu_ms, char *err, size_t err_size)
-{
-	char path[4096];
 	memset(s, 0, sizeof *s);
 	snprintf(s->path, sizeof s->path, "%s", run);
-	snprintf(path, sizeof path, "%s/manifest.json", run);
-	json_error_t je;
-	json_t *m = json_load_file(path, 0, &je);
-	json_t *in = json_object_get(m, "inputs");
-	if (!in) {
-		json_decref(m);
-		snprintf(err, err_size, "%s: not a complete run (no manifest.json); render it first", run);
-		return -1;
-	}
-	const char *fields[3] = {"method", "scene", "camera"};
-	char *dst[3] = {s->method, s->scene, s->camera};
-	size_t len[3] = {sizeof s->method, sizeof s->scene, sizeof s->camera};
-	for (int k = 0; k < 3; k++) {
-		const char *v = json_string_value(json_object_get(in, fields[k]));
-		snprintf(dst[k], len[k], "%s", v ? v : "?");
-	}
-	s->threshold = json_number_value(json_object_get(in, "threshold"));
-	json_decref(m);
-	snprintf(path, sizeof path, "%s/stats.csv", run);
-	FILE *f = fopen(path, "r");
-	if (!f) {
-		snprintf(err, err_size, "%s: %s", path, strerror(errno));
-		return -1;
-	}
-	char line[8192], cols[MAX_COLS][48];
-	int ncols = 0;
-	if (!fgets(line, sizeof line, f)) {
-		fclose(f);
-		snprintf(err, err_size, "%s: empty", path);
-		return -1;
-	}
-	for (char *save = NULL, *t = strtok_r(line, ",\n", &save); t && ncols < MAX_COLS; t = strtok_r(NULL, ",\n", &save))
-		snprintf(cols[ncols++], sizeof cols[0], "%s", t);
-	int c_reuse = col_index(cols, ncols, "reuse_fraction"), c_fs = col_index(cols, ncols, "fs_invocations");
-	int c_cs = col_index(cols, ncols, "cs_invocations"), c_gpu = col_index(cols, ncols, "gpu_ms_total");
-	int c_t[4] = {col_index(cols, ncols, "late"), col_index(cols, ncols, "early"), col_index(cols, ncols, "on_time"),
-		      col_index(cols, ncols, "unchanged")};
-	if (c_reuse < 0 || c_fs < 0 || c_cs < 0 || c_gpu < 0) {
-		fclose(f);
-		snprintf(err, err_size, "%s: missing columns (reuse_fraction, fs_invocations, cs_invocations, gpu_ms_total)", path);
-		return -1;
+	run_manifest m;
+	run_stats st;
+	int rc = run_manifest_read(run, &m, err, err_size);
+	if (rc || (rc = run_stats_read(run, &st, err, err_size)))
+		return rc;
+	snprintf(s->method, sizeof s->method, "%s", m.method);
+	snprintf(s->scene, sizeof s->scene, "%s", m.scene);
+	snprintf(s->camera, sizeof s->camera, "%s", m.camera);
+	s->threshold = m.threshold;
+	int c_reuse = run_stats_col(&st, "reuse_fraction"), c_gpu = run_stats_col(&st, "gpu_ms_total");
+	int c_fs = run_stats_col(&st, "fs_invocations"), c_cs = run_stats_col(&st, "cs_invocations");
+	static const char *const tally_cols[4] = {"late", "early", "on_time", "unchanged"};
+	if (c_reuse < 0 || c_fs < 0 || c_cs < 0 || c_gpu < 0 || st.rows == 0) {
+		run_stats_free(&st);
+		return tl_error(err, err_size, TL_ERR_INPUT,
+				"%s/stats.csv: no frames, or missing columns (reuse_fraction, fs_invocations, cs_invocations, "
+				"gpu_ms_total)", run);
 	}
 	double tally[4] = {0, 0, 0, 0}, inv = 0;
-	int inv_seen = 0;
-	size_t cap = 0;
-	*gpu_ms = NULL;
+	int inv_seen = 0, have_tally[4];
+	for (int k = 0; k < 4; k++)
+		have_tally[k] = run_stats_col(&st, tally_cols[k]) >= 0;
+	double *gpu_ms = malloc(st.rows * sizeof *gpu_ms);
 	size_t ng = 0;
-	while (fgets(line, sizeof line, f)) {
-		double v[MAX_COLS];
-		int have[MAX_COLS] = {0};
-		int ci = 0;
-		char *p = line;
-		while (ci < ncols) { /* empty cells are allowed: not strtok */
-			char *e = p;
-			while (*e && *e != ',' && *e != '\n')
-				e++;
-			have[ci] = e > p;
-			v[ci] = have[ci] ? strtod(p, NULL) : NAN;
-			ci++;
-			if (*e != ',')
-				break;
-			p = e + 1;
-		}
-		if (ci < ncols) {
-			fclose(f);
-			free(*gpu_ms);
-			snprintf(err, err_size, "%s: row %zu has %d of %d columns", path, s->frames + 2, ci, ncols);
-			return -1;
-		}
+	if (!gpu_ms) {
+		run_stats_free(&st);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+	for (size_t r = 0; r < st.rows; r++) {
+		const double *v = st.values + r * st.cols;
 		s->frames++;
-		s->reuse_mean += v[c_reuse];
-		if (have[c_fs] || have[c_cs]) {
-			inv += (have[c_fs] ? v[c_fs] : 0) + (have[c_cs] ? v[c_cs] : 0);
+		s->reuse_mean += isfinite(v[c_reuse]) ? v[c_reuse] : 0.0;
+		if (isfinite(v[c_fs]) || isfinite(v[c_cs])) {
+			inv += (isfinite(v[c_fs]) ? v[c_fs] : 0) + (isfinite(v[c_cs]) ? v[c_cs] : 0);
 			inv_seen = 1;
 		}
-		for (int k = 0; k < 4; k++)
-			if (c_t[k] >= 0 && have[c_t[k]])
-				tally[k] += v[c_t[k]];
-		if (have[c_gpu]) {
-			if (ng == cap) {
-				cap = cap ? cap * 2 : 64;
-				double *nn = realloc(*gpu_ms, cap * sizeof *nn);
-				if (!nn) {
-					fclose(f);
-					free(*gpu_ms);
-					snprintf(err, err_size, "out of memory");
-					return -1;
-				}
-				*gpu_ms = nn;
-			}
-			(*gpu_ms)[ng++] = v[c_gpu];
+		for (int k = 0; k < 4; k++) {
+			double t = run_stats_get(&st, r, tally_cols[k]);
+			if (isfinite(t))
+				tally[k] += t;
 		}
+		if (isfinite(v[c_gpu]))
+			gpu_ms[ng++] = v[c_gpu];
 	}
-	fclose(f);
-	if (s->frames == 0) {
-		free(*gpu_ms);
-		snprintf(err, err_size, "%s: no frames", path);
-		return -1;
-	}
+	run_stats_free(&st);
 	s->reuse_mean /= (double)s->frames;
 	s->invocations = inv_seen ? inv : NAN;
 	if (ng) {
-		qsort(*gpu_ms, ng, sizeof **gpu_ms, cmpd);
-		s->gpu_ms_median = ng % 2 ? (*gpu_ms)[ng / 2] : 0.5 * ((*gpu_ms)[ng / 2 - 1] + (*gpu_ms)[ng / 2]);
+		qsort(gpu_ms, ng, sizeof *gpu_ms, cmpd);
+		s->gpu_ms_median = ng % 2 ? gpu_ms[ng / 2] : 0.5 * (gpu_ms[ng / 2 - 1] + gpu_ms[ng / 2]);
 	} else {
 		s->gpu_ms_median = NAN;
 	}
-	s->late = c_t[0] >= 0 ? tally[0] : NAN;
-	s->early = c_t[1] >= 0 ? tally[1] : NAN;
-	s->on_time = c_t[2] >= 0 ? tally[2] : NAN;
-	s->unchanged = c_t[3] >= 0 ? tally[3] : NAN;
-	free(*gpu_ms);
-	*gpu_ms = NULL;
-	return 0;
+	free(gpu_ms);
+	s->late = have_tally[0] ? tally[0] : NAN;
+	s->early = have_tally[1] ? tally[1] : NAN;
+	s->on_time = have_tally[2] ? tally[2] : NAN;
+	s->unchanged = have_tally[3] ? tally[3] : NAN;
+	return TL_OK;
 }
 
 int mtr_runs_summarise(const char *const *runs, size_t n, int baseline, mtr_run_summary *out, char *err, size_t err_size)
 {
 	for (size_t i = 0; i < n; i++) {
-		double *g = NULL;
-		if (summarise_one(runs[i], &out[i], &g, err, err_size))
-			return -1;
+		int rc = summarise_one(runs[i], &out[i], err, err_size);
+		if (rc)
+			return rc;
 	}
 	if (baseline < 0)
 		for (size_t i = 0; i < n && baseline < 0; i++)
@@ -186,14 +124,14 @@ static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null();
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
 {
 	char path[4096];
-	if (run_mkdirs(dir, err, err_size))
-		return -1;
+	tl_atomic csv, md;
+	int rc = tl_mkdirs(dir, err, err_size);
+	if (rc)
+		return rc;
 	snprintf(path, sizeof path, "%s/runs.csv", dir);
-	FILE *f = fopen(path, "w");
-	if (!f) {
-		snprintf(err, err_size, "%s: %s", path, strerror(errno));
-		return -1;
-	}
+	if ((rc = tl_atomic_open(&csv, path, err, err_size)))
+		return rc;
+	FILE *f = csv.f;
 	fprintf(f, "run,scene,camera,method,T,frames,reuse_percent,invocations,invocation_reduction_percent,gpu_ms_median,"
 		   "speedup_vs_ref,late,early,on_time,unchanged\n");
 	json_t *arr = json_array();
@@ -221,10 +159,13 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 						     "speedup_vs_ref", jnum(r->speedup_vs_ref), "late", jnum(r->late), "early",
 						     jnum(r->early), "on_time", jnum(r->on_time), "unchanged", jnum(r->unchanged)));
 	}
-	int bad = fclose(f) != 0;
+	rc = tl_atomic_commit(&csv, err, err_size);
 	snprintf(path, sizeof path, "%s/runs.json", dir);
-	bad |= json_dump_file(arr, path, JSON_INDENT(2)) != 0;
+	if (!rc)
+		rc = tl_json_write(path, arr, err, err_size);
 	json_decref(arr);
+	if (rc)
+		return rc;
 	/* Table 1 layout: shader-invocation reduction (%) per method (rows) and T (columns). */
 	double ts[32];
 	int nt = 0;
@@ -237,8 +178,10 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 	}
 	qsort(ts, (size_t)nt, sizeof *ts, cmpd);
 	snprintf(path, sizeof path, "%s/table1.md", dir);
-	f = fopen(path, "w");
-	if (f) {
+	if ((rc = tl_atomic_open(&md, path, err, err_size)))
+		return rc;
+	f = md.f;
+	{
 		fprintf(f, "Shader invocations, reduction against the baseline (%%), per method and threshold T (cf. paper Table 1)\n\n| method |");
 		for (int k = 0; k < nt; k++)
 			fprintf(f, " T = %g |", ts[k]);
@@ -265,15 +208,8 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 			}
 			fprintf(f, "\n");
 		}
-		bad |= fclose(f) != 0;
-	} else {
-		bad = 1;
 	}
-	if (bad) {
-		snprintf(err, err_size, "%s: cannot write runs.csv / runs.json / table1.md", dir);
-		return -1;
-	}
-	return 0;
+	return tl_atomic_commit(&md, err, err_size);
 }
 
 int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)

@@ -10,50 +10,29 @@
 
 #include "plot.h"
 #include "taslab/metrics.h"
-#include "taslab/run.h"
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
 
-/* A file written as DIR/NAME.tmp and renamed to DIR/NAME by close_file. */
-typedef struct out_file {
-	FILE *f;
-	char path[4096], tmp[4200];
-} out_file;
+/* Every file goes through the atomic-write helper (tl_fs.h). */
+typedef tl_atomic out_file;
 
 static int open_file(out_file *o, const char *dir, const char *name, char *err, size_t err_size)
 {
-	snprintf(o->path, sizeof o->path, "%s/%s", dir, name);
-	snprintf(o->tmp, sizeof o->tmp, "%s.tmp", o->path);
-	o->f = fopen(o->tmp, "w");
-	if (!o->f) {
-		snprintf(err, err_size, "%s: %s", o->tmp, strerror(errno));
-		return -1;
-	}
-	return 0;
+	char path[TL_PATH_MAX];
+	snprintf(path, sizeof path, "%s/%s", dir, name);
+	return tl_atomic_open(o, path, err, err_size);
 }
 
-static int close_file(out_file *o, char *err, size_t err_size)
-{
-	int bad = ferror(o->f) | (fclose(o->f) != 0);
-	if (bad || rename(o->tmp, o->path)) {
-		snprintf(err, err_size, "%s: write error", o->path);
-		unlink(o->tmp);
-		return -1;
-	}
-	return 0;
-}
+static int close_file(out_file *o, char *err, size_t err_size) { return tl_atomic_commit(o, err, err_size); }
 
 static int write_json(json_t *j, const char *dir, const char *name, char *err, size_t err_size)
 {
-	char path[4096], tmp[4200];
+	char path[TL_PATH_MAX];
 	snprintf(path, sizeof path, "%s/%s", dir, name);
-	snprintf(tmp, sizeof tmp, "%s.tmp", path);
-	int bad = json_dump_file(j, tmp, JSON_INDENT(2)) != 0 || rename(tmp, path) != 0;
+	int rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
-	if (bad) {
-		unlink(tmp);
-		snprintf(err, err_size, "%s: write error", path);
-		return -1;
-	}
-	return 0;
+	return rc;
 }
 
 /* Plots: DIR/NAME.gp is written by the caller into the returned file, then plot_run draws it (gnuplot). */
@@ -89,7 +68,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 {
 	out_file o;
 	size_t nT = meta->threshold_count;
-	if (run_mkdirs(dir, err, err_size))
+	if (tl_mkdirs(dir, err, err_size))
 		return -1;
 	uint64_t visible = 0, visible_prev = 0;
 	for (size_t f = 0; f < n; f++)
@@ -181,7 +160,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 {
 	out_file o;
 	size_t nT = meta->threshold_count;
-	if (run_mkdirs(dir, err, err_size) || open_file(&o, dir, "predictors.csv", err, err_size))
+	if (tl_mkdirs(dir, err, err_size) || open_file(&o, dir, "predictors.csv", err, err_size))
 		return -1;
 	fprintf(o.f, "T,predictor,filtered,late,early,on_time,unchanged,samples,late_fraction,early_fraction,"
 		     "on_time_fraction,unchanged_fraction\n");
@@ -248,7 +227,7 @@ int mtr_tfr_write_gradients(const analyze_result *r, const mtr_tfr_meta *meta, c
 		return -1;
 	}
 	snprintf(sub, sizeof sub, "%s/gradients", dir);
-	if (run_mkdirs(sub, err, err_size))
+	if (tl_mkdirs(sub, err, err_size))
 		return -1;
 	size_t np = (size_t)r->width * r->height;
 	float *map = malloc(np * sizeof *map);

@@ -1,46 +1,54 @@
 /* cmd_clip.c — `taslab clip RUN --out clip.webm`: a run's PNG frames as a bit-exact lossless clip. */
 #include <string.h>
 
-#include "cli.h"
+#include "commands.h"
 #include "taslab/clip.h"
+#include "taslab/tl_fs.h"
 
-static void clip_usage(FILE *out)
+static const cli_opt clip_options[] = {
+	{.name = "out", .arg = "CLIP.webm",
+	 .help = "the clip to write (a temporary name until it is complete)",
+	 .type = CLI_STRING, .offset = offsetof(clip_opts, out)},
+	{0},
+};
+
+static int clip_validate(void *opts, cli_ctx *ctx)
 {
-	fprintf(out, "usage: taslab clip RUN --out CLIP.webm\n\n"
-		     "Encodes RUN/frames/NNNNNN.png at the run's fps as lossless VP9 with RGB (gbrp) pixels in WebM:\n"
-		     "decoded frames equal the PNG frames exactly (plays back bit-exact in Chromium). The clip is\n"
-		     "written under a temporary name and renamed at the end; on any error no clip is left.\n");
+	clip_opts *o = opts;
+	if (!o->out)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out CLIP.webm is required (see 'taslab clip --help')");
+	return TL_OK;
 }
 
-static int clip_run(int argc, char **argv)
+static int clip_main(void *opts, cli_ctx *ctx)
 {
-	const char *run = NULL, *out = NULL;
-	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-			clip_usage(stdout);
-			return CLI_EXIT_OK;
-		} else if (!strcmp(argv[i], "--out") && i + 1 < argc) {
-			out = argv[++i];
-		} else if (argv[i][0] != '-' && !run) {
-			run = argv[i];
-		} else {
-			fprintf(stderr, "taslab clip: unexpected argument '%s' (see 'taslab clip --help')\n", argv[i]);
-			return CLI_EXIT_USAGE;
-		}
-	}
-	if (!run || !out) {
-		fprintf(stderr, "taslab clip: need a run folder and --out CLIP.webm (see 'taslab clip --help')\n");
-		return CLI_EXIT_USAGE;
-	}
-	char err[1024];
+	clip_opts *o = opts;
+	const char *run = ctx->pos[0];
+	/* Never write into the run itself: the clip would replace a frame or the run's files. */
+	if (tl_path_inside(o->out, run))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"--out %s lies inside the run folder %s, whose files it could replace (write the clip elsewhere)",
+				o->out, run);
 	uint32_t n;
-	if (clip_encode_run(run, out, &n, err, sizeof err)) {
-		fprintf(stderr, "taslab clip: %s\n", err);
-		return CLI_EXIT_FAILURE;
-	}
-	fprintf(stderr, "taslab: wrote %u frames to %s (lossless VP9, gbrp, WebM)\n", n, out);
-	return CLI_EXIT_OK;
+	int rc = clip_encode_run(run, o->out, &n, ctx->err, sizeof ctx->err);
+	if (!rc)
+		fprintf(stderr, "taslab: wrote %u frames to %s (lossless VP9, gbrp, WebM)\n", n, o->out);
+	return rc;
 }
 
-const cli_command cli_cmd_clip = {"clip", "encode a run's frames as a bit-exact lossless VP9/WebM clip", clip_run,
-				  clip_usage};
+const cli_command cli_cmd_clip = {
+	.name = "clip",
+	.summary = "encode a run's frames as a bit-exact lossless VP9/WebM clip",
+	.synopsis = "taslab clip RUN --out CLIP.webm",
+	.description = "Encodes RUN/frames/NNNNNN.png at the run's fps as lossless VP9 with RGB (gbrp) pixels in WebM:\n"
+		       "decoded frames equal the PNG frames exactly (plays back bit-exact in Chromium). The frames must be\n"
+		       "exactly those of the run's manifest. The clip is written under a temporary name and renamed at the\n"
+		       "end; on any error no clip is left.",
+	.options = clip_options,
+	.opts_size = sizeof(clip_opts),
+	.validate = clip_validate,
+	.min_pos = 1,
+	.max_pos = 1,
+	.pos_help = "RUN (a run folder)",
+	.run = clip_main,
+};

@@ -4,25 +4,23 @@
 #include "cli.h"
 #include "taslab/vkdev.h"
 
-static void devices_usage(FILE *out)
+static int devices_main(void *opts, cli_ctx *ctx)
 {
-	fprintf(out, "usage: taslab devices\n\nLists the Vulkan devices; pass an index or a name substring to\n"
-		     "'taslab render --device', or 'lavapipe' for the CPU device.\n");
-}
-
-static int devices_run(int argc, char **argv)
-{
-	int st = cli_no_args(argc, argv, devices_usage);
-	if (st >= 0)
-		return st;
+	(void)opts;
 	char list[2048];
 	VkResult r = vkdev_list(list, sizeof list);
-	if (r) {
-		fprintf(stderr, "taslab devices: cannot enumerate Vulkan devices (%s); run scripts/setup\n", vkdev_result_string(r));
-		return CLI_EXIT_FAILURE;
-	}
+	if (r)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_VULKAN, "cannot enumerate Vulkan devices (%s); run scripts/setup",
+				vkdev_result_string(r));
 	fputs(list, stdout);
-	return CLI_EXIT_OK;
+	return TL_OK;
 }
 
-const cli_command cli_cmd_devices = {"devices", "list Vulkan devices", devices_run, devices_usage};
+const cli_command cli_cmd_devices = {
+	.name = "devices",
+	.summary = "list Vulkan devices",
+	.synopsis = "taslab devices",
+	.description = "Lists the Vulkan devices; pass an index or a name substring to 'taslab render --device', or\n"
+		       "'lavapipe' for the CPU device.",
+	.run = devices_main,
+};

@@ -1,98 +1,24 @@
 /* cmd_pair.c — `taslab pair`: paired study clips for one scene and camera path (DESIGN sections 5, 7):
- * renders the reference and each variant (METHOD or METHOD@T) into run folders, encodes their bit-exact
- * clips, an inspection clip per variant (reference | variant side by side), and pairs.json tying every clip
- * to its condition (scene, camera path and motion class, method, T). pairs.json is written last and
- * atomically: its presence means the set is complete. */
+ * renders the reference and each variant (ref, tfr@8, rrc/4, tarc-oracle@8, ...) into run folders, encodes
+ * their bit-exact clips, an inspection clip per variant (reference | variant side by side), and pairs.json
+ * (output/pairs.h) tying every clip to its condition. pairs.json is written last and atomically: its
+ * presence means the set is complete. */
 #include <errno.h>
-#include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "cli.h"
+#include "commands.h"
 #include "taslab/clip.h"
 #include "taslab/colour.h"
 #include "taslab/imageio.h"
+#include "taslab/pairs.h"
 #include "taslab/render.h"
-#include "taslab/run.h"
 #include "taslab/scene.h"
+#include "taslab/tl_fs.h"
 #include "taslab/vkdev.h"
-
-#define MAX_VARIANTS 64
-
-static void pair_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: taslab pair --scene S --camera C --out DIR [--variants LIST] [options]\n\n"
-		"Renders the reference (ref) and each variant of one scene and camera path, and writes\n"
-		"  DIR/runs/NAME/        run folders (frames, stats.csv, manifest.json)\n"
-		"  DIR/clips/NAME.webm   bit-exact lossless clips for the study\n"
-		"  DIR/inspect/NAME.webm reference | variant side by side, for looking at the differences\n"
-		"  DIR/pairs.json        the conditions (scene, camera, camera_motion, method, T) and their clips\n\n"
-		"options:\n"
-		"  --variants LIST   comma-separated METHOD or METHOD@T (e.g. tfr@2,tfr@4); default: ref (a catch\n"
-		"                    pair, reference against itself); see 'taslab render --help' for the methods\n"
-		"  --frames A:B, --size WxH, --fps F, --device D, --validation,\n"
-		"  --ocio-config F, --display D, --view V   as for 'taslab render' (default size 960x540)\n");
-}
-
-typedef struct variant {
-	char method[32];
-	double T; /* NAN: method without threshold */
-	char name[64];
-} variant;
-
-static int parse_variants(const char *list, variant *v, size_t *n, char *err, size_t err_size)
-{
-	char buf[2048];
-	snprintf(buf, sizeof buf, "%s", list);
-	*n = 0;
-	for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-		if (*n == MAX_VARIANTS) {
-			snprintf(err, err_size, "--variants: at most %d variants", MAX_VARIANTS);
-			return -1;
-		}
-		variant *x = &v[(*n)++];
-		char *at = strchr(tok, '@');
-		x->T = NAN;
-		if (at) {
-			*at = 0;
-			if (cli_parse_float(at + 1, "--variants threshold", 1e-6, 255, &x->T, err, err_size))
-				return -1;
-		}
-		size_t nm;
-		const render_method_info *m = render_methods(&nm);
-		size_t i = 0;
-		while (i < nm && strcmp(m[i].name, tok))
-			i++;
-		if (i == nm || !m[i].available) {
-			snprintf(err, err_size, "--variants: %s method '%s' (available: ref, tfr; see 'taslab render --help')",
-				 i == nm ? "unknown" : "not yet implemented", tok);
-			return -1;
-		}
-		snprintf(x->method, sizeof x->method, "%s", tok);
-		if (isnan(x->T) && !strcmp(tok, "tfr")) {
-			snprintf(err, err_size, "--variants: tfr needs a threshold, e.g. tfr@8");
-			return -1;
-		}
-		if (isnan(x->T))
-			snprintf(x->name, sizeof x->name, "%s", tok);
-		else
-			snprintf(x->name, sizeof x->name, "%s-T%g", tok, x->T);
-		for (size_t j = 0; j + 1 < *n; j++)
-			if (!strcmp(v[j].name, x->name)) {
-				snprintf(err, err_size, "--variants: '%s' is listed twice", x->name);
-				return -1;
-			}
-	}
-	if (*n == 0) {
-		snprintf(err, err_size, "--variants is empty");
-		return -1;
-	}
-	return 0;
-}
 
 /* reference | variant, side by side with a 2-pixel grey gap. */
 static int inspect_clip(const char *ref_run, const char *var_run, uint32_t first, uint32_t end, float fps,
@@ -100,25 +26,29 @@ static int inspect_clip(const char *ref_run, const char *var_run, uint32_t first
 {
 	clip_writer *w = NULL;
 	uint8_t *a = NULL, *b = NULL, *sbs = NULL;
-	int rc = -1;
+	int rc = TL_ERR_INPUT;
 	for (uint32_t f = first; f < end; f++) {
-		char pa[4096], pb[4096];
+		char pa[TL_PATH_MAX], pb[TL_PATH_MAX];
 		uint32_t wa, ha, wb, hb;
 		snprintf(pa, sizeof pa, "%s/frames/%06u.png", ref_run, f);
 		snprintf(pb, sizeof pb, "%s/frames/%06u.png", var_run, f);
 		free(a);
 		free(b);
 		a = b = NULL;
-		if (imageio_read_rgb8(pa, &wa, &ha, &a, err, err_size) || imageio_read_rgb8(pb, &wb, &hb, &b, err, err_size))
+		if ((rc = imageio_read_rgb8(pa, &wa, &ha, &a, err, err_size)) ||
+		    (rc = imageio_read_rgb8(pb, &wb, &hb, &b, err, err_size)))
 			goto done;
 		if (wa != wb || ha != hb) {
-			snprintf(err, err_size, "%s and %s differ in size", pa, pb);
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s and %s differ in size", pa, pb);
 			goto done;
 		}
 		uint32_t W = 2 * wa + 2;
 		if (!w) {
-			sbs = malloc((size_t)W * ha * 3);
-			if (!sbs || clip_writer_create(out, W, ha, fps, &w, err, err_size))
+			if (!(sbs = malloc((size_t)W * ha * 3))) {
+				rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+				goto done;
+			}
+			if ((rc = clip_writer_create(out, W, ha, fps, &w, err, err_size)))
 				goto done;
 		}
 		for (uint32_t y = 0; y < ha; y++) {
@@ -127,10 +57,10 @@ static int inspect_clip(const char *ref_run, const char *var_run, uint32_t first
 			memset(row + (size_t)wa * 3, 128, 6);
 			memcpy(row + (size_t)(wa + 2) * 3, b + (size_t)y * wa * 3, (size_t)wa * 3);
 		}
-		if (clip_writer_frame(w, sbs, err, err_size))
+		if ((rc = clip_writer_frame(w, sbs, err, err_size)))
 			goto done;
 	}
-	rc = w ? clip_writer_finish(w, err, err_size) : -1;
+	rc = w ? clip_writer_finish(w, err, err_size) : tl_error(err, err_size, TL_ERR_ARG, "no frames");
 done:
 	clip_writer_destroy(&w);
 	free(a);
@@ -139,188 +69,138 @@ done:
 	return rc;
 }
 
-static int pair_run(int argc, char **argv)
+static const cli_opt pair_options[] = {
+	{.name = "variants", .arg = "LIST",
+	 .help = "comma-separated variants (e.g. tfr@2,tfr@8,rrc/4,tarc-oracle@8); default: ref (a catch "
+			     "pair, reference against itself); see 'taslab render --help' for the methods",
+	 .type = CLI_STRING, .offset = offsetof(pair_opts, variants)},
+	{.name = "out", .arg = "DIR",
+	 .help = "output folder (runs/, clips/, inspect/, pairs.json)",
+	 .type = CLI_STRING, .offset = offsetof(pair_opts, out)},
+	{0},
+};
+
+static void pair_defaults(void *opts, cli_setup_opts *setup)
 {
-	char err[1024], scene_path[4096];
-	const char *scene_arg = NULL, *camera = NULL, *out = NULL, *variants_arg = "ref", *frames = NULL, *device = NULL;
-	uint32_t width = 960, height = 540;
-	double fps_opt = 0;
-	int validation = 0;
-	colour_desc cd = {0};
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i];
-		const char **dst = NULL;
-		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-			pair_usage(stdout);
-			return CLI_EXIT_OK;
-		}
-		if (!strcmp(a, "--validation")) {
-			validation = 1;
-			continue;
-		}
-		if (!strcmp(a, "--scene"))
-			dst = &scene_arg;
-		else if (!strcmp(a, "--camera"))
-			dst = &camera;
-		else if (!strcmp(a, "--out"))
-			dst = &out;
-		else if (!strcmp(a, "--variants"))
-			dst = &variants_arg;
-		else if (!strcmp(a, "--frames"))
-			dst = &frames;
-		else if (!strcmp(a, "--device"))
-			dst = &device;
-		else if (!strcmp(a, "--ocio-config"))
-			dst = &cd.config_path;
-		else if (!strcmp(a, "--display"))
-			dst = &cd.display;
-		else if (!strcmp(a, "--view"))
-			dst = &cd.view;
-		else if (strcmp(a, "--size") && strcmp(a, "--fps")) {
-			fprintf(stderr, "taslab pair: unknown argument '%s' (see 'taslab pair --help')\n", a);
-			return CLI_EXIT_USAGE;
-		}
-		if (i + 1 >= argc) {
-			fprintf(stderr, "taslab pair: %s needs a value\n", a);
-			return CLI_EXIT_USAGE;
-		}
-		if (dst) {
-			*dst = argv[++i];
-		} else if (!strcmp(a, "--size")) {
-			if (cli_parse_size(argv[++i], &width, &height, err, sizeof err)) {
-				fprintf(stderr, "taslab pair: %s\n", err);
-				return CLI_EXIT_USAGE;
-			}
-		} else if (cli_parse_float(argv[++i], "--fps", 1, 1000, &fps_opt, err, sizeof err)) {
-			fprintf(stderr, "taslab pair: %s\n", err);
-			return CLI_EXIT_USAGE;
+	(void)setup;
+	((pair_opts *)opts)->variants = "ref";
+}
+
+static int pair_validate(void *opts, cli_ctx *ctx)
+{
+	pair_opts *o = opts;
+	if (!o->out)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out DIR is required (see 'taslab pair --help')");
+	char buf[2048];
+	const char *items[32];
+	int rc = cli_split_list(o->variants, "--variants", buf, sizeof buf, items, 32, &o->count, ctx->err, sizeof ctx->err);
+	for (size_t i = 0; !rc && i < o->count; i++) {
+		char why[512], a[96], b[96];
+		if (method_config_parse_variant(&o->configs[i], items[i], why, sizeof why))
+			return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--variants: %s", why);
+		method_config_id(&o->configs[i], a, sizeof a);
+		for (size_t j = 0; j < i; j++) {
+			method_config_id(&o->configs[j], b, sizeof b);
+			if (!strcmp(a, b))
+				return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--variants: '%s' is listed twice", items[i]);
 		}
 	}
-	variant vars[MAX_VARIANTS];
-	size_t nvar = 0;
-	if (!scene_arg || !out) {
-		fprintf(stderr, "taslab pair: --scene and --out are required (see 'taslab pair --help')\n");
-		return CLI_EXIT_USAGE;
+	return rc;
+}
+
+static int pair_main(void *opts, cli_ctx *ctx)
+{
+	pair_opts *o = opts;
+	cli_setup *s = &ctx->setup;
+	const scene *scn = s->scene;
+	char *err = ctx->err;
+	size_t err_size = sizeof ctx->err;
+	char path[TL_PATH_MAX], sub[TL_PATH_MAX];
+	int rc;
+	snprintf(path, sizeof path, "%s/pairs.json", o->out);
+	if ((rc = tl_mkdirs(o->out, err, err_size)))
+		return rc;
+	if (unlink(path) && errno != ENOENT)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot remove the old pairs.json: %s", path, strerror(errno));
+	const char *subs[2] = {"clips", "inspect"};
+	for (int i = 0; i < 2; i++) {
+		snprintf(sub, sizeof sub, "%s/%s", o->out, subs[i]);
+		if ((rc = tl_mkdirs(sub, err, err_size)))
+			return rc;
 	}
-	if (parse_variants(variants_arg, vars, &nvar, err, sizeof err) ||
-	    cli_resolve_scene(scene_arg, scene_path, sizeof scene_path, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		return CLI_EXIT_USAGE;
-	}
-	scene *scn = NULL;
-	colour *col = NULL;
-	vkdev *dev = NULL;
-	json_t *conds = NULL;
-	int status = CLI_EXIT_USAGE;
-	if (scene_load(scene_path, &scn, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		return CLI_EXIT_USAGE;
-	}
-	int cam = camera ? scene_find_camera(scn, camera) : 0;
-	if (cam < 0) {
-		fprintf(stderr, "taslab pair: scene '%s' has no camera path '%s' (see 'taslab scenes')\n", scn->name, camera);
-		goto done;
-	}
-	float fps = fps_opt > 0 ? (float)fps_opt : scn->fps;
-	uint32_t first = 0, end = (uint32_t)lround((double)scn->duration_s * fps);
-	bool given;
-	if (frames && cli_parse_frames(frames, &first, &end, &given, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	if (colour_create(&cd, &col, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	char pairs_json[4096], sub[4096];
-	snprintf(pairs_json, sizeof pairs_json, "%s/pairs.json", out);
-	if (run_mkdirs(out, err, sizeof err) || (unlink(pairs_json) && errno != ENOENT)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	status = CLI_EXIT_FAILURE;
-	vkdev_desc dd = {.device = device, .validation = validation};
-	if (vkdev_create(&dd, &dev, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	snprintf(sub, sizeof sub, "%s/clips", out);
-	if (run_mkdirs(sub, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	snprintf(sub, sizeof sub, "%s/inspect", out);
-	if (run_mkdirs(sub, err, sizeof err)) {
-		fprintf(stderr, "taslab pair: %s\n", err);
-		goto done;
-	}
-	conds = json_array();
+	pairs_condition conds[32];
+	pairs_set set = {.fps = s->fps, .first_frame = s->first, .last_frame = s->end - 1, .width = s->width,
+			 .height = s->height, .conditions = conds, .count = 0};
+	snprintf(set.scene, sizeof set.scene, "%s", scn->name);
+	snprintf(set.scene_path, sizeof set.scene_path, "%s", s->scene_path);
+	snprintf(set.camera, sizeof set.camera, "%s", scn->cameras[s->camera].name);
+	snprintf(set.camera_motion, sizeof set.camera_motion, "%s", scene_camera_motion_name(scn->cameras[s->camera].motion));
+	snprintf(set.display_transform, sizeof set.display_transform, "%s", colour_name(s->colour));
+	snprintf(set.ref_run, sizeof set.ref_run, "runs/ref");
+	snprintf(set.ref_clip, sizeof set.ref_clip, "clips/ref.webm");
+	method_config ref;
+	if ((rc = method_config_init(&ref, "ref", err, err_size)))
+		return rc;
 	/* Index -1 is the reference; then the variants. */
-	for (int k = -1; k < (int)nvar; k++) {
-		const char *name = k < 0 ? "ref" : vars[k].name, *method = k < 0 ? "ref" : vars[k].method;
-		double T = k < 0 ? NAN : vars[k].T;
-		char run[4096], clip[4096], inspect[4096], rel_run[256], rel_clip[256], rel_inspect[256];
-		snprintf(rel_run, sizeof rel_run, "runs/%s", name);
-		snprintf(rel_clip, sizeof rel_clip, "clips/%s.webm", name);
-		snprintf(rel_inspect, sizeof rel_inspect, "inspect/%s.webm", name);
-		snprintf(run, sizeof run, "%s/%s", out, rel_run);
-		snprintf(clip, sizeof clip, "%s/%s", out, rel_clip);
-		snprintf(inspect, sizeof inspect, "%s/%s", out, rel_inspect);
+	for (int k = -1; k < (int)o->count; k++) {
+		const method_config *mc = k < 0 ? &ref : &o->configs[k];
+		char id[96], run[TL_PATH_MAX], clip[TL_PATH_MAX], inspect[TL_PATH_MAX];
+		method_config_id(mc, id, sizeof id);
 		/* A variant identical to the reference (a catch pair) reuses the reference's run and clip. */
-		int same_as_ref = k >= 0 && !strcmp(method, "ref");
+		int same_as_ref = k >= 0 && !strcmp(id, "ref");
 		if (!same_as_ref) {
+			snprintf(run, sizeof run, "%s/runs/%s", o->out, id);
+			snprintf(clip, sizeof clip, "%s/clips/%s.webm", o->out, id);
 			fprintf(stderr, "taslab: pair %s/%s: rendering %s (frames %u..%u, %ux%u)\n", scn->name,
-				scn->cameras[cam].name, name, first, end - 1, width, height);
-			run_render_desc rr = {.dev = dev, .scene = scn, .scene_path = scene_path, .camera = cam, .colour = col,
-					      .method = method, .threshold = isnan(T) ? 0.0f : (float)T, .first = first,
-					      .end = end, .width = width, .height = height, .fps = fps, .write_exr = true,
-					      .write_png = true, .out = run, .command_line = "taslab pair"};
+				scn->cameras[s->camera].name, id, s->first, s->end - 1, s->width, s->height);
+			render_run_desc rr = {.dev = s->dev, .scene = scn, .scene_path = s->scene_path, .camera = s->camera,
+					      .colour = s->colour, .method = mc, .first = s->first, .end = s->end,
+					      .width = s->width, .height = s->height, .fps = s->fps, .write_exr = true,
+					      .write_png = true, .out = run, .command_line = ctx->command_line};
 			uint32_t n;
-			if (run_render(&rr, err, sizeof err) || clip_encode_run(run, clip, &n, err, sizeof err)) {
-				fprintf(stderr, "taslab pair: %s: %s\n", name, err);
-				goto done;
-			}
+			char why[1024];
+			if ((rc = render_run(&rr, why, sizeof why)) || (rc = clip_encode_run(run, clip, &n, why, sizeof why)))
+				return tl_error(err, err_size, rc, "%s: %s", id, why);
 		}
 		if (k < 0)
 			continue;
-		const char *vr = same_as_ref ? "runs/ref" : rel_run, *vc = same_as_ref ? "clips/ref.webm" : rel_clip;
-		char ref_run[4096], var_run[4096];
-		snprintf(ref_run, sizeof ref_run, "%s/runs/ref", out);
-		snprintf(var_run, sizeof var_run, "%s/%s", out, vr);
-		if (inspect_clip(ref_run, var_run, first, end, fps, inspect, err, sizeof err)) {
-			fprintf(stderr, "taslab pair: %s: %s\n", name, err);
-			goto done;
-		}
-		json_array_append_new(conds, json_pack("{s:s, s:s, s:o, s:s, s:s, s:s}", "id", name, "method", method, "T",
-						       isnan(T) ? json_null() : json_real(T), "run", vr, "clip", vc,
-						       "inspect", rel_inspect));
+		pairs_condition *c = &conds[set.count++];
+		memset(c, 0, sizeof *c);
+		snprintf(c->id, sizeof c->id, "%s", id);
+		method_config_name(mc, c->method, sizeof c->method);
+		method_config_variant(mc, c->variant, sizeof c->variant);
+		c->T = method_config_threshold(mc);
+		c->period = method_config_period(mc);
+		snprintf(c->run, sizeof c->run, "runs/%s", same_as_ref ? "ref" : id);
+		snprintf(c->clip, sizeof c->clip, "clips/%s.webm", same_as_ref ? "ref" : id);
+		snprintf(c->inspect, sizeof c->inspect, "inspect/%s.webm", id);
+		char ref_run[TL_PATH_MAX], var_run[TL_PATH_MAX], why[1024];
+		snprintf(ref_run, sizeof ref_run, "%s/runs/ref", o->out);
+		snprintf(var_run, sizeof var_run, "%s/%s", o->out, c->run);
+		snprintf(inspect, sizeof inspect, "%s/%s", o->out, c->inspect);
+		if ((rc = inspect_clip(ref_run, var_run, s->first, s->end, s->fps, inspect, why, sizeof why)))
+			return tl_error(err, err_size, rc, "%s: %s", id, why);
 	}
-	json_t *m = json_pack("{s:i, s:s, s:s, s:s, s:s, s:f, s:[i,i], s:[i,i], s:s, s:{s:s, s:s}, s:O}", "taslab_pairs", 1,
-			      "scene", scn->name, "scene_path", scene_path, "camera", scn->cameras[cam].name,
-			      "camera_motion", scene_camera_motion_name(scn->cameras[cam].motion), "fps", (double)fps,
-			      "frames", (int)first, (int)(end - 1), "size", (int)width, (int)height, "display_transform",
-			      colour_name(col), "reference", "run", "runs/ref", "clip", "clips/ref.webm", "conditions", conds);
-	char tmp[4096];
-	snprintf(tmp, sizeof tmp, "%s/.pairs.json.tmp%ld", out, (long)getpid());
-	if (!m || json_dump_file(m, tmp, JSON_INDENT(2)) || rename(tmp, pairs_json)) {
-		unlink(tmp);
-		json_decref(m);
-		fprintf(stderr, "taslab pair: cannot write %s\n", pairs_json);
-		goto done;
-	}
-	json_decref(m);
-	fprintf(stderr, "taslab: %zu pair(s) in %s (pairs.json, clips/, inspect/)\n", nvar, out);
-	printf("%s\n", pairs_json);
-	status = CLI_EXIT_OK;
-done:
-	json_decref(conds);
-	if (dev && validation && vkdev_validation_messages(dev) && status == CLI_EXIT_OK)
-		status = CLI_EXIT_FAILURE;
-	vkdev_destroy(&dev);
-	colour_destroy(&col);
-	scene_destroy(&scn);
-	return status;
+	if ((rc = pairs_write(path, &set, err, err_size)))
+		return rc;
+	fprintf(stderr, "taslab: %zu pair(s) in %s (pairs.json, clips/, inspect/)\n", set.count, o->out);
+	printf("%s\n", path);
+	return TL_OK;
 }
 
-const cli_command cli_cmd_pair = {"pair", "render reference/variant clip pairs for a study, with pairs.json", pair_run,
-				  pair_usage};
+const cli_command cli_cmd_pair = {
+	.name = "pair",
+	.summary = "render reference/variant clip pairs for a study, with pairs.json",
+	.synopsis = "taslab pair --scene S --camera C --out DIR [--variants LIST] [options]",
+	.description = "Renders the reference (ref) and each variant of one scene and camera path, and writes\n"
+		       "  DIR/runs/ID/        run folders (frames, stats.csv, manifest.json)\n"
+		       "  DIR/clips/ID.webm   bit-exact lossless clips for the study\n"
+		       "  DIR/inspect/ID.webm reference | variant side by side, for looking at the differences\n"
+		       "  DIR/pairs.json      the conditions (scene, camera, camera_motion, method, T, period) and clips",
+	.options = pair_options,
+	.opts_size = sizeof(pair_opts),
+	.defaults = pair_defaults,
+	.validate = pair_validate,
+	.needs = CLI_NEED_SCENE | CLI_NEED_COLOUR | CLI_NEED_DEVICE,
+	.run = pair_main,
+};

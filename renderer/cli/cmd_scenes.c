@@ -6,31 +6,16 @@
 #include "cli.h"
 #include "taslab/scene.h"
 
-#ifndef TASLAB_SCENES_DIR
-#define TASLAB_SCENES_DIR "scenes"
-#endif
-
-static void scenes_usage(FILE *out)
-{
-	fprintf(out, "usage: taslab scenes\n\nLists the built-in scenes (scenes/*.json, or $TASLAB_SCENES) with their\n"
-		     "duration, lights and camera paths (stationary or moving), for 'taslab render --scene/--camera'.\n");
-}
-
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
-static int scenes_run(int argc, char **argv)
+static int scenes_main(void *opts, cli_ctx *ctx)
 {
-	int st = cli_no_args(argc, argv, scenes_usage);
-	if (st >= 0)
-		return st;
-	const char *dir = getenv("TASLAB_SCENES");
-	if (!dir || !*dir)
-		dir = TASLAB_SCENES_DIR;
+	(void)opts;
+	const char *dir = cli_scenes_dir();
 	DIR *d = opendir(dir);
-	if (!d) {
-		fprintf(stderr, "taslab scenes: cannot open the scenes folder %s (set TASLAB_SCENES)\n", dir);
-		return CLI_EXIT_FAILURE;
-	}
+	if (!d)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_INPUT, "cannot open the scenes folder %s (set TASLAB_SCENES)",
+				dir);
 	char *names[256];
 	size_t n = 0;
 	struct dirent *e;
@@ -41,14 +26,15 @@ static int scenes_run(int argc, char **argv)
 	}
 	closedir(d);
 	qsort(names, n, sizeof names[0], cmp_str);
-	int status = CLI_EXIT_OK;
+	int status = TL_OK;
 	for (size_t i = 0; i < n; i++) {
 		char path[4096], err[1024];
 		scene *s = NULL;
 		snprintf(path, sizeof path, "%s/%s", dir, names[i]);
 		if (!names[i] || scene_load(path, &s, err, sizeof err)) {
 			fprintf(stderr, "taslab scenes: %s\n", names[i] ? err : "out of memory");
-			status = CLI_EXIT_FAILURE;
+			status = TL_ERR_INPUT;
+			snprintf(ctx->err, sizeof ctx->err, "some scenes did not load (see above)");
 		} else {
 			printf("%s  (%.1f s at %g fps, %zu objects, %zu lights)\n", s->name, (double)s->duration_s,
 			       (double)s->fps, s->object_count, s->light_count);
@@ -61,4 +47,11 @@ static int scenes_run(int argc, char **argv)
 	return status;
 }
 
-const cli_command cli_cmd_scenes = {"scenes", "list built-in scenes and their camera paths", scenes_run, scenes_usage};
+const cli_command cli_cmd_scenes = {
+	.name = "scenes",
+	.summary = "list built-in scenes and their camera paths",
+	.synopsis = "taslab scenes",
+	.description = "Lists the built-in scenes (scenes/*.json, or $TASLAB_SCENES) with their duration, lights and\n"
+		       "camera paths (stationary or moving), for 'taslab render --scene/--camera'.",
+	.run = scenes_main,
+};

@@ -1,49 +1,56 @@
-/* run_render.c — one run: render frames with a method and write them to a run folder (run.h). */
+/* run_render.c — one run: render frames with a method and write them to a run folder (render.h, run.h). */
+#include <math.h>
 #include <stdio.h>
-#include <time.h>
 
 #include "taslab/colour.h"
 #include "taslab/render.h"
 #include "taslab/run.h"
 #include "taslab/scene.h"
+#include "taslab/tl_clock.h"
 #include "taslab/vkdev.h"
 
-static double now_s(void)
+int render_run(const render_run_desc *d, char *err, size_t err_size)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-int run_render(const run_render_desc *d, char *err, size_t err_size)
-{
-	int rc = -1;
+	int rc;
 	render *r = NULL;
 	run_writer *w = NULL;
 	const scene *scn = d->scene;
+	method_config ref;
+	const method_config *mc = d->method;
+	if (!mc && (rc = method_config_init(&ref, "ref", err, err_size)))
+		return rc;
+	if (!mc)
+		mc = &ref;
 	render_desc rd = {
 		.scene = scn,
 		.camera = d->camera,
 		.width = d->width,
 		.height = d->height,
 		.fps = d->fps,
-		.method = d->method,
-		.threshold = d->threshold,
-		.max_age = d->max_age,
+		.method = mc,
 		.trivial_shading = d->trivial_shading,
 		.colour = d->colour,
 	};
-	if (render_create(d->dev, &rd, &r, err, err_size))
+	if ((rc = render_create(d->dev, &rd, &r, err, err_size)))
 		goto done;
+	char name[64], variant[96];
+	method_config_name(mc, name, sizeof name);
+	method_config_variant(mc, variant, sizeof variant);
+	run_option opts[RUN_MAX_OPTIONS];
+	size_t nopt = method_config_run_options(mc, opts, RUN_MAX_OPTIONS);
 	run_info info = {
 		.scene_name = scn->name,
 		.scene_path = d->scene_path,
 		.camera = scn->cameras[d->camera].name,
 		.camera_motion = scene_camera_motion_name(scn->cameras[d->camera].motion),
-		.method = d->method,
+		.method = name,
+		.variant = variant,
+		.threshold = method_config_threshold(mc),
+		.period = method_config_period(mc),
+		.options = opts,
+		.option_count = nopt,
 		.device = d->dev->props.deviceName,
 		.driver = d->dev->driver_info,
-		.threshold = d->threshold,
 		.first_frame = d->first,
 		.last_frame = d->end - 1,
 		.width = d->width,
@@ -55,30 +62,28 @@ int run_render(const run_render_desc *d, char *err, size_t err_size)
 		.command_line = d->command_line,
 		.display_transform = d->colour ? colour_name(d->colour) : NULL,
 	};
-	if (run_writer_create(d->out, &info, &w, err, err_size)) {
-		rc = RUN_ERR_OUTPUT;
+	if ((rc = run_writer_create(d->out, &info, &w, err, err_size)))
 		goto done;
-	}
-	double t0 = now_s();
+	double t0 = tl_clock_s();
 	for (uint32_t f = d->first; f < d->end; f++) {
-		render_image img;
-		render_stats st;
+		frame_image img;
+		frame_stats st;
 		char why[1024];
-		if (render_frame(r, f, &img, &st, why, sizeof why) || run_writer_frame(w, &img, &st, why, sizeof why)) {
+		if ((rc = render_frame(r, f, &img, &st, why, sizeof why)) ||
+		    (rc = run_writer_frame(w, &img, &st, why, sizeof why))) {
 			snprintf(err, err_size, "frame %u: %s", f, why);
 			goto done;
 		}
 		if (d->dev->validation && vkdev_validation_messages(d->dev)) {
-			snprintf(err, err_size, "%u Vulkan validation message(s) at frame %u (printed above); run not completed",
-				 vkdev_validation_messages(d->dev), f);
+			rc = tl_error(err, err_size, TL_ERR_VALIDATION,
+				      "%u Vulkan validation message(s) at frame %u (printed above); run not completed",
+				      vkdev_validation_messages(d->dev), f);
 			goto done;
 		}
 		if (d->progress)
 			d->progress(d->user, f - d->first + 1, d->end - d->first);
 	}
-	if (run_writer_finish(w, now_s() - t0, err, err_size))
-		goto done;
-	rc = 0;
+	rc = run_writer_finish(w, tl_clock_s() - t0, err, err_size);
 done:
 	run_writer_destroy(&w);
 	render_destroy(&r);

@@ -5,144 +5,149 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "cli.h"
+#include "commands.h"
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
 
-static void study_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: taslab study <subcommand> --db STUDY.db [options]\n\n"
-		"  design --stimuli DIR --participants N [--seed S] [--training K] [--catch K] [--break-every N]\n"
-		"         randomised within-subject plan from the pairs.json sets in DIR (made by 'taslab pair')\n"
-		"  links [--base URL]     participant links (default base http://127.0.0.1:8080)\n"
-		"  serve [--port P] [--bind ADDR] [--threads N]   run the study in the browser (default 127.0.0.1:8080);\n"
-		"         prints the admin token for /admin/export.csv?token=...; Ctrl-C stops it\n"
-		"  tally --out DIR [--keep-flagged] [--bootstrap B] [--seed S]\n"
-		"         conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, tables.md, fig3.png\n"
-		"  export --out RATINGS.csv [--pwcmp PAIRS.csv]   long-format ratings (and pwcmp layout)\n"
-		"  import RATINGS.csv     load a long-format file into a new study (validated; all or nothing)\n");
-}
+static const cli_opt db_option[] = {
+	{.name = "db", .arg = "STUDY.db",
+	 .help = "the study database (SQLite)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, db)},
+	{0},
+};
 
-typedef struct opts {
-	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *file;
-	double participants, seed, training, catch_trials, break_every, port, threads, bootstrap;
-	int keep_flagged;
-} opts;
+static const cli_opt design_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "stimuli", .arg = "DIR",
+	 .help = "folder holding the pairs.json sets (made by 'taslab pair'), or sets one level below",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, stimuli)},
+	{.name = "participants", .arg = "N",
+	 .help = "participants to plan for (1..10000)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, participants), .lo = 1, .hi = 10000},
+	{.name = "seed", .arg = "S",
+	 .help = "seed of the randomisation (default 1)",
+	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = 1e18},
+	{.name = "training", .arg = "K",
+	 .help = "training trials at the start, not analysed (0..100)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, training), .lo = 0, .hi = 100},
+	{.name = "catch", .arg = "K",
+	 .help = "catch trials (reference against itself) for observer screening (0..100)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, catch_trials), .lo = 0, .hi = 100},
+	{.name = "break-every", .arg = "N",
+	 .help = "a break after every N trials (0: none)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, break_every), .lo = 0, .hi = 10000},
+	{0},
+};
 
-static int parse(int argc, char **argv, opts *o, char *err, size_t err_size)
+static const cli_opt links_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "base", .arg = "URL",
+	 .help = "base of the links (default: the address the study was last served on, else http://127.0.0.1:8080)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, base)},
+	{0},
+};
+
+static const cli_opt serve_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "port", .arg = "P",
+	 .help = "TCP port (default 8080; 0: any free port, printed)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, port), .lo = 0, .hi = 65535},
+	{.name = "bind", .arg = "ADDR",
+	 .help = "address to listen on (default 127.0.0.1)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, bind)},
+	{.name = "threads", .arg = "N",
+	 .help = "server threads (1..64, default 4)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, threads), .lo = 1, .hi = 64},
+	{0},
+};
+
+static const cli_opt tally_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "out", .arg = "DIR", .help = "output folder", .type = CLI_STRING, .offset = offsetof(study_opts, out)},
+	{.name = "keep-flagged", .arg = NULL,
+	 .help = "keep observers flagged by the catch-trial screening",
+	 .type = CLI_FLAG, .offset = offsetof(study_opts, keep_flagged)},
+	{.name = "bootstrap", .arg = "B",
+	 .help = "bootstrap resamples for the JOD intervals (1..100000, default 2000)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, bootstrap), .lo = 1, .hi = 100000},
+	{.name = "seed", .arg = "S",
+	 .help = "seed of the bootstrap (default 1)",
+	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = 1e18},
+	{0},
+};
+
+static const cli_opt export_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "out", .arg = "RATINGS.csv",
+	 .help = "long-format ratings (DESIGN section 7)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, out)},
+	{.name = "pwcmp", .arg = "PAIRS.csv",
+	 .help = "also the pwcmp layout",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, pwcmp)},
+	{0},
+};
+
+static void study_defaults(void *opts, cli_setup_opts *setup)
 {
-	memset(o, 0, sizeof *o);
+	(void)setup;
+	study_opts *o = opts;
 	o->port = 8080;
 	o->seed = 1;
-	for (int i = 2; i < argc; i++) {
-		const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-		const char **s = !strcmp(a, "--db") ? &o->db : !strcmp(a, "--stimuli") ? &o->stimuli : !strcmp(a, "--out") ? &o->out
-				 : !strcmp(a, "--pwcmp") ? &o->pwcmp : !strcmp(a, "--base") ? &o->base : !strcmp(a, "--bind") ? &o->bind : NULL;
-		double *d = !strcmp(a, "--participants") ? &o->participants : !strcmp(a, "--seed") ? &o->seed
-			    : !strcmp(a, "--training") ? &o->training : !strcmp(a, "--catch") ? &o->catch_trials
-			    : !strcmp(a, "--break-every") ? &o->break_every : !strcmp(a, "--port") ? &o->port
-			    : !strcmp(a, "--threads") ? &o->threads : !strcmp(a, "--bootstrap") ? &o->bootstrap : NULL;
-		if (!strcmp(a, "--keep-flagged")) {
-			o->keep_flagged = 1;
-		} else if (s && v) {
-			*s = v;
-			i++;
-		} else if (d && v) {
-			if (cli_parse_float(v, a, 0, 4294967295.0, d, err, err_size))
-				return -1;
-			i++;
-		} else if (a[0] != '-' && !o->file) {
-			o->file = a;
-		} else {
-			snprintf(err, err_size, "unexpected argument '%s' (see 'taslab study --help')", a);
-			return -1;
-		}
-	}
-	if (!o->db) {
-		snprintf(err, err_size, "--db STUDY.db is required");
-		return -1;
-	}
-	return 0;
+}
+
+static int study_validate(void *opts, cli_ctx *ctx)
+{
+	study_opts *o = opts;
+	const char *sub = strrchr(ctx->name, ' ') + 1;
+	char *err = ctx->err;
+	size_t n = sizeof ctx->err;
+	if (!o->db)
+		return tl_error(err, n, TL_ERR_ARG, "--db STUDY.db is required (see 'taslab %s --help')", ctx->name);
+	if (!strcmp(sub, "design") && (!o->stimuli || !o->participants))
+		return tl_error(err, n, TL_ERR_ARG, "--stimuli DIR and --participants N are required");
+	if ((!strcmp(sub, "tally") || !strcmp(sub, "export")) && !o->out)
+		return tl_error(err, n, TL_ERR_ARG, "--out is required");
+	return TL_OK;
 }
 
 static volatile sig_atomic_t stop_flag;
 static void on_signal(int sig) { (void)sig; stop_flag = 1; }
 
-static int study_run(int argc, char **argv)
+static int study_main(void *opts, cli_ctx *ctx)
 {
-	char err[1024];
-	opts o;
-	if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-		study_usage(argc < 2 ? stderr : stdout);
-		return argc < 2 ? CLI_EXIT_USAGE : CLI_EXIT_OK;
-	}
-	const char *sub = argv[1];
-	static const char *const subs[] = {"design", "links", "serve", "tally", "export", "import", NULL};
-	int known = 0;
-	for (const char *const *s = subs; *s; s++)
-		known |= !strcmp(*s, sub);
-	if (!known) {
-		fprintf(stderr, "taslab study: unknown subcommand '%s' (see 'taslab study --help')\n", sub);
-		return CLI_EXIT_USAGE;
-	}
-	if (parse(argc, argv, &o, err, sizeof err)) {
-		fprintf(stderr, "taslab study %s: %s\n", sub, err);
-		return CLI_EXIT_USAGE;
-	}
+	study_opts *o = opts, ov = *o;
+	const char *sub = strrchr(ctx->name, ' ') + 1;
+	char *err = ctx->err;
+	size_t err_size = sizeof ctx->err;
 	int create = !strcmp(sub, "design") || !strcmp(sub, "import");
-	if (!strcmp(sub, "design") && (!o.stimuli || o.participants < 1)) {
-		fprintf(stderr, "taslab study design: --stimuli DIR and --participants N are required\n");
-		return CLI_EXIT_USAGE;
-	}
-	if ((!strcmp(sub, "tally") || !strcmp(sub, "export")) && !o.out) {
-		fprintf(stderr, "taslab study %s: --out is required\n", sub);
-		return CLI_EXIT_USAGE;
-	}
-	if (!strcmp(sub, "import") && !o.file) {
-		fprintf(stderr, "taslab study import: give the ratings CSV file\n");
-		return CLI_EXIT_USAGE;
-	}
 	sty *s = NULL;
-	if (sty_open(o.db, create, &s, err, sizeof err)) {
-		fprintf(stderr, "taslab study %s: %s\n", sub, err);
-		return CLI_EXIT_USAGE;
-	}
-	int status = CLI_EXIT_OK;
+	int rc = sty_open(o->db, create, &s, err, err_size);
+	if (rc)
+		return rc;
 	if (!strcmp(sub, "design")) {
-		sty_design_desc d = {.stimuli = o.stimuli, .participants = (uint32_t)o.participants, .seed = (uint64_t)o.seed,
-				     .training = (uint32_t)o.training, .catch_trials = (uint32_t)o.catch_trials,
-				     .break_every = (uint32_t)o.break_every};
+		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
+				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every};
 		sty_design_summary sm;
-		if (sty_design(s, &d, &sm, err, sizeof err)) {
-			fprintf(stderr, "taslab study design: %s\n", err);
-			status = CLI_EXIT_USAGE;
-		} else {
+		if (!(rc = sty_design(s, &d, &sm, err, err_size))) {
 			printf("study %s: %u conditions from %u set(s), %u participants, %u trials each, %u break(s); "
 			       "estimated session %.1f min\nlinks: taslab study links --db %s; run: taslab study serve --db %s\n",
-			       o.db, sm.conditions, sm.sets, sm.participants, sm.trials_per_participant, sm.breaks, sm.session_minutes,
-			       o.db, o.db);
+			       ov.db, sm.conditions, sm.sets, sm.participants, sm.trials_per_participant, sm.breaks, sm.session_minutes,
+			       ov.db, ov.db);
 		}
 	} else if (!strcmp(sub, "links")) {
 		char **codes;
 		size_t n;
-		if (sty_participant_codes(s, &codes, &n, err, sizeof err)) {
-			fprintf(stderr, "taslab study links: %s\n", err);
-			status = CLI_EXIT_FAILURE;
-		} else {
+		if (!(rc = sty_participant_codes(s, &codes, &n, err, err_size))) {
 			for (size_t i = 0; i < n; i++) {
-				printf("P%03zu %s/p/%s\n", i + 1, o.base ? o.base : "http://127.0.0.1:8080", codes[i]);
+				printf("P%03zu %s/p/%s\n", i + 1, ov.base ? ov.base : "http://127.0.0.1:8080", codes[i]);
 				free(codes[i]);
 			}
 			free(codes);
 		}
 	} else if (!strcmp(sub, "serve")) {
 		sty_server *sv = NULL;
-		if (o.port > 65535 || sty_server_start(s, o.bind, (uint16_t)o.port, (unsigned)o.threads, &sv, err, sizeof err)) {
-			fprintf(stderr, "taslab study serve: %s\n", o.port > 65535 ? "--port must be 0..65535" : err);
-			status = CLI_EXIT_USAGE;
-		} else {
-			printf("listening on http://%s:%u\nadmin token %s (/admin/export.csv?token=...)\n", o.bind ? o.bind : "127.0.0.1",
+		if (!(rc = sty_server_start(s, ov.bind, (uint16_t)ov.port, ov.threads, &sv, err, err_size))) {
+			printf("listening on http://%s:%u\nadmin token %s (/admin/export.csv?token=...)\n", ov.bind ? ov.bind : "127.0.0.1",
 			       sty_server_port(sv), sty_admin_token(s));
 			fflush(stdout);
 			struct sigaction sa = {.sa_handler = on_signal};
@@ -154,32 +159,80 @@ static int study_run(int argc, char **argv)
 			fprintf(stderr, "taslab study serve: stopped\n");
 		}
 	} else if (!strcmp(sub, "tally")) {
-		sty_tally_desc t = {.out = o.out, .keep_flagged = o.keep_flagged, .bootstrap = (uint32_t)o.bootstrap,
-				    .seed = (uint64_t)o.seed};
-		if (sty_tally(s, &t, err, sizeof err)) {
-			fprintf(stderr, "taslab study tally: %s\n", err);
-			status = CLI_EXIT_FAILURE;
-		} else {
+		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .bootstrap = ov.bootstrap, .seed = ov.seed};
+		if (!(rc = sty_tally(s, &t, err, err_size))) {
 			fprintf(stderr, "taslab: study statistics in %s (conditions.csv, anova.csv, posthoc.csv, observers.csv, "
-					"jod.csv, tables.md, fig3.png)\n", o.out);
+					"jod.csv, tables.md, fig3.png)\n", ov.out);
 		}
 	} else if (!strcmp(sub, "export")) {
-		if (sty_export_long(s, o.out, err, sizeof err) || (o.pwcmp && sty_export_pwcmp(s, o.pwcmp, err, sizeof err))) {
-			fprintf(stderr, "taslab study export: %s\n", err);
-			status = CLI_EXIT_FAILURE;
-		}
+		if (!(rc = sty_export_long(s, ov.out, err, err_size)) && ov.pwcmp)
+			rc = sty_export_pwcmp(s, ov.pwcmp, err, err_size);
 	} else {
 		size_t rows;
-		if (sty_import_long(s, o.file, &rows, err, sizeof err)) {
-			fprintf(stderr, "taslab study import: %s\n", err);
-			status = CLI_EXIT_USAGE;
-		} else {
-			fprintf(stderr, "taslab: imported %zu ratings into %s\n", rows, o.db);
+		if (!(rc = sty_import_long(s, ctx->pos[0], &rows, err, err_size))) {
+			fprintf(stderr, "taslab: imported %zu ratings into %s\n", rows, ov.db);
 		}
 	}
 	sty_close(&s);
-	return status;
+	return rc;
 }
 
-const cli_command cli_cmd_study = {"study", "pairwise-comparison studies: design, serve, tally, export/import", study_run,
-				   study_usage};
+#define STUDY_SUB .opts_size = sizeof(study_opts), .defaults = study_defaults, .validate = study_validate, .run = study_main
+
+static const cli_command study_design = {
+	.name = "study design",
+	.summary = "randomised within-subject plan from the pairs.json sets of a stimulus folder",
+	.synopsis = "taslab study design --db STUDY.db --stimuli DIR --participants N [--seed S] [--training K] [--catch K] "
+		    "[--break-every N]",
+	.options = design_options,
+	STUDY_SUB,
+};
+static const cli_command study_links = {
+	.name = "study links",
+	.summary = "one unguessable link per participant",
+	.synopsis = "taslab study links --db STUDY.db [--base URL]",
+	.options = links_options,
+	STUDY_SUB,
+};
+static const cli_command study_serve = {
+	.name = "study serve",
+	.summary = "run the study in the browser (prints the admin token; Ctrl-C stops it)",
+	.synopsis = "taslab study serve --db STUDY.db [--port P] [--bind ADDR] [--threads N]",
+	.options = serve_options,
+	STUDY_SUB,
+};
+static const cli_command study_tally = {
+	.name = "study tally",
+	.summary = "Q, p_ref, JND, RM-ANOVA, post hoc tests, screening, JOD, Fig. 3",
+	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--bootstrap B] [--seed S]",
+	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, tables.md, fig3.png.",
+	.options = tally_options,
+	STUDY_SUB,
+};
+static const cli_command study_export = {
+	.name = "study export",
+	.summary = "long-format ratings CSV (and the pwcmp layout)",
+	.synopsis = "taslab study export --db STUDY.db --out RATINGS.csv [--pwcmp PAIRS.csv]",
+	.options = export_options,
+	STUDY_SUB,
+};
+static const cli_command study_import = {
+	.name = "study import",
+	.summary = "load a long-format ratings file into a new study (validated; all or nothing)",
+	.synopsis = "taslab study import --db STUDY.db RATINGS.csv",
+	.options = db_option,
+	.min_pos = 1,
+	.max_pos = 1,
+	.pos_help = "RATINGS.csv",
+	STUDY_SUB,
+};
+
+static const cli_command *const study_subs[] = {&study_design, &study_links, &study_serve, &study_tally, &study_export,
+						&study_import, NULL};
+
+const cli_command cli_cmd_study = {
+	.name = "study",
+	.summary = "pairwise-comparison studies: design, serve, tally, export/import",
+	.synopsis = "taslab study <subcommand> --db STUDY.db [options]",
+	.subcommands = study_subs,
+};

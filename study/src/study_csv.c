@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "study_internal.h"
+#include "taslab/tl_fs.h"
 
 static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
 
@@ -18,49 +19,33 @@ static const char *ANSWERS_SQL =
 	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
 	" WHERE t.kind = 'test' ORDER BY p.id, t.idx";
 
-static int open_tmp(const char *path, char *tmp, size_t tmp_size, FILE **f, char *err, size_t err_size)
+/* Opens the output (atomic-write helper, tl_fs.h) and the answers query shared by both export formats. The
+ * output may not be the study database itself (or its journal): that would replace every answer. */
+static int begin_export(sty *s, const char *path, tl_atomic *out, sqlite3_stmt **st, char *err, size_t err_size)
 {
-	snprintf(tmp, tmp_size, "%s.tmp%ld", path, (long)getpid());
-	*f = fopen(tmp, "w");
-	if (!*f) {
-		snprintf(err, err_size, "%s: cannot write: %s", path, strerror(errno));
-		return STY_ERR_ARG;
-	}
-	return STY_OK;
-}
-
-static int close_tmp(FILE *f, const char *tmp, const char *path, char *err, size_t err_size)
-{
-	if (fclose(f) != 0 || rename(tmp, path) != 0) {
-		unlink(tmp);
-		snprintf(err, err_size, "%s: write failed: %s", path, strerror(errno));
-		return STY_ERR_ARG;
-	}
-	return STY_OK;
-}
-
-/* Opens the temporary output file and the answers query shared by both export formats. */
-static int begin_export(sty *s, const char *path, char *tmp, size_t tmp_size, FILE **f, sqlite3_stmt **st, char *err,
-			size_t err_size)
-{
-	if (open_tmp(path, tmp, tmp_size, f, err, err_size))
-		return STY_ERR_ARG;
+	char wal[TL_PATH_MAX];
+	snprintf(wal, sizeof wal, "%s-wal", sty_path(s));
+	if (tl_same_file(path, sty_path(s)) || !strcmp(path, sty_path(s)) || tl_same_file(path, wal))
+		return tl_error(err, err_size, TL_ERR_ARG, "%s is the study database: exporting there would replace every answer "
+				"(choose another --out)", path);
+	int rc = tl_atomic_open(out, path, err, err_size);
+	if (rc)
+		return rc;
 	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, st, NULL)) {
-		fclose(*f);
-		unlink(tmp);
+		tl_atomic_abort(out);
 		return sty_db_fail(s, err, err_size, "export");
 	}
-	return STY_OK;
+	return TL_OK;
 }
 
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 {
-	char tmp[4200];
-	FILE *f;
+	tl_atomic out;
 	sqlite3_stmt *st;
-	int rc = begin_export(s, path, tmp, sizeof tmp, &f, &st, err, err_size);
+	int rc = begin_export(s, path, &out, &st, err, err_size);
 	if (rc)
 		return rc;
+	FILE *f = out.f;
 	fprintf(f, "%s\n", LONG_HEADER);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
@@ -75,17 +60,17 @@ int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 		fputc('\n', f);
 	}
 	sqlite3_finalize(st);
-	return close_tmp(f, tmp, path, err, err_size);
+	return tl_atomic_commit(&out, err, err_size);
 }
 
 int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 {
-	char tmp[4200];
-	FILE *f;
+	tl_atomic out;
 	sqlite3_stmt *st;
-	int rc = begin_export(s, path, tmp, sizeof tmp, &f, &st, err, err_size);
+	int rc = begin_export(s, path, &out, &st, err, err_size);
 	if (rc)
 		return rc;
+	FILE *f = out.f;
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		char cond[64], grp[160];
@@ -104,7 +89,7 @@ int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 		}
 	}
 	sqlite3_finalize(st);
-	return close_tmp(f, tmp, path, err, err_size);
+	return tl_atomic_commit(&out, err, err_size);
 }
 
 /* ------------------------------------------------------------------ import */
@@ -233,7 +218,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	FILE *f = fopen(path, "r");
 	if (!f) {
 		snprintf(err, err_size, "%s: %s", path, strerror(errno));
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sqlite3_stmt *st;
 	sqlite3_prepare_v2(s->db, "SELECT count(*) FROM participants", -1, &st, NULL);
@@ -242,12 +227,12 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	if (used) {
 		fclose(f);
 		snprintf(err, err_size, "%s already holds participants; import into a new study database", s->path);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	char line[4096], why[256];
 	row *rows = NULL;
 	size_t n = 0, lineno = 1;
-	int rc = STY_ERR_ARG;
+	int rc = TL_ERR_ARG;
 	if (!fgets(line, sizeof line, f) || strncmp(line, LONG_HEADER, strlen(LONG_HEADER)) ||
 	    (line[strlen(LONG_HEADER)] != '\n' && line[strlen(LONG_HEADER)] != '\r' && line[strlen(LONG_HEADER)])) {
 		snprintf(err, err_size, "%s:1: the header must be exactly: %s", path, LONG_HEADER);
@@ -362,7 +347,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 		goto done;
 	}
 	*rows_out = n;
-	rc = STY_OK;
+	rc = TL_OK;
 done:
 	free(rows);
 	fclose(f);

@@ -15,6 +15,8 @@
 #include <sys/stat.h>
 
 #include "study_internal.h"
+#include "taslab/pairs.h"
+#include "taslab/tl_fs.h"
 
 static const char *SCHEMA =
 	"CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);"
@@ -33,7 +35,7 @@ static const char *SCHEMA =
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what)
 {
 	snprintf(err, err_size, "%s: %s: %s", s->path, what, sqlite3_errmsg(s->db));
-	return STY_ERR_DB;
+	return TL_ERR_DB;
 }
 
 static int meta_get(sty *s, const char *key, char *val, size_t size)
@@ -79,12 +81,12 @@ int sty_open(const char *path, bool create, sty **out, char *err, size_t err_siz
 	struct stat sb;
 	if (!create && stat(path, &sb) != 0) {
 		snprintf(err, err_size, "%s: no such study database (create one with 'taslab study design')", path);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sty *s = calloc(1, sizeof *s);
 	if (!s) {
 		snprintf(err, err_size, "out of memory");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	snprintf(s->path, sizeof s->path, "%s", path);
 	pthread_mutex_init(&s->lock, NULL);
@@ -92,7 +94,7 @@ int sty_open(const char *path, bool create, sty **out, char *err, size_t err_siz
 	if (sqlite3_open_v2(path, &s->db, flags, NULL) != SQLITE_OK) {
 		snprintf(err, err_size, "%s: cannot open: %s", path, s->db ? sqlite3_errmsg(s->db) : "out of memory");
 		sty_close(&s);
-		return STY_ERR_DB;
+		return TL_ERR_DB;
 	}
 	sqlite3_busy_timeout(s->db, 5000);
 	/* Durability: WAL with synchronous=FULL fsyncs the log at every commit, so an answer acknowledged after
@@ -104,18 +106,18 @@ int sty_open(const char *path, bool create, sty **out, char *err, size_t err_siz
 		snprintf(err, err_size, "%s: not a taslab study database (%s)", path, msg ? msg : "?");
 		sqlite3_free(msg);
 		sty_close(&s);
-		return STY_ERR_DB;
+		return TL_ERR_DB;
 	}
 	if (meta_get(s, "admin_token", s->token, sizeof s->token)) {
 		if (random_hex(s->token) || meta_set(s, "admin_token", s->token) || meta_set(s, "taslab_study", "1")) {
 			snprintf(err, err_size, "%s: cannot initialise the study", path);
 			sty_close(&s);
-			return STY_ERR_DB;
+			return TL_ERR_DB;
 		}
 	}
 	meta_get(s, "stimuli", s->stimuli, sizeof s->stimuli);
 	*out = s;
-	return STY_OK;
+	return TL_OK;
 }
 
 void sty_close(sty **ps)
@@ -131,6 +133,7 @@ void sty_close(sty **ps)
 }
 
 const char *sty_stimuli(const sty *s) { return s->stimuli; }
+const char *sty_path(const sty *s) { return s->path; }
 const char *sty_admin_token(const sty *s) { return s->token; }
 
 /* ------------------------------------------------------------------ design */
@@ -142,56 +145,54 @@ typedef struct cond {
 	int is_catch;
 } cond;
 
-/* Reads one pairs.json (from `taslab pair`) into conditions; `rel` is its folder relative to the stimuli. */
+/* Reads one pairs.json (from `taslab pair`, output/pairs.h) into conditions; `rel` is its folder relative to
+ * the stimuli. Every clip it names must exist, so a session never fails midway on a missing file. */
 static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, char *err, size_t err_size)
 {
-	json_error_t je;
-	json_t *j = json_load_file(file, 0, &je);
-	if (!j) {
-		snprintf(err, err_size, "%s:%d: not valid JSON: %s", file, je.line, je.text);
-		return STY_ERR_ARG;
+	pairs_set set;
+	int rc = pairs_read(file, &set, err, err_size);
+	if (rc)
+		return rc;
+	if (strcmp(set.camera_motion, "stationary") && strcmp(set.camera_motion, "moving")) {
+		pairs_free(&set);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: camera_motion must be stationary or moving", file);
 	}
-	const char *scene = json_string_value(json_object_get(j, "scene"));
-	const char *camera = json_string_value(json_object_get(j, "camera"));
-	const char *motion = json_string_value(json_object_get(j, "camera_motion"));
-	const char *ref = json_string_value(json_object_get(json_object_get(j, "reference"), "clip"));
-	json_t *conds = json_object_get(j, "conditions");
-	if (!scene || !camera || !motion || !ref || !json_is_array(conds) ||
-	    (strcmp(motion, "stationary") && strcmp(motion, "moving"))) {
-		json_decref(j);
-		snprintf(err, err_size, "%s: not a taslab pairs.json (scene, camera, camera_motion, reference.clip, conditions)", file);
-		return STY_ERR_ARG;
-	}
-	for (size_t i = 0; i < json_array_size(conds); i++) {
-		json_t *c = json_array_get(conds, i);
-		const char *method = json_string_value(json_object_get(c, "method"));
-		const char *clip = json_string_value(json_object_get(c, "clip"));
-		json_t *T = json_object_get(c, "T");
-		if (!method || !clip || strstr(clip, "..") || strstr(ref, "..") || clip[0] == '/' || ref[0] == '/') {
-			json_decref(j);
-			snprintf(err, err_size, "%s: conditions[%zu] needs method and a relative clip path inside the set", file, i);
-			return STY_ERR_ARG;
+	char dir[TL_PATH_MAX], clip[TL_PATH_MAX];
+	snprintf(dir, sizeof dir, "%s", file);
+	char *slash = strrchr(dir, '/');
+	if (slash)
+		*slash = 0;
+	else
+		snprintf(dir, sizeof dir, ".");
+	for (size_t i = 0; i <= set.count; i++) {
+		snprintf(clip, sizeof clip, "%s/%s", dir, i < set.count ? set.conditions[i].clip : set.ref_clip);
+		if (!tl_is_file(clip)) {
+			pairs_free(&set);
+			return tl_error(err, err_size, TL_ERR_INPUT, "%s: clip %s does not exist (render the set again with 'taslab pair')",
+					file, clip);
 		}
+	}
+	for (size_t i = 0; i < set.count; i++) {
+		const pairs_condition *c = &set.conditions[i];
 		cond *nc = realloc(*cs, (*n + 1) * sizeof *nc);
 		if (!nc) {
-			json_decref(j);
-			snprintf(err, err_size, "out of memory");
-			return STY_ERR_ARG;
+			pairs_free(&set);
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 		}
 		*cs = nc;
 		cond *x = &nc[(*n)++];
 		memset(x, 0, sizeof *x);
-		snprintf(x->scene, sizeof x->scene, "%s", scene);
-		snprintf(x->camera, sizeof x->camera, "%s", camera);
-		snprintf(x->motion, sizeof x->motion, "%s", motion);
-		snprintf(x->method, sizeof x->method, "%s", method);
-		x->T = json_is_number(T) ? json_number_value(T) : NAN;
-		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", ref);
-		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", clip);
-		x->is_catch = !strcmp(method, "ref"); /* reference against itself */
+		snprintf(x->scene, sizeof x->scene, "%s", set.scene);
+		snprintf(x->camera, sizeof x->camera, "%s", set.camera);
+		snprintf(x->motion, sizeof x->motion, "%s", set.camera_motion);
+		snprintf(x->method, sizeof x->method, "%s", c->method);
+		x->T = c->T;
+		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", set.ref_clip);
+		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", c->clip);
+		x->is_catch = !strcmp(c->method, "ref"); /* reference against itself */
 	}
-	json_decref(j);
-	return STY_OK;
+	pairs_free(&set);
+	return TL_OK;
 }
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
@@ -200,14 +201,14 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 {
 	cond *cs = NULL;
 	size_t nc = 0;
-	int rc = STY_ERR_ARG;
+	int rc = TL_ERR_ARG;
 	char **sets = NULL;
 	size_t nsets = 0;
 	gsl_rng *rng = NULL;
 	memset(out, 0, sizeof *out);
 	if (!d->stimuli || d->participants < 1 || d->participants > 100000) {
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sqlite3_stmt *cnt;
 	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM conditions) + (SELECT count(*) FROM participants)", -1, &cnt, NULL);
@@ -215,12 +216,12 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	sqlite3_finalize(cnt);
 	if (used) {
 		snprintf(err, err_size, "%s already holds a study design; use a new --db file", s->path);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	char root[4096];
 	if (!realpath(d->stimuli, root)) {
 		snprintf(err, err_size, "%s: %s (give the folder that holds the pairs.json sets)", d->stimuli, strerror(errno));
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	/* Sets: ROOT/pairs.json and ROOT/<name>/pairs.json, in name order. */
 	char p[8192];
@@ -253,7 +254,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		snprintf(p, sizeof p, "%s%s%s/pairs.json", root, sets[i][0] ? "/" : "", sets[i]);
 		if ((rc = read_pairs(p, sets[i], &cs, &nc, err, err_size)))
 			goto done;
-		rc = STY_ERR_ARG;
+		rc = TL_ERR_ARG;
 	}
 	size_t ntest = 0, ncatch = 0;
 	for (size_t i = 0; i < nc; i++)
@@ -389,20 +390,19 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	/* Session length: clip durations from the first set's pairs.json frames and fps. */
 	double clip_s = 5.0;
 	snprintf(p, sizeof p, "%s%s%s/pairs.json", root, sets[0][0] ? "/" : "", sets[0]);
-	json_error_t je;
-	json_t *j = json_load_file(p, 0, &je);
-	json_t *fr = json_object_get(j, "frames");
-	double fps = json_number_value(json_object_get(j, "fps"));
-	if (fps > 0 && json_array_size(fr) == 2)
-		clip_s = (double)(json_integer_value(json_array_get(fr, 1)) - json_integer_value(json_array_get(fr, 0)) + 1) / fps;
-	json_decref(j);
+	pairs_set first;
+	char why[256];
+	if (!pairs_read(p, &first, why, sizeof why)) {
+		clip_s = (double)(first.last_frame - first.first_frame + 1) / first.fps;
+		pairs_free(&first);
+	}
 	double ans = d->answer_s > 0 ? d->answer_s : 4.0, gap = d->gap_s > 0 ? d->gap_s : 0.5;
 	out->conditions = (uint32_t)nc;
 	out->sets = (uint32_t)nsets;
 	out->participants = d->participants;
 	out->breaks = breaks;
 	out->session_minutes = (out->trials_per_participant * (2 * clip_s + gap + ans) + 30.0 * breaks) / 60.0;
-	rc = STY_OK;
+	rc = TL_OK;
 done:
 	gsl_rng_free(rng);
 	for (size_t i = 0; i < nsets; i++)
@@ -427,7 +427,7 @@ int sty_participant_codes(sty *s, char ***codes, size_t *n, char *err, size_t er
 		(*codes)[(*n)++] = strdup((const char *)sqlite3_column_text(st, 0));
 	}
 	sqlite3_finalize(st);
-	return STY_OK;
+	return TL_OK;
 }
 
 static int64_t participant_id(sty *s, const char *code)
@@ -447,12 +447,12 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 {
 	memset(t, 0, sizeof *t);
 	pthread_mutex_lock(&s->lock);
-	int rc = STY_OK;
+	int rc = TL_OK;
 	int64_t pid = participant_id(s, code);
 	sqlite3_stmt *st = NULL;
 	if (pid < 0) {
 		snprintf(err, err_size, "unknown participant");
-		rc = STY_ERR_NOTFOUND;
+		rc = TL_ERR_NOTFOUND;
 		goto done;
 	}
 	if (sqlite3_prepare_v2(s->db,
@@ -498,15 +498,15 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_
 {
 	if (answer < -2 || answer > 2) {
 		snprintf(err, err_size, "answer must be an integer from -2 to 2");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	pthread_mutex_lock(&s->lock);
-	int rc = STY_OK;
+	int rc = TL_OK;
 	sqlite3_stmt *st = NULL;
 	int64_t pid = participant_id(s, code);
 	if (pid < 0) {
 		snprintf(err, err_size, "unknown participant");
-		rc = STY_ERR_NOTFOUND;
+		rc = TL_ERR_NOTFOUND;
 		goto done;
 	}
 	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
@@ -519,12 +519,12 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_
 	}
 	if (sqlite3_column_int(st, 0) == 0) {
 		snprintf(err, err_size, "no trial %u for this participant", trial);
-		rc = STY_ERR_NOTFOUND;
+		rc = TL_ERR_NOTFOUND;
 		goto done;
 	}
 	if (sqlite3_column_int(st, 1) != 0) {
 		snprintf(err, err_size, "trial %u was answered already", trial);
-		rc = STY_ERR_CONFLICT;
+		rc = TL_ERR_CONFLICT;
 		goto done;
 	}
 	sqlite3_finalize(st);
@@ -542,7 +542,7 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_
 	int r = sqlite3_step(st);
 	if (r == SQLITE_CONSTRAINT) {
 		snprintf(err, err_size, "trial %u was answered already", trial);
-		rc = STY_ERR_CONFLICT;
+		rc = TL_ERR_CONFLICT;
 	} else if (r != SQLITE_DONE) {
 		rc = sty_db_fail(s, err, err_size, "storing the answer");
 	}

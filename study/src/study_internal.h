@@ -15,7 +15,7 @@ struct sty {
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
 };
 
-/* Formats "DB: what: sqlite message" into err; returns STY_ERR_DB. */
+/* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);
 
 #endif

@@ -181,10 +181,10 @@ static enum MHD_Result handle_answer(struct sty_server *sv, struct MHD_Connectio
 			    json_is_integer(rt) ? json_integer_value(rt) : -1, err, sizeof err);
 	json_decref(j);
 	switch (rc) {
-	case STY_OK: return send_json(c, json_pack("{s:b}", "ok", 1));
-	case STY_ERR_ARG: return send_error(c, 400, err);
-	case STY_ERR_NOTFOUND: return send_error(c, 404, err);
-	case STY_ERR_CONFLICT: return send_error(c, 409, err);
+	case TL_OK: return send_json(c, json_pack("{s:b}", "ok", 1));
+	case TL_ERR_ARG: return send_error(c, 400, err);
+	case TL_ERR_NOTFOUND: return send_error(c, 404, err);
+	case TL_ERR_CONFLICT: return send_error(c, 409, err);
 	default: return send_error(c, 500, err);
 	}
 }
@@ -238,7 +238,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c, const char *
 			char err[256];
 			int rc = sty_next_trial(sv->study, cb, &t, err, sizeof err);
 			if (rc)
-				return send_error(c, rc == STY_ERR_NOTFOUND ? 404 : 500, err);
+				return send_error(c, rc == TL_ERR_NOTFOUND ? 404 : 500, err);
 			if (t.done)
 				return send_json(c, json_pack("{s:b, s:i, s:i}", "done", 1, "total", t.total, "answered", t.answered));
 			return send_json(c, json_pack("{s:b, s:i, s:i, s:i, s:s, s:s, s:s, s:b}", "done", 0, "index", t.index, "total",
@@ -279,24 +279,24 @@ int sty_server_start(sty *s, const char *bind_addr, uint16_t port, unsigned thre
 	*out = NULL;
 	if (!sty_stimuli(s)[0]) {
 		snprintf(err, err_size, "this study has no stimulus folder (an imported study cannot be served)");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sty_server *sv = calloc(1, sizeof *sv);
 	if (!sv) {
 		snprintf(err, err_size, "out of memory");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sv->study = s;
 	if (!realpath(sty_stimuli(s), sv->root)) {
 		snprintf(err, err_size, "%s: stimulus folder missing: %s", sty_stimuli(s), strerror(errno));
 		free(sv);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(port)};
 	if (inet_pton(AF_INET, bind_addr ? bind_addr : "127.0.0.1", &sa.sin_addr) != 1) {
 		snprintf(err, err_size, "--bind '%s' is not an IPv4 address", bind_addr);
 		free(sv);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_ERROR_LOG, 0, NULL, NULL, handler, sv,
 				   MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE,
@@ -305,12 +305,12 @@ int sty_server_start(sty *s, const char *bind_addr, uint16_t port, unsigned thre
 	if (!sv->mhd) {
 		snprintf(err, err_size, "cannot listen on %s:%u (port in use?)", bind_addr ? bind_addr : "127.0.0.1", port);
 		free(sv);
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
 	const union MHD_DaemonInfo *info = MHD_get_daemon_info(sv->mhd, MHD_DAEMON_INFO_BIND_PORT);
 	sv->port = info ? info->port : port;
 	*out = sv;
-	return STY_OK;
+	return TL_OK;
 }
 
 uint16_t sty_server_port(const sty_server *sv) { return sv->port; }

@@ -22,7 +22,8 @@
 
 #include "study_internal.h"
 #include "taslab/metrics.h"
-#include "taslab/run.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
 
 /* ------------------------------------------------------------------ repeated-measures ANOVA */
 
@@ -78,14 +79,14 @@ static void effect_from_scores(const double *z, size_t n, size_t m, sty_anova_ef
 int sty_rm_anova2(const double *y, size_t n, size_t a, size_t b, sty_anova_effect out[3])
 {
 	if (n < 2 || a < 1 || b < 1)
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	size_t cells = a * b;
 	double *ca = calloc(a * (a > 1 ? a - 1 : 1), sizeof *ca), *cb = calloc(b * (b > 1 ? b - 1 : 1), sizeof *cb);
 	size_t ma = a - 1, mb = b - 1;
 	double *M[3];
 	size_t m[3] = {ma, mb, ma * mb};
 	if (!ca || !cb)
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	helmert(a, ca);
 	helmert(b, cb);
 	/* Cell contrast matrices: A = C_A (x) 1_b/sqrt(b), B = 1_a/sqrt(a) (x) C_B, AB = C_A (x) C_B. */
@@ -114,7 +115,7 @@ int sty_rm_anova2(const double *y, size_t n, size_t a, size_t b, sty_anova_effec
 	}
 	free(ca);
 	free(cb);
-	return STY_OK;
+	return TL_OK;
 }
 
 /* ------------------------------------------------------------------ data */
@@ -217,7 +218,7 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 		if (ci < 0 || !no) {
 			sqlite3_finalize(st);
 			snprintf(err, err_size, "out of memory");
-			return STY_ERR_ARG;
+			return TL_ERR_ARG;
 		}
 		d->o = no;
 		int answer = sqlite3_column_int(st, 7);
@@ -228,9 +229,9 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 	if (d->n == 0) {
 		snprintf(err, err_size, "%s: no answered test trials to tally%s", s->path,
 			 d->nflagged ? " (all observers were flagged; --keep-flagged keeps them)" : "");
-		return STY_ERR_ARG;
+		return TL_ERR_ARG;
 	}
-	return STY_OK;
+	return TL_OK;
 }
 
 /* Selection of observations for a summary row. */
@@ -386,17 +387,18 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 {
 	char path[4200];
 	data d;
-	int rc = STY_ERR_ARG;
-	if (run_mkdirs(td->out, err, err_size))
-		return STY_ERR_ARG;
+	int rc = TL_ERR_ARG;
+	if ((rc = tl_mkdirs(td->out, err, err_size)))
+		return rc;
+	tl_atomic obs;
 	snprintf(path, sizeof path, "%s/observers.csv", td->out);
-	FILE *fo = fopen(path, "w");
-	if (!fo) {
-		snprintf(err, err_size, "%s: cannot write", path);
-		return STY_ERR_ARG;
-	}
-	rc = load(s, td, &d, fo, err, err_size);
-	fclose(fo);
+	if ((rc = tl_atomic_open(&obs, path, err, err_size)))
+		return rc;
+	rc = load(s, td, &d, obs.f, err, err_size);
+	if (rc)
+		tl_atomic_abort(&obs);
+	else
+		rc = tl_atomic_commit(&obs, err, err_size);
 	if (rc) {
 		free(d.o), free(d.c), free(d.flagged);
 		return rc;
@@ -410,8 +412,10 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			seen |= same_mt(&mts[k], &d.c[i]);
 		if (!seen) {
 			condk *nm = realloc(mts, (nmt + 1) * sizeof *nm);
-			if (!nm)
+			if (!nm) {
+				rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 				goto done;
+			}
 			mts = nm;
 			mts[nmt++] = d.c[i];
 		}
@@ -419,13 +423,14 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL;
 	const char *names[6] = {"conditions.csv", "anova.csv", "posthoc.csv", "jod.csv", "tables.md", "fig3.csv"};
 	FILE **files[6] = {&fc, &fa, &fp, &fj, &fmd, &ff};
+	tl_atomic outs[6] = {0};
 	for (int k = 0; k < 6; k++) {
 		snprintf(path, sizeof path, "%s/%s", td->out, names[k]);
-		if (!(*files[k] = fopen(path, "w"))) {
-			snprintf(err, err_size, "%s: cannot write", path);
+		if ((rc = tl_atomic_open(&outs[k], path, err, err_size)))
 			goto close;
-		}
+		*files[k] = outs[k].f;
 	}
+	rc = TL_ERR_ARG;
 	json_t *jc = json_array(), *ja = json_array();
 	fprintf(fc, "method,T,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd\n");
 	fprintf(fa, "method,T,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
@@ -588,19 +593,20 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	fprintf(fmd, "\nQ: mean reference-relative rating (+2 = reference much better); p_ref: share of answers preferring "
 		     "the reference (ties count half); JND = Phi^-1(p_ref)/Phi^-1(0.75).\n");
 	snprintf(path, sizeof path, "%s/conditions.json", td->out);
-	json_dump_file(jc, path, JSON_INDENT(2));
+	rc = tl_json_write(path, jc, err, err_size);
 	snprintf(path, sizeof path, "%s/anova.json", td->out);
-	json_dump_file(ja, path, JSON_INDENT(2));
+	if (!rc)
+		rc = tl_json_write(path, ja, err, err_size);
 	json_decref(jc);
 	json_decref(ja);
-	rc = STY_OK;
 close:
-	for (int k = 0; k < 6; k++)
-		if (*files[k] && fclose(*files[k]) != 0 && rc == STY_OK) {
-			snprintf(err, err_size, "%s/%s: write error", td->out, names[k]);
-			rc = STY_ERR_ARG;
-		}
-	if (rc == STY_OK) {
+	for (int k = 0; k < 6; k++) {
+		if (rc == TL_OK)
+			rc = tl_atomic_commit(&outs[k], err, err_size);
+		else
+			tl_atomic_abort(&outs[k]);
+	}
+	if (rc == TL_OK) {
 		/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). */
 		snprintf(path, sizeof path, "%s/fig3.gp", td->out);
 		FILE *g = fopen(path, "w");

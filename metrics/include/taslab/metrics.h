@@ -21,6 +21,7 @@
 #ifndef TASLAB_METRICS_H
 #define TASLAB_METRICS_H
 
+#include "taslab/tl_error.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -31,11 +32,6 @@ extern "C" {
 #define MTR_THRESHOLD_COUNT 6
 extern const double mtr_thresholds[MTR_THRESHOLD_COUNT]; /* 2, 4, 8, 16, 32, 64 */
 
-enum {
-	MTR_OK = 0,
-	MTR_ERR_ARG = -1,   /* sizes differ, empty input, ... */
-	MTR_ERR_NOMEM = -2,
-};
 
 typedef struct mtr_image {
 	uint32_t width, height;

@@ -20,7 +20,7 @@ typedef struct mtr_diff_desc {
 	const char *ref, *test; /* run folders (their frames/) or folders of images */
 	const char *out;        /* output folder */
 	mtr_format format;      /* PNG: the display frames as stored; EXR: through `colour` (unquantised) */
-	const colour *colour;   /* required for EXR */
+	const struct colour *colour;   /* required for EXR */
 	bool heatmaps;          /* DIR/heatmaps/NNNNNN.png for every frame */
 	double heatmap_max;     /* colour scale maximum (code values); 0: 64 */
 	bool plots;             /* DIR/plots/ PNG plots through gnuplot (skipped with a note if gnuplot is missing) */

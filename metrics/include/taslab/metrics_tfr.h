@@ -1,4 +1,4 @@
-/* metrics_tfr.h — outputs of the TFR analysis (taslab/analyze.h; DESIGN sections 4 and 6, paper Figs. 4,
+/* metrics_tfr.h — outputs of the TFR analysis (taslab/analysis.h, produced by the renderer's analyze.h; DESIGN sections 4 and 6, paper Figs. 4,
  * 7, 8, 9): CSV and JSON for every figure, gnuplot plots and gradient heatmaps for people.
  *
  * Every file is written under a temporary name and renamed when complete; the JSON summary is written
@@ -9,7 +9,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "taslab/analyze.h"
+#include "taslab/analysis.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -14,6 +14,7 @@
 #ifndef TASLAB_STUDY_H
 #define TASLAB_STUDY_H
 
+#include "taslab/tl_error.h"
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -24,19 +25,14 @@ extern "C" {
 
 typedef struct sty sty;
 
-enum {
-	STY_OK = 0,
-	STY_ERR_ARG = -1,      /* bad input (the message says what) */
-	STY_ERR_DB = -2,       /* SQLite failed */
-	STY_ERR_CONFLICT = -3, /* e.g. a trial answered already */
-	STY_ERR_NOTFOUND = -4,
-};
 
 /* Opens (creating the schema when `create`) a study database. */
 int sty_open(const char *path, bool create, sty **out, char *err, size_t err_size);
 void sty_close(sty **s);
 /* The stimulus folder recorded at design time ("" for imported studies). */
 const char *sty_stimuli(const sty *s);
+/* The database file this study was opened from. */
+const char *sty_path(const sty *s);
 /* The admin token for export endpoints (random, created with the study). */
 const char *sty_admin_token(const sty *s);
 
@@ -74,8 +70,8 @@ typedef struct sty_trial {
 } sty_trial;
 
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size);
-/* Stores an answer durably (committed before returning). STY_ERR_CONFLICT if that trial was answered,
- * STY_ERR_NOTFOUND for an unknown participant or trial, STY_ERR_ARG for an answer outside -2..2. */
+/* Stores an answer durably (committed before returning). TL_ERR_CONFLICT if that trial was answered,
+ * TL_ERR_NOTFOUND for an unknown participant or trial, TL_ERR_ARG for an answer outside -2..2. */
 int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_ms, char *err, size_t err_size);
 
 /* Long-format ratings CSV (DESIGN section 7):

@@ -1,0 +1,297 @@
+/* fs.c — mkdir -p, atomic writes, temp-file cleanup, path checks (tl_fs.h). */
+#define _XOPEN_SOURCE 700 /* realpath */
+#include "taslab/tl_fs.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "taslab/tl_error.h"
+
+int tl_mkdirs(const char *path, char *err, size_t err_size)
+{
+	char buf[TL_PATH_MAX];
+	if (!path || !*path)
+		return tl_error(err, err_size, TL_ERR_ARG, "empty folder name");
+	if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: path too long", path);
+	for (char *p = buf + 1;; p++) {
+		if (*p == '/' || *p == 0) {
+			char c = *p;
+			*p = 0;
+			if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+				return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot create folder: %s (choose a writable --out)",
+						buf, strerror(errno));
+			struct stat sb;
+			if (stat(buf, &sb) != 0 || !S_ISDIR(sb.st_mode))
+				return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: exists and is not a folder (choose another --out)",
+						buf);
+			*p = c;
+			if (!c)
+				break;
+		}
+	}
+	return TL_OK;
+}
+
+/* The folder part of `path` ("." when there is none) into dir. */
+static void dir_of(const char *path, char *dir, size_t n)
+{
+	const char *slash = strrchr(path, '/');
+	if (!slash)
+		snprintf(dir, n, ".");
+	else if (slash == path)
+		snprintf(dir, n, "/");
+	else
+		snprintf(dir, n, "%.*s", (int)(slash - path), path);
+}
+
+int tl_atomic_open(tl_atomic *a, const char *path, char *err, size_t err_size)
+{
+	memset(a, 0, sizeof *a);
+	if (!path || !*path)
+		return tl_error(err, err_size, TL_ERR_ARG, "empty output file name");
+	const char *slash = strrchr(path, '/');
+	const char *base = slash ? slash + 1 : path;
+	if (!*base)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: names a folder, not a file", path);
+	if (snprintf(a->path, sizeof a->path, "%s", path) >= (int)sizeof a->path ||
+	    snprintf(a->tmp, sizeof a->tmp, "%.*s.%s.tmp.XXXXXX", (int)(base - path), path, base) >= (int)sizeof a->tmp)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: path too long", path);
+	int fd = mkstemp(a->tmp);
+	if (fd < 0)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(errno));
+	fchmod(fd, 0644);
+	a->open = true;
+	a->f = fdopen(fd, "wb");
+	if (!a->f) {
+		int e = errno;
+		close(fd);
+		tl_atomic_abort(a);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(e));
+	}
+	return TL_OK;
+}
+
+int tl_atomic_detach(tl_atomic *a, char *err, size_t err_size)
+{
+	if (a->f) {
+		int bad = fclose(a->f) != 0;
+		a->f = NULL;
+		if (bad) {
+			tl_atomic_abort(a);
+			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a->path, strerror(errno));
+		}
+	}
+	return TL_OK;
+}
+
+static void fsync_dir(const char *path)
+{
+	char dir[TL_PATH_MAX];
+	dir_of(path, dir, sizeof dir);
+	int fd = open(dir, O_RDONLY | O_DIRECTORY);
+	if (fd >= 0) {
+		fsync(fd); /* best effort: some file systems refuse fsync on folders */
+		close(fd);
+	}
+}
+
+int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size)
+{
+	if (!a->open)
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: commit without an open temporary file", a->path);
+	int e = 0;
+	if (a->f) {
+		if (fflush(a->f) != 0 || ferror(a->f))
+			e = errno ? errno : EIO;
+		if (!e && fsync(fileno(a->f)) != 0)
+			e = errno;
+		if (fclose(a->f) != 0 && !e)
+			e = errno ? errno : EIO;
+		a->f = NULL;
+	} else {
+		int fd = open(a->tmp, O_RDONLY);
+		if (fd < 0 || fsync(fd) != 0)
+			e = errno;
+		if (fd >= 0)
+			close(fd);
+	}
+	if (!e && rename(a->tmp, a->path) != 0)
+		e = errno;
+	if (e) {
+		tl_atomic_abort(a);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a->path, strerror(e));
+	}
+	a->open = false;
+	fsync_dir(a->path);
+	return TL_OK;
+}
+
+void tl_atomic_abort(tl_atomic *a)
+{
+	if (a->f) {
+		fclose(a->f);
+		a->f = NULL;
+	}
+	if (a->open) {
+		unlink(a->tmp);
+		a->open = false;
+	}
+}
+
+int tl_write_file(const char *path, const void *data, size_t size, char *err, size_t err_size)
+{
+	tl_atomic a;
+	int rc = tl_atomic_open(&a, path, err, err_size);
+	if (rc)
+		return rc;
+	if (size && fwrite(data, 1, size, a.f) != size) {
+		int e = errno;
+		tl_atomic_abort(&a);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(e));
+	}
+	return tl_atomic_commit(&a, err, err_size);
+}
+
+int tl_read_file(const char *path, size_t max_size, char **data, size_t *size, char *err, size_t err_size)
+{
+	*data = NULL;
+	if (size)
+		*size = 0;
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot read: %s", path, strerror(errno));
+	char *buf = NULL;
+	size_t len = 0, cap = 0;
+	int rc = TL_OK;
+	for (;;) {
+		if (len + 65536 + 1 > cap) {
+			size_t c = cap ? cap * 2 : 65536 + 1;
+			char *b = realloc(buf, c);
+			if (!b) {
+				rc = tl_error(err, err_size, TL_ERR_NOMEM, "%s: out of memory", path);
+				break;
+			}
+			buf = b;
+			cap = c;
+		}
+		size_t n = fread(buf + len, 1, 65536, f);
+		len += n;
+		if (len > max_size) {
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: larger than %zu bytes", path, max_size);
+			break;
+		}
+		if (n < 65536) {
+			if (ferror(f))
+				rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: read error", path);
+			break;
+		}
+	}
+	fclose(f);
+	if (rc) {
+		free(buf);
+		return rc;
+	}
+	buf[len] = 0;
+	*data = buf;
+	if (size)
+		*size = len;
+	return TL_OK;
+}
+
+/* ".NAME.tmp.XXXXXX" with six characters of mkstemp's alphabet at the end. */
+static bool is_temp_name(const char *n)
+{
+	size_t len = strlen(n);
+	if (n[0] != '.' || len < 1 + 1 + 5 + 6)
+		return false;
+	if (strncmp(n + len - 11, ".tmp.", 5) != 0)
+		return false;
+	for (size_t i = len - 6; i < len; i++) {
+		char c = n[i];
+		if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9')))
+			return false;
+	}
+	return true;
+}
+
+int tl_fs_clean_temps(const char *dir)
+{
+	DIR *d = opendir(dir);
+	if (!d)
+		return 0;
+	int n = 0;
+	struct dirent *e;
+	char p[TL_PATH_MAX];
+	while ((e = readdir(d)))
+		if (is_temp_name(e->d_name) && snprintf(p, sizeof p, "%s/%s", dir, e->d_name) < (int)sizeof p && tl_is_file(p) &&
+		    unlink(p) == 0)
+			n++;
+	closedir(d);
+	return n;
+}
+
+bool tl_is_dir(const char *path)
+{
+	struct stat sb;
+	return path && stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+bool tl_is_file(const char *path)
+{
+	struct stat sb;
+	return path && stat(path, &sb) == 0 && S_ISREG(sb.st_mode);
+}
+
+bool tl_same_file(const char *a, const char *b)
+{
+	struct stat sa, sb;
+	return a && b && stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* realpath of `p`, or of its deepest existing parent followed by the rest of the path. */
+static bool resolve(const char *p, char *out)
+{
+	char buf[TL_PATH_MAX], rest[TL_PATH_MAX] = "";
+	if (snprintf(buf, sizeof buf, "%s", p) >= (int)sizeof buf)
+		return false;
+	for (;;) {
+		char tmp[PATH_MAX];
+		if (realpath(buf, tmp)) {
+			int n = snprintf(out, TL_PATH_MAX, "%s%s", tmp, rest);
+			return n < TL_PATH_MAX;
+		}
+		char *slash = strrchr(buf, '/');
+		char nrest[TL_PATH_MAX];
+		if (!slash) {
+			if (!getcwd(tmp, sizeof tmp))
+				return false;
+			snprintf(nrest, sizeof nrest, "/%s%s", buf, rest);
+			return snprintf(out, TL_PATH_MAX, "%s%s", tmp, nrest) < TL_PATH_MAX;
+		}
+		snprintf(nrest, sizeof nrest, "%s%s", slash, rest);
+		snprintf(rest, sizeof rest, "%s", nrest);
+		if (slash == buf) {
+			snprintf(out, TL_PATH_MAX, "%s", rest);
+			return true;
+		}
+		*slash = 0;
+	}
+}
+
+bool tl_path_inside(const char *inner, const char *outer)
+{
+	char ri[TL_PATH_MAX], ro[TL_PATH_MAX];
+	if (!inner || !outer || !resolve(inner, ri) || !resolve(outer, ro))
+		return false;
+	size_t n = strlen(ro);
+	if (n == 1 && ro[0] == '/')
+		return true;
+	return !strncmp(ri, ro, n) && (ri[n] == 0 || ri[n] == '/');
+}

@@ -1,0 +1,73 @@
+/* commands.h — the options structs of the taslab commands (filled by cli_parse_command from each command's
+ * table), for the commands themselves and for the parser tests. */
+#ifndef TASLAB_CLI_COMMANDS_H
+#define TASLAB_CLI_COMMANDS_H
+
+#include "cli.h"
+#include "taslab/method.h"
+
+/* Method options given as --NAME [VALUE], applied to the chosen method after parsing. */
+typedef struct cli_method_args {
+	const char *name[16];
+	const char *value[16]; /* NULL for flags */
+	size_t n;
+} cli_method_args;
+
+/* The method options of every method as CLI options (--threshold, --max-age, ...), writing into a
+ * cli_method_args field at `offset`. */
+const cli_opt *cli_method_options(size_t offset);
+/* --method M (a method or a variant token) plus the --NAME options into a checked configuration. */
+int cli_method_config(const char *method, const cli_method_args *args, method_config *out, char *err, size_t err_size);
+
+typedef struct render_opts {
+	const char *method, *out;
+	bool no_exr, no_png, trivial_shading, quiet;
+	cli_method_args margs;
+	method_config config; /* from --method and the method options (validate) */
+} render_opts;
+
+typedef struct pair_opts {
+	const char *variants, *out;
+	method_config configs[32]; /* the parsed variants (validate) */
+	size_t count;
+} pair_opts;
+
+typedef struct tonemap_opts {
+	const char *out;
+} tonemap_opts;
+
+typedef struct clip_opts {
+	const char *out;
+} clip_opts;
+
+typedef struct metrics_diff_opts {
+	const char *ref, *test, *out, *format;
+	bool heatmaps, plots;
+	double heatmap_max;
+	uint32_t threads;
+} metrics_diff_opts;
+
+typedef struct metrics_runs_opts {
+	const char *out, *baseline;
+} metrics_runs_opts;
+
+typedef struct metrics_jnd_opts {
+	double n, ref_preferred, ties, confidence;
+} metrics_jnd_opts;
+
+typedef struct analyze_opts {
+	const char *frames, *thresholds, *out;
+	double step;
+	bool images, no_plots, quiet;
+	float T[8];
+	size_t nT;
+} analyze_opts;
+
+typedef struct study_opts {
+	const char *db, *stimuli, *out, *pwcmp, *base, *bind;
+	uint32_t participants, training, catch_trials, break_every, port, threads, bootstrap;
+	uint64_t seed;
+	bool keep_flagged;
+} study_opts;
+
+#endif

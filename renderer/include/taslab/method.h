@@ -1,0 +1,107 @@
+/* method.h — the rendering methods of DESIGN section 4 as a registry of plug-ins, their option tables,
+ * and the variant syntax that names one configuration in one token.
+ *
+ * Every method lives in one file (renderer/src/methods/<name>.c) that exports its frame operations and a
+ * table of options (name, help, type, default, range; libvmaf's feature-extractor shape). `taslab render
+ * --help`, the manifest's "method_options" and variant parsing are generated from these tables, so a new
+ * option is one table line and a new method one file plus one registry line (renderer/src/frame/methods.c).
+ *
+ * Variants (DESIGN section 4): NAME[-FLAG...][@T][/N], e.g. ref, tfr@8, tarc@8, tarc-oracle@8, rrc/4, sau/8.
+ * "@" sets the method's threshold option, "/" its period option, "-FLAG" one of its boolean options
+ * (the oracle variants). The variant's *method name* is NAME with its flags ("tarc-oracle"): the EXR
+ * attribute taslab:method and the method column of every CSV; T and the period have their own columns.
+ *
+ * No Vulkan here: the CLI, sweeps and tests use this header without a device.
+ */
+#ifndef TASLAB_METHOD_H
+#define TASLAB_METHOD_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/run.h"
+#include "taslab/tl_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum method_opt_type {
+	METHOD_OPT_FLOAT = 1, /* float */
+	METHOD_OPT_UINT,      /* uint32_t; `allowed` may restrict it to a list */
+	METHOD_OPT_BOOL,      /* bool, given as a flag (--oracle) */
+	METHOD_OPT_CHOICE,    /* uint32_t index into `choices` */
+} method_opt_type;
+
+typedef struct method_option {
+	const char *name;    /* "threshold": the CLI flag --threshold and the manifest key "threshold" */
+	const char *arg;     /* placeholder in help texts ("T"); NULL for flags */
+	const char *help;
+	method_opt_type type;
+	size_t offset;       /* of the value in the method's options struct */
+	double def, min, max;
+	const char *const *choices;  /* CHOICE: NULL-terminated names */
+	const uint32_t *allowed;     /* UINT: the only values allowed, terminated by 0 (NULL: any in range) */
+	char variant;        /* '@' or '/': the value's sigil in variants; '-': a flag written as a -NAME suffix */
+	bool variant_required; /* the variant token must carry it (tfr@8, not tfr) */
+} method_option;
+
+typedef struct method_info {
+	const char *name;
+	const char *summary;
+	bool available;               /* false: planned, listed in help, refused with a message */
+	const method_option *options; /* the method's option table */
+	size_t option_count;
+	size_t options_size;          /* sizeof the method's options struct (<= METHOD_OPTIONS_MAX_B) */
+} method_info;
+
+/* All methods in registry order (available ones first, then the planned ones). */
+const method_info *const *method_list(size_t *count);
+/* The method called `name`, or NULL. */
+const method_info *method_find(const char *name);
+
+#define METHOD_OPTIONS_MAX_B 64
+
+/* A method with values for all of its options. Zero-initialised it is invalid; fill it with
+ * method_config_init or method_config_parse_variant. Plain data: copy it freely. */
+typedef struct method_config {
+	const method_info *method;
+	union {
+		double align;
+		unsigned char bytes[METHOD_OPTIONS_MAX_B];
+	} values;
+	uint32_t given; /* bit i: option i was set explicitly */
+} method_config;
+
+/* The method `name` with default option values. TL_ERR_ARG for an unknown name, TL_ERR_UNSUPPORTED for a
+ * planned method. */
+int method_config_init(method_config *c, const char *name, char *err, size_t err_size);
+/* Sets option `option` (its table name) from text ("8", "bilinear"; flags: NULL or "1"/"true").
+ * TL_ERR_ARG when the method has no such option or the value is out of range (the message says which). */
+int method_config_set(method_config *c, const char *option, const char *value, char *err, size_t err_size);
+/* Checks that required options are set and values are consistent (before rendering). */
+int method_config_check(const method_config *c, char *err, size_t err_size);
+/* Parses a variant token (see above) into a checked configuration. */
+int method_config_parse_variant(method_config *c, const char *variant, char *err, size_t err_size);
+
+/* The canonical variant token ("tarc-oracle@8", "rrc/4", "ref") and the variant's method name ("tarc-oracle"). */
+void method_config_variant(const method_config *c, char *out, size_t out_size);
+void method_config_name(const method_config *c, char *out, size_t out_size);
+/* A file-name-safe id of the variant ("tarc-oracle-T8", "rrc-N4", "ref"). */
+void method_config_id(const method_config *c, char *out, size_t out_size);
+/* Values of the variant options: T (NAN when the method has none) and period N (0 when none). */
+double method_config_threshold(const method_config *c);
+uint32_t method_config_period(const method_config *c);
+/* Typed access by table name (for method files and tests); 0 / false / NAN when absent. */
+double method_config_number(const method_config *c, const char *option);
+bool method_config_flag(const method_config *c, const char *option);
+
+/* The option values as manifest entries (all options, defaults included); returns the count (<= max).
+ * String values point into the method's tables. */
+size_t method_config_run_options(const method_config *c, run_option *out, size_t max);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,47 @@
+/* colour.h — the display (view) transform through OpenColorIO, on the CPU and as GLSL for the GPU.
+ *
+ * T is defined on display-referred values (DESIGN section 3), so the renderer encodes inside its shaders
+ * with the GLSL OpenColorIO emits for the same processor the CPU path uses (metrics, `taslab tonemap`).
+ * Default (no config): ACES 1.0 SDR-video output transform to an sRGB display, built from OCIO
+ * BuiltinTransforms (OCIO 2.1 in Debian 12 ships no built-in config): scene-linear Rec.709 -> CIE XYZ D65
+ * (matrix) -> ACES2065-1 (inverse "UTILITY - ACES-AP0_to_CIE-XYZ-D65_BFD") -> "ACES-OUTPUT -
+ * ACES2065-1_to_CIE-XYZ-D65 - SDR-VIDEO_1.0" -> "DISPLAY - CIE-XYZ-D65_to_sRGB".
+ * With a config (`config_path`, else $OCIO): role scene_linear -> display/view (defaults: the config's).
+ *
+ * Errors: negative return, one line in `err`. Ownership: colour_create allocates, colour_destroy frees.
+ */
+#ifndef TASLAB_COLOUR_H
+#define TASLAB_COLOUR_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/tl_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct colour colour;
+
+typedef struct colour_desc {
+	const char *config_path; /* NULL: $OCIO if set, else the built-in ACES default */
+	const char *display;     /* NULL: the config's default display */
+	const char *view;        /* NULL: the display's default view */
+	int ignore_env;          /* do not read $OCIO (tests) */
+} colour_desc;
+
+int colour_create(const colour_desc *desc, colour **out, char *err, size_t err_size);
+void colour_destroy(colour **c);
+/* One line naming the transform, e.g. "ACES 1.0 SDR-video -> sRGB (OCIO 2.1.2 builtins)". */
+const char *colour_name(const colour *c);
+/* GLSL (Vulkan GLSL 4.60 compatible) defining `vec4 ocio_display(vec4 linear_rgba)`; no uniforms or
+ * textures (creation fails with a clear message for a config that would need them). */
+const char *colour_glsl(const colour *c);
+/* Applies the transform in place to `n` RGB(A) float pixels (channels 3 or 4, alpha untouched). */
+void colour_apply(const colour *c, float *pixels, size_t n, int channels);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,45 @@
+/* imageio.h — image files through OpenImageIO (C shim over the C++ API).
+ *
+ * Writers are atomic: the file is written under a temporary name in the same folder and renamed
+ * into place, so an interrupted run never leaves a truncated image under the final name.
+ * Errors: negative return and a one-line message in `err`.
+ */
+#ifndef TASLAB_IMAGEIO_H
+#define TASLAB_IMAGEIO_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/tl_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct imageio_attr {
+	const char *name;  /* e.g. "taslab:scene" */
+	const char *value;
+} imageio_attr;
+
+/* Scene-linear RGBA half-float EXR (ZIP compression) with string attributes. */
+int imageio_write_exr_half(const char *path, uint32_t width, uint32_t height, const uint16_t *rgba_half,
+			   const imageio_attr *attrs, size_t attr_count, char *err, size_t err_size);
+/* 8-bit RGB PNG from RGBA8 pixels (alpha dropped: display frames are opaque). */
+int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8, char *err,
+			   size_t err_size);
+/* Reads any image OpenImageIO can read as 8-bit RGB; *rgb is malloc'ed (caller frees). */
+int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size);
+/* Reads an image as float RGBA (missing channels: RGB from the first channel, alpha 1); *rgba is malloc'ed.
+ * Fails with a message naming the first non-finite pixel when `reject_nonfinite` is set. */
+int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
+			    char *err, size_t err_size);
+/* 8-bit RGB PNG from RGB8 pixels. */
+int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb, char *err,
+				  size_t err_size);
+/* Reads a string attribute of an image's header into `value` (empty if absent). */
+int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,49 @@
+/* pairs.h — pairs.json, the stimulus set of one scene and camera path written by `taslab pair` and read
+ * by the study module (DESIGN sections 5, 7):
+ *
+ *   { "taslab_pairs": 1, "scene", "scene_path", "camera", "camera_motion", "fps", "frames": [first, last],
+ *     "size": [w, h], "display_transform", "reference": {"run", "clip"},
+ *     "conditions": [ {"id", "method", "variant", "T", "period", "run", "clip", "inspect"}, ... ] }
+ *
+ * Paths are relative to the folder holding pairs.json; the reader refuses absolute paths and "..".
+ * The file is written last and atomically: its presence means the set is complete. */
+#ifndef TASLAB_PAIRS_H
+#define TASLAB_PAIRS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/tl_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pairs_condition {
+	char id[64];          /* unique within the set, e.g. "tarc-oracle-T8" */
+	char method[32];      /* the variant's method name ("tarc-oracle") */
+	char variant[64];     /* the variant token ("tarc-oracle@8") */
+	double T;             /* NAN when the method has no threshold */
+	uint32_t period;      /* 0 when the method has no period */
+	char run[256], clip[256], inspect[256];
+} pairs_condition;
+
+typedef struct pairs_set {
+	char scene[64], camera[64], camera_motion[16];
+	char scene_path[1024], display_transform[256];
+	double fps;
+	uint32_t first_frame, last_frame, width, height;
+	char ref_run[256], ref_clip[256];
+	pairs_condition *conditions; /* malloc'ed by pairs_read; borrowed by pairs_write */
+	size_t count;
+} pairs_set;
+
+int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size);
+/* TL_ERR_INPUT naming the file and what is wrong. Free with pairs_free. */
+int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size);
+void pairs_free(pairs_set *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,107 @@
+/* run.h — a run folder (DESIGN section 5): its writer and its reader.
+ *
+ *   RUN/frames/NNNNNN.exr   scene-linear RGBA half (attributes taslab:scene, :camera, :method, ...)
+ *   RUN/frames/NNNNNN.png   display-referred 8-bit RGB
+ *   RUN/stats.csv           one row per frame (frame.h)
+ *   RUN/manifest.json       written last and atomically: inputs, method options, device, totals
+ *
+ * Completeness protocol: run_writer_create removes an old manifest.json first and every frame, stats.csv
+ * and the manifest are written through the atomic-write helper (tl_fs.h); manifest.json comes last. A
+ * folder with a manifest.json is a complete run; one without is not. A re-used folder is emptied of the
+ * previous run's frames, stats and temporary files, so it holds exactly one run.
+ *
+ * Errors: negative tl_err (tl_error.h) and one line in `err`. Ownership: create/destroy pairs; the
+ * writer copies every string of run_info it keeps.
+ */
+#ifndef TASLAB_RUN_H
+#define TASLAB_RUN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/frame.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One method option as recorded in manifest.json's "method_options" (key → number, bool or string). */
+typedef enum run_value_type { RUN_VALUE_NUMBER = 0, RUN_VALUE_BOOL, RUN_VALUE_STRING } run_value_type;
+typedef struct run_option {
+	const char *key;
+	run_value_type type;
+	double number;
+	bool boolean;
+	const char *string;
+} run_option;
+
+#define RUN_MAX_OPTIONS 16
+
+typedef struct run_info {
+	const char *scene_name, *scene_path, *camera, *camera_motion, *device, *driver;
+	const char *method;  /* the variant's method name, e.g. "tarc-oracle" (EXR taslab:method, CSV method) */
+	const char *variant; /* the variant token, e.g. "tarc-oracle@8" */
+	double threshold;    /* T, NAN when the method has none */
+	uint32_t period;     /* N of rrc/sau, 0 when the method has none */
+	const run_option *options; /* the method's options, all of them (defaults included) */
+	size_t option_count;
+	uint32_t first_frame, last_frame; /* inclusive */
+	uint32_t width, height;
+	float fps;
+	bool validation;
+	bool write_exr, write_png;
+	const char *command_line;
+	const char *display_transform; /* colour_name() of the view transform used for the PNGs */
+} run_info;
+
+typedef struct run_writer run_writer;
+
+int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size);
+/* Writes the frame's EXR and PNG and appends its stats.csv row. */
+int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size);
+/* Closes stats.csv and writes manifest.json (atomically) with totals. */
+int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size);
+/* Frees the writer; an unfinished run leaves no manifest.json. */
+void run_writer_destroy(run_writer **w);
+
+/* ---- reading ---- */
+
+typedef struct run_manifest {
+	char scene[64], camera[64], camera_motion[16], method[32], variant[64];
+	char scene_path[1024], device[256], display_transform[256];
+	double threshold;          /* NAN when absent */
+	uint32_t period;           /* 0 when absent */
+	uint32_t first_frame, last_frame, width, height;
+	double fps;
+	bool exr, png;
+	uint64_t frames, visible_samples, shaded_samples;
+	double gpu_ms_median, wall_s;
+} run_manifest;
+
+/* Reads DIR/manifest.json. TL_ERR_INPUT when the folder is not a complete run (no manifest) or the
+ * manifest lacks a field or holds an impossible value (frames, size, fps). */
+int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_size);
+
+/* Checks that DIR/frames holds exactly the manifest's frames in format `ext` ("png" or "exr"): every
+ * frame first..last present, no frame outside that range. TL_ERR_INPUT naming the first problem. */
+int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size);
+
+/* stats.csv as a table of numbers: values[row * cols + col], NAN for empty cells. */
+typedef struct run_stats {
+	size_t rows, cols;
+	char **names;
+	double *values;
+} run_stats;
+
+int run_stats_read(const char *dir, run_stats *s, char *err, size_t err_size);
+/* Column index of `name`, or -1. */
+int run_stats_col(const run_stats *s, const char *name);
+/* Value at (row, column name): NAN when the column is absent or the cell empty. */
+double run_stats_get(const run_stats *s, size_t row, const char *name);
+void run_stats_free(run_stats *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,175 @@
+// imageio.cpp — thin extern "C" shim over OpenImageIO (see imageio.h).
+#include "taslab/imageio.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+using namespace OIIO;
+
+// OpenImageIO error strings can span lines (one per failing layer); keep the first line.
+static std::string first_line(std::string e)
+{
+	size_t nl = e.find('\n');
+	if (nl != std::string::npos)
+		e.resize(nl);
+	return e.empty() ? std::string("unknown error") : e;
+}
+
+// Written by file name to the atomic-write helper's temporary file, which is fsync'ed and renamed into
+// place only when OpenImageIO reports success for the pixels and for closing (tl_fs.h).
+static int write_atomic(const char *path, const char *format, const ImageSpec &spec, TypeDesc type,
+			const void *pixels, stride_t xstride, char *err, size_t err_size)
+{
+	tl_atomic a;
+	int rc = tl_atomic_open(&a, path, err, err_size);
+	if (rc || (rc = tl_atomic_detach(&a, err, err_size)))
+		return rc;
+	auto out = ImageOutput::create(format);
+	if (!out) {
+		tl_atomic_abort(&a);
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: OpenImageIO has no %s writer: %s", path, format,
+				first_line(OIIO::geterror()).c_str());
+	}
+	if (!out->open(a.tmp, spec)) {
+		tl_atomic_abort(&a);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, first_line(out->geterror()).c_str());
+	}
+	bool ok = out->write_image(type, pixels, xstride);
+	ok = out->close() && ok;
+	if (!ok) {
+		tl_atomic_abort(&a);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: write failed: %s", path, first_line(out->geterror()).c_str());
+	}
+	return tl_atomic_commit(&a, err, err_size);
+}
+
+extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t height, const uint16_t *rgba_half,
+				      const imageio_attr *attrs, size_t attr_count, char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 4, TypeDesc::HALF);
+	spec.channelnames = {"R", "G", "B", "A"};
+	spec.alpha_channel = 3;
+	spec.attribute("compression", "zip");
+	spec.attribute("oiio:ColorSpace", "Linear");
+	for (size_t i = 0; i < attr_count; i++)
+		spec.attribute(attrs[i].name, attrs[i].value);
+	return write_atomic(path, "openexr", spec, TypeDesc::HALF, rgba_half, AutoStride, err, err_size);
+}
+
+extern "C" int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
+				      char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
+	spec.attribute("oiio:ColorSpace", "sRGB");
+	// Writing 3 channels out of 4-channel pixels: x stride of 4 bytes.
+	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgba8, 4, err, err_size);
+}
+
+extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err,
+				 size_t err_size)
+{
+	*rgb = nullptr;
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		return TL_ERR_INPUT;
+	}
+	const ImageSpec &spec = in->spec();
+	if (spec.width <= 0 || spec.height <= 0 || spec.nchannels < 1) {
+		snprintf(err, err_size, "%s: image has no pixels", path);
+		return TL_ERR_INPUT;
+	}
+	size_t n = (size_t)spec.width * spec.height;
+	std::vector<uint8_t> all(n * spec.nchannels);
+	if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::UINT8, all.data())) {
+		snprintf(err, err_size, "%s: cannot decode image: %s", path, first_line(in->geterror()).c_str());
+		return TL_ERR_INPUT;
+	}
+	uint8_t *out = (uint8_t *)malloc(n * 3);
+	if (!out) {
+		snprintf(err, err_size, "%s: out of memory", path);
+		return TL_ERR_NOMEM;
+	}
+	for (size_t i = 0; i < n; i++)
+		for (int c = 0; c < 3; c++)
+			out[i * 3 + c] = all[i * spec.nchannels + (c < spec.nchannels ? c : 0)];
+	*width = (uint32_t)spec.width;
+	*height = (uint32_t)spec.height;
+	*rgb = out;
+	return 0;
+}
+
+extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba,
+				       int reject_nonfinite, char *err, size_t err_size)
+{
+	*rgba = nullptr;
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		return TL_ERR_INPUT;
+	}
+	const ImageSpec &spec = in->spec();
+	int nc = spec.nchannels;
+	if (spec.width <= 0 || spec.height <= 0 || nc < 1) {
+		snprintf(err, err_size, "%s: image has no pixels", path);
+		return TL_ERR_INPUT;
+	}
+	size_t n = (size_t)spec.width * spec.height;
+	std::vector<float> all(n * nc);
+	if (!in->read_image(0, 0, 0, nc, TypeDesc::FLOAT, all.data())) {
+		snprintf(err, err_size, "%s: cannot decode image (truncated or corrupt?): %s", path,
+			 first_line(in->geterror()).c_str());
+		return TL_ERR_INPUT;
+	}
+	float *out = (float *)malloc(n * 4 * sizeof(float));
+	if (!out) {
+		snprintf(err, err_size, "%s: out of memory", path);
+		return TL_ERR_NOMEM;
+	}
+	for (size_t i = 0; i < n; i++) {
+		for (int c = 0; c < 4; c++)
+			out[i * 4 + c] = c < nc ? all[i * nc + c] : (c == 3 ? 1.0f : all[i * nc]);
+		if (reject_nonfinite)
+			for (int c = 0; c < 4; c++)
+				if (!std::isfinite(out[i * 4 + c])) {
+					snprintf(err, err_size, "%s: non-finite value (NaN or Inf) at pixel (%zu, %zu)", path,
+						 i % spec.width, i / spec.width);
+					free(out);
+					return TL_ERR_INPUT;
+				}
+	}
+	*width = (uint32_t)spec.width;
+	*height = (uint32_t)spec.height;
+	*rgba = out;
+	return 0;
+}
+
+extern "C" int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb,
+					     char *err, size_t err_size)
+{
+	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
+	spec.attribute("oiio:ColorSpace", "sRGB");
+	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgb, 3, err, err_size);
+}
+
+extern "C" int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err,
+				 size_t err_size)
+{
+	auto in = ImageInput::open(path);
+	if (!in) {
+		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		return TL_ERR_INPUT;
+	}
+	std::string v = in->spec().get_string_attribute(name);
+	snprintf(value, value_size, "%s", v.c_str());
+	return 0;
+}

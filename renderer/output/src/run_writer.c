@@ -1,0 +1,269 @@
+/* run_writer.c — writing a run folder (run.h; DESIGN section 5). */
+#include "taslab/run.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "taslab/imageio.h"
+#include "taslab/tl_clock.h"
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
+#include "taslab/version.h"
+
+struct run_writer {
+	char dir[TL_PATH_MAX];
+	run_info info;
+	json_t *inputs;        /* run_info as JSON, built at create (the strings of run_info are borrowed) */
+	tl_atomic stats;
+	uint32_t frames;
+	int64_t visible_total, shaded_total, fs_total;
+	double *gpu_ms;
+	size_t gpu_ms_cap;
+	char header[4096];     /* stats.csv header of the first frame; later frames must match */
+};
+
+/* A frame file of a run: NNNNNN.png or NNNNNN.exr (six or more digits). */
+static bool is_frame_name(const char *n)
+{
+	size_t len = strlen(n), d = 0;
+	while (n[d] >= '0' && n[d] <= '9')
+		d++;
+	return d >= 6 && len == d + 4 && (!strcmp(n + d, ".png") || !strcmp(n + d, ".exr"));
+}
+
+/* Removes what a previous run left in the folder: frames, stats.csv, manifest.json (first), temporary files. */
+static int clear_run(const char *dir, char *err, size_t err_size)
+{
+	char p[TL_PATH_MAX];
+	const char *names[2] = {"manifest.json", "stats.csv"};
+	for (int i = 0; i < 2; i++) {
+		snprintf(p, sizeof p, "%s/%s", dir, names[i]);
+		if (unlink(p) != 0 && errno != ENOENT)
+			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot remove the previous run's file: %s", p,
+					strerror(errno));
+	}
+	tl_fs_clean_temps(dir);
+	snprintf(p, sizeof p, "%s/frames", dir);
+	tl_fs_clean_temps(p);
+	DIR *d = opendir(p);
+	struct dirent *e;
+	int rc = TL_OK;
+	while (d && (e = readdir(d)) && !rc) {
+		char f[TL_PATH_MAX];
+		if (is_frame_name(e->d_name) && snprintf(f, sizeof f, "%s/%s", p, e->d_name) < (int)sizeof f && unlink(f) != 0)
+			rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot remove the previous run's frame: %s", f,
+				      strerror(errno));
+	}
+	if (d)
+		closedir(d);
+	return rc;
+}
+
+static json_t *option_json(const run_option *o)
+{
+	switch (o->type) {
+	case RUN_VALUE_BOOL: return json_boolean(o->boolean);
+	case RUN_VALUE_STRING: return json_string(o->string ? o->string : "");
+	default: return isfinite(o->number) ? json_real(o->number) : json_null();
+	}
+}
+
+static json_t *inputs_json(const run_info *in)
+{
+	json_t *opts = json_object();
+	for (size_t i = 0; i < in->option_count; i++)
+		json_object_set_new(opts, in->options[i].key, option_json(&in->options[i]));
+	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:[i,i], s:[i,i], s:f}", "scene",
+			 in->scene_name, "scene_path", in->scene_path, "camera", in->camera, "camera_motion",
+			 in->camera_motion, "method", in->method, "variant", in->variant, "threshold",
+			 isfinite(in->threshold) ? json_real(in->threshold) : json_null(), "period",
+			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "frames",
+			 (int)in->first_frame, (int)in->last_frame, "size", (int)in->width, (int)in->height, "fps",
+			 (double)in->fps);
+}
+
+int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	char frames[TL_PATH_MAX];
+	if (snprintf(frames, sizeof frames, "%s/frames", dir) >= (int)sizeof frames)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: path too long", dir);
+	int rc = tl_mkdirs(frames, err, err_size);
+	if (rc || (rc = clear_run(dir, err, err_size)))
+		return rc;
+	run_writer *w = calloc(1, sizeof *w);
+	if (!w)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	snprintf(w->dir, sizeof w->dir, "%s", dir);
+	w->info = *info;
+	w->info.options = NULL; /* borrowed only during create: kept as JSON */
+	w->info.option_count = 0;
+	w->inputs = inputs_json(info);
+	if (!w->inputs) {
+		run_writer_destroy(&w);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory describing the run");
+	}
+	char path[TL_PATH_MAX];
+	snprintf(path, sizeof path, "%s/stats.csv", dir);
+	if ((rc = tl_atomic_open(&w->stats, path, err, err_size))) {
+		run_writer_destroy(&w);
+		return rc;
+	}
+	*out = w;
+	return TL_OK;
+}
+
+static void csv_int(FILE *f, int64_t v)
+{
+	if (v >= 0)
+		fprintf(f, "%lld", (long long)v);
+}
+
+static void csv_ms(FILE *f, double v)
+{
+	if (v >= 0.0)
+		fprintf(f, "%.4f", v);
+}
+
+static void stats_header(const frame_stats *st, char *h, size_t n)
+{
+	/* DESIGN section 5 columns, then one gpu_ms_<pass> per pass of the method, then taslab's additions. */
+	size_t len = (size_t)snprintf(h, n, "frame,time_s,visible_samples,shaded_samples,visible_units,shaded_units,"
+					    "new_units,reuse_fraction,fs_invocations,cs_invocations,gpu_ms_total");
+	for (uint32_t p = 0; p < st->pass_count && len < n; p++)
+		len += (size_t)snprintf(h + len, n - len, ",gpu_ms_%s", st->pass_names[p]);
+	if (len < n)
+		len += (size_t)snprintf(h + len, n - len, ",reused_samples");
+	for (uint32_t e = 0; e < st->extra_count && len < n; e++)
+		len += (size_t)snprintf(h + len, n - len, ",%s", st->extra_names[e]);
+}
+
+int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size)
+{
+	char path[TL_PATH_MAX], val[3][64], header[sizeof w->header];
+	int rc;
+	stats_header(st, header, sizeof header);
+	if (w->frames == 0) {
+		snprintf(w->header, sizeof w->header, "%s", header);
+		fprintf(w->stats.f, "%s\n", header);
+	} else if (strcmp(header, w->header)) {
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "frame %u: statistics columns changed within the run", st->frame);
+	}
+	if (w->info.write_exr) {
+		snprintf(val[0], sizeof val[0], "%u", st->frame);
+		snprintf(val[1], sizeof val[1], "%.9g", st->time_s);
+		if (isfinite(w->info.threshold))
+			snprintf(val[2], sizeof val[2], "%g", w->info.threshold);
+		else
+			val[2][0] = 0;
+		imageio_attr attrs[] = {
+			{"taslab:scene", w->info.scene_name}, {"taslab:camera", w->info.camera},
+			{"taslab:method", w->info.method},    {"taslab:threshold", val[2]},
+			{"taslab:frame", val[0]},             {"taslab:time_s", val[1]},
+		};
+		snprintf(path, sizeof path, "%s/frames/%06u.exr", w->dir, st->frame);
+		if ((rc = imageio_write_exr_half(path, img->width, img->height, img->hdr_rgba_half, attrs,
+						 sizeof attrs / sizeof attrs[0], err, err_size)))
+			return rc;
+	}
+	if (w->info.write_png) {
+		snprintf(path, sizeof path, "%s/frames/%06u.png", w->dir, st->frame);
+		if ((rc = imageio_write_png_rgb8(path, img->width, img->height, img->display_rgba, err, err_size)))
+			return rc;
+	}
+	FILE *f = w->stats.f;
+	/* reuse_fraction: 1 - shaded / denominator, the denominator being the allocated atlas texels for atlas
+	 * methods ("fraction of the total allocated space in the atlas", paper sec. 4.3) and the visible
+	 * samples for pixel methods (DESIGN section 5). */
+	int64_t denom = st->allocated_samples >= 0 ? st->allocated_samples : st->visible_samples;
+	double reuse = denom > 0 && st->shaded_samples >= 0 ? 1.0 - (double)st->shaded_samples / (double)denom : 0.0;
+	fprintf(f, "%u,%.6f,", st->frame, st->time_s);
+	csv_int(f, st->visible_samples), fputc(',', f);
+	csv_int(f, st->shaded_samples), fputc(',', f);
+	csv_int(f, st->visible_units), fputc(',', f);
+	csv_int(f, st->shaded_units), fputc(',', f);
+	csv_int(f, st->new_units), fputc(',', f);
+	fprintf(f, "%.6f,", reuse);
+	csv_int(f, st->fs_invocations), fputc(',', f);
+	csv_int(f, st->cs_invocations), fputc(',', f);
+	csv_ms(f, st->gpu_ms_total);
+	for (uint32_t p = 0; p < st->pass_count; p++)
+		fputc(',', f), csv_ms(f, st->gpu_ms[p]);
+	fputc(',', f), csv_int(f, st->reused_samples);
+	for (uint32_t e = 0; e < st->extra_count; e++) {
+		fputc(',', f);
+		if (isfinite(st->extra[e]))
+			fprintf(f, "%.10g", st->extra[e]);
+	}
+	fputc('\n', f);
+	if (ferror(f))
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s/stats.csv: write error: %s", w->dir, strerror(errno));
+	if (w->frames == w->gpu_ms_cap) {
+		size_t cap = w->gpu_ms_cap ? w->gpu_ms_cap * 2 : 64;
+		double *n = realloc(w->gpu_ms, cap * sizeof *n);
+		if (!n)
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		w->gpu_ms = n;
+		w->gpu_ms_cap = cap;
+	}
+	w->gpu_ms[w->frames] = st->gpu_ms_total;
+	w->frames++;
+	w->visible_total += st->visible_samples > 0 ? st->visible_samples : 0;
+	w->shaded_total += st->shaded_samples > 0 ? st->shaded_samples : 0;
+	w->fs_total += st->fs_invocations > 0 ? st->fs_invocations : 0;
+	return TL_OK;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
+{
+	int rc = tl_atomic_commit(&w->stats, err, err_size);
+	if (rc)
+		return rc;
+	double median = -1.0;
+	if (w->frames) {
+		qsort(w->gpu_ms, w->frames, sizeof *w->gpu_ms, cmp_double);
+		median = w->frames % 2 ? w->gpu_ms[w->frames / 2]
+				       : 0.5 * (w->gpu_ms[w->frames / 2 - 1] + w->gpu_ms[w->frames / 2]);
+	}
+	char created[32];
+	tl_clock_utc(created, sizeof created);
+	const run_info *in = &w->info;
+	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:s}, s:{s:i, s:I, s:I, s:I, s:f, s:f}, s:s}",
+			      "taslab_version", TASLAB_VERSION_STRING, "created_utc", created, "inputs", w->inputs,
+			      "device", "name", in->device, "driver", in->driver, "validation", in->validation, "outputs",
+			      "exr", in->write_exr, "png", in->write_png, "display_transform",
+			      in->display_transform ? in->display_transform : "", "totals", "frames", (int)w->frames,
+			      "visible_samples", (json_int_t)w->visible_total, "shaded_samples", (json_int_t)w->shaded_total,
+			      "fs_invocations", (json_int_t)w->fs_total, "gpu_ms_median", median, "wall_s", wall_s,
+			      "command", in->command_line ? in->command_line : "");
+	char path[TL_PATH_MAX];
+	snprintf(path, sizeof path, "%s/manifest.json", w->dir);
+	rc = tl_json_write(path, m, err, err_size);
+	json_decref(m);
+	return rc;
+}
+
+void run_writer_destroy(run_writer **pw)
+{
+	if (!pw || !*pw)
+		return;
+	run_writer *w = *pw;
+	tl_atomic_abort(&w->stats);
+	json_decref(w->inputs);
+	free(w->gpu_ms);
+	free(w);
+	*pw = NULL;
+}

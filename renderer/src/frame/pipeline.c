@@ -1,0 +1,190 @@
+/* pipeline.c — graphics and compute pipelines of the frame pipeline, and run-time shader compilation
+ * (templates completed with the OpenColorIO display function, device/shader_library.h). */
+#include "render_internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "shaders/common/scene_vert.h"
+
+VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
+{
+	const uint32_t *vs = pd->vs ? pd->vs : scene_vert, *fs = pd->fs;
+	size_t vs_size = pd->vs ? pd->vs_size : sizeof scene_vert, fs_size = pd->fs_size;
+	VkShaderModule vm = VK_NULL_HANDLE, fm = VK_NULL_HANDLE;
+	VkResult res = vkdev_shader_module(r->dev, vs, vs_size, &vm);
+	if (!res && fs)
+		res = vkdev_shader_module(r->dev, fs, fs_size, &fm);
+	if (res)
+		goto done;
+	VkPushConstantRange pcr = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(gpu_push)};
+	VkDescriptorSetLayout sets[2] = {r->scene_set_layout, pd->method_set};
+	VkPipelineLayoutCreateInfo li = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+		.setLayoutCount = pd->method_set ? 2u : 1u,
+		.pSetLayouts = sets,
+		.pushConstantRangeCount = 1,
+		.pPushConstantRanges = &pcr,
+	};
+	if ((res = vkCreatePipelineLayout(r->dev->device, &li, NULL, &out->layout)))
+		goto done;
+	/* Specialisation: 0 = shade.frag's ALPHA_BLEND, 1 = SHADOW_CHUNKS_USED (shading.glsl); entries for
+	 * constants a shader does not declare are ignored. */
+	struct {
+		VkBool32 blend;
+		int32_t chunks;
+	} spec_values = {pd->fs_alpha_blend ? VK_TRUE : VK_FALSE, (int32_t)r->shadow.chunks_compiled};
+	VkSpecializationMapEntry spec_entries[2] = {{0, 0, sizeof(VkBool32)}, {1, sizeof(VkBool32), sizeof(int32_t)}};
+	VkSpecializationInfo spec = {2, spec_entries, sizeof spec_values, &spec_values};
+	VkPipelineShaderStageCreateInfo stages[2] = {
+		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_VERTEX_BIT,
+		 .module = vm, .pName = "main"},
+		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
+		 .module = fm, .pName = "main", .pSpecializationInfo = &spec},
+	};
+	VkVertexInputBindingDescription bind = {0, sizeof(scene_vertex), VK_VERTEX_INPUT_RATE_VERTEX};
+	const VkVertexInputAttributeDescription all_attrs[4] = {
+		{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene_vertex, position)},
+		{1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene_vertex, normal)},
+		{2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene_vertex, uv)},
+		{3, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(scene_vertex, tangent)},
+	};
+	VkVertexInputAttributeDescription attrs[4];
+	uint32_t nattr = 0;
+	for (int i = 0; i < 4; i++)
+		if (pd->attributes & (1u << i))
+			attrs[nattr++] = all_attrs[i];
+	VkPipelineVertexInputStateCreateInfo vi = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO,
+		.vertexBindingDescriptionCount = 1,
+		.pVertexBindingDescriptions = &bind,
+		.vertexAttributeDescriptionCount = nattr,
+		.pVertexAttributeDescriptions = attrs,
+	};
+	VkPipelineInputAssemblyStateCreateInfo ia = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
+		.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST,
+	};
+	VkPipelineViewportStateCreateInfo vps = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO, .viewportCount = 1, .scissorCount = 1};
+	VkPipelineRasterizationStateCreateInfo rs = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO,
+		.polygonMode = VK_POLYGON_MODE_FILL,
+		.cullMode = VK_CULL_MODE_NONE,
+		.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE,
+		.depthBiasEnable = pd->bias ? VK_TRUE : VK_FALSE,
+		.depthBiasConstantFactor = 1.25f,
+		.depthBiasSlopeFactor = 1.75f,
+		.lineWidth = 1.0f,
+	};
+	VkPipelineMultisampleStateCreateInfo ms = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO,
+		.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT,
+	};
+	VkPipelineDepthStencilStateCreateInfo ds = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
+		.depthTestEnable = VK_TRUE,
+		.depthWriteEnable = pd->depth_write ? VK_TRUE : VK_FALSE,
+		.depthCompareOp = pd->depth_op,
+	};
+	/* Blending: "over" for colour; coverage alpha accumulates as a + (1 - a) * dst. */
+	VkPipelineColorBlendAttachmentState cba = {
+		.blendEnable = pd->blend ? VK_TRUE : VK_FALSE,
+		.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA,
+		.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+		.colorBlendOp = VK_BLEND_OP_ADD,
+		.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE,
+		.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+		.alphaBlendOp = VK_BLEND_OP_ADD,
+		.colorWriteMask = 0xF,
+	};
+	VkPipelineColorBlendStateCreateInfo cb = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
+		.attachmentCount = pd->color ? 1u : 0u,
+		.pAttachments = &cba,
+	};
+	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
+	VkPipelineDynamicStateCreateInfo dy = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+		.dynamicStateCount = pd->bias ? 2u : 3u,
+		.pDynamicStates = dyn,
+	};
+	VkFormat cfmt = VK_FORMAT_R16G16B16A16_SFLOAT;
+	VkPipelineRenderingCreateInfo pr = {
+		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
+		.colorAttachmentCount = pd->color ? 1u : 0u,
+		.pColorAttachmentFormats = &cfmt,
+		.depthAttachmentFormat = VK_FORMAT_D32_SFLOAT,
+	};
+	VkGraphicsPipelineCreateInfo gi = {
+		.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
+		.pNext = &pr,
+		.stageCount = fs ? 2u : 1u,
+		.pStages = stages,
+		.pVertexInputState = &vi,
+		.pInputAssemblyState = &ia,
+		.pViewportState = &vps,
+		.pRasterizationState = &rs,
+		.pMultisampleState = &ms,
+		.pDepthStencilState = &ds,
+		.pColorBlendState = &cb,
+		.pDynamicState = &dy,
+		.layout = out->layout,
+	};
+	res = vkCreateGraphicsPipelines(r->dev->device, VK_NULL_HANDLE, 1, &gi, NULL, &out->pipeline);
+done:
+	if (vm)
+		vkDestroyShaderModule(r->dev->device, vm, NULL);
+	if (fm)
+		vkDestroyShaderModule(r->dev->device, fm, NULL);
+	return res;
+}
+
+VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
+				    render_pipeline *out)
+{
+	render_pipe_desc shade = {.attributes = RENDER_ATTR_ALL, .color = 1,
+			   .depth_op = VK_COMPARE_OP_EQUAL, .fs = fs, .fs_size = fs_size, .method_set = method_set};
+	return render_make_graphics(r, &shade, out);
+}
+
+void render_pipeline_destroy(render *r, render_pipeline *p)
+{
+	if (p->pipeline)
+		vkDestroyPipeline(r->dev->device, p->pipeline, NULL);
+	if (p->layout)
+		vkDestroyPipelineLayout(r->dev->device, p->layout, NULL);
+	p->pipeline = VK_NULL_HANDLE;
+	p->layout = VK_NULL_HANDLE;
+}
+
+int render_compile(const render *r, const char *template_path, shc_stage stage, uint32_t **spv, size_t *spv_size,
+		   char *err, size_t err_size)
+{
+	char *src = NULL;
+	int rc = shader_assemble(template_path, colour_glsl(r->colour), &src, err, err_size);
+	if (rc)
+		return rc;
+	if (shc_compile(src, stage, spv, spv_size, err, err_size))
+		rc = TL_ERR_ARG; /* a view transform whose GLSL does not compile (the message says why) */
+	free(src);
+	return rc;
+}
+
+VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, VkPipelineLayout layout, VkPipeline *out)
+{
+	VkShaderModule m;
+	VkResult res = vkdev_shader_module(r->dev, spv, spv_size, &m);
+	if (res)
+		return res;
+	VkComputePipelineCreateInfo ci = {
+		.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+		.stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+			  .module = m, .pName = "main"},
+		.layout = layout,
+	};
+	res = vkCreateComputePipelines(r->dev->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
+	vkDestroyShaderModule(r->dev->device, m, NULL);
+	return res;
+}

@@ -1,0 +1,212 @@
+/* render_internal.h (private) — the frame core: the `render` object, the method interface, and the
+ * building blocks every pass and method uses (scene upload, state rings, targets, pipelines, draws,
+ * command buffer and timestamps).
+ *
+ * Layers inside the renderer (each includes only the ones below it):
+ *   render.c, run_render.c (composition: the public render.h API)
+ *   methods/ (one file per method + registry.c), analysis/ (TFR analysis)
+ *   passes/  (shadow, depth, shade, display, readback, tas_filter: passes.h)
+ *   frame/   (this header: the core)
+ *   device/  (Vulkan device, shader compilation and the generated shader library)
+ */
+#ifndef TASLAB_RENDER_INTERNAL_H
+#define TASLAB_RENDER_INTERNAL_H
+
+#include <stdio.h>
+
+#include "../device/shader_compile.h"
+#include "../device/shader_library.h"
+#include "gpu_types.h"
+#include "taslab/method.h"
+#include "taslab/render.h"
+
+/* ---- the method interface (one implementation per file in methods/) ---- */
+
+typedef struct render_method {
+	method_info info;              /* name, summary, option table (method.h) */
+	const char *const *pass_names; /* timestamp intervals recorded by `record`, in order */
+	uint32_t pass_count;
+	uint32_t state_ring;           /* state slots the method needs (0: 1) */
+	int (*init)(render *r, char *err, size_t err_size);
+	/* Before recording frame `frame`: update state slots and plan their shadow maps (may allocate and
+	 * update descriptors, which is why it runs outside the command buffer). */
+	int (*prepare)(render *r, uint32_t frame, char *err, size_t err_size);
+	/* Records the frame into `cmd`; must call render_ts() once before each pass and once at the end. */
+	void (*record)(render *r, VkCommandBuffer cmd, uint32_t frame);
+	/* Fills the method-specific statistics after the frame completed. */
+	void (*collect)(render *r, frame_stats *st);
+	void (*finish)(render *r);
+	/* Re-creates the method's shading pipelines (after the shadow pool grew; see render_frame). */
+	int (*rebuild)(render *r, char *err, size_t err_size);
+} render_method;
+
+/* The registry (methods/registry.c): the implementation of an available method, else NULL. */
+const render_method *render_method_of(const method_info *info);
+extern const render_method render_method_ref;
+extern const render_method render_method_tfr;
+
+/* ---- the render object ---- */
+
+/* Shadow maps: a pool of physical layers shared by the state slots (passes/shadow.c). */
+typedef struct render_shadow_pool {
+	uint32_t layers;       /* logical layers per slot (lights: 1, point lights: 6) */
+	uint32_t size;         /* shadow map size */
+	uint32_t chunk_layers; /* physical layers per chunk image */
+	uint32_t chunk_count;
+	uint32_t chunks_max;   /* chunks the pool may need */
+	uint32_t chunks_compiled; /* chunks the shading pipelines are specialised for (SHADOW_CHUNKS_USED) */
+	vkdev_image chunks[GPU_SHADOW_CHUNKS];
+	vkdev_image dummy;     /* bound while there are no chunks */
+	VkImageView *views;    /* per physical layer */
+	uint32_t *refs;        /* per physical layer: slots mapping to it */
+	uint32_t *owner;       /* per physical layer: logical layer whose content it holds */
+	uint32_t *slot_phys;   /* state_ring x layers */
+	uint8_t *todo;         /* state_ring x layers: planned, not rendered yet */
+	uint64_t *last_key;    /* per logical layer: inputs of its last rendering */
+	uint32_t *last_phys;
+	uint64_t rendered, reused; /* layer renderings and shares so far */
+} render_shadow_pool;
+
+typedef struct render_pipeline {
+	VkPipeline pipeline;
+	VkPipelineLayout layout;
+} render_pipeline;
+
+struct render {
+	vkdev *dev;
+	const scene *scene;
+	render_desc desc;
+	method_config config;     /* copy of *desc.method (desc.method points here) */
+	const render_method *method;
+	void *method_state;
+
+	uint32_t state_ring;      /* slots in the state and object rings */
+	uint32_t push_aux[4];     /* copied into gpu_push.aux of every draw */
+
+	/* scene on the GPU (frame/upload.c) */
+	vkdev_buffer vertices, indices;
+	uint32_t *mesh_first_index, *mesh_vertex_offset;
+	vkdev_buffer materials;
+	vkdev_buffer states;      /* FrameState x state_ring, host visible */
+	vkdev_buffer objects;     /* GpuObject x object_count x state_ring, host visible */
+	vkdev_image color_tex, data_tex;
+	VkSampler tex_sampler, shadow_sampler;
+	render_shadow_pool shadow; /* D32 layers, one per light (point lights: 6) per slot */
+	int *light_shadow_layer;  /* first shadow layer per light, -1 none */
+
+	/* targets (frame/targets.c) */
+	vkdev_image depth, hdr, display;
+	vkdev_buffer readback_hdr, readback_display;
+	uint32_t row_pitch_hdr_B, row_pitch_display_B;
+	uint16_t *hdr_packed;
+	uint8_t *display_packed;
+
+	/* descriptors and pipelines */
+	VkDescriptorSetLayout scene_set_layout, display_set_layout;
+	VkDescriptorPool pool;
+	VkDescriptorSet scene_set, display_set;
+	render_pipeline shadow_pipe, depth_pipe, shade_pipe, display_pipe;
+	render_pipeline shadow_mask_pipe, depth_mask_pipe, shade_blend_pipe; /* glTF alphaMode MASK / BLEND */
+	tlm_vec3 eye;             /* camera position of the last render_update_state (blend sorting) */
+	uint32_t *blend_order;    /* BLEND objects, sorted back to front each frame */
+	uint32_t blend_count;
+
+	/* queries and submission */
+	VkQueryPool ts_pool, stats_pool;
+	uint32_t ts_count;
+	VkCommandBuffer cmd;
+	VkFence fence;
+
+	colour *own_colour;       /* created when desc.colour is NULL */
+	const colour *colour;
+
+	/* scratch */
+	tlm_mat4 *world;
+	scene_light_state *light_states;
+};
+
+/* ---- frame/upload.c: the scene on the device ---- */
+int render_upload_scene(render *r, char *err, size_t err_size);
+void render_upload_destroy(render *r);
+
+/* ---- frame/state.c: state rings ---- */
+/* Evaluates the scene and camera at `time_s` into state slot `slot` (FrameState + object ring). */
+void render_update_state(render *r, uint32_t slot, double time_s);
+
+/* ---- frame/targets.c: render targets, samplers, readback buffers, the scene descriptor set ---- */
+int render_targets_create(render *r, char *err, size_t err_size);
+int render_descriptors_create(render *r, char *err, size_t err_size);
+void render_targets_destroy(render *r);
+
+/* ---- frame/pipeline.c: pipelines ---- */
+/* A graphics pipeline of the frame pipeline; zero-initialised fields mean "off". */
+typedef struct render_pipe_desc {
+	const uint32_t *vs, *fs; /* vs NULL: common/scene.vert, the one vertex shader of all scene passes */
+	size_t vs_size, fs_size;
+	unsigned attributes;   /* bit i: vertex attribute location i (0 position, 1 normal, 2 uv, 3 tangent) */
+	int depth_write, color, bias, blend;
+	VkCompareOp depth_op;
+	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
+	VkDescriptorSetLayout method_set; /* optional set 1 */
+} render_pipe_desc;
+
+#define RENDER_ATTR_POSITION 1u
+#define RENDER_ATTR_UV 4u
+#define RENDER_ATTR_ALL 15u
+
+VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out);
+/* Shading pipeline like the reference one (common/scene.vert, depth EQUAL) with fragment shader `fs` and an
+ * optional descriptor set 1. */
+VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
+				    render_pipeline *out);
+/* Compute pipeline from SPIR-V with the given layout. */
+VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, VkPipelineLayout layout, VkPipeline *out);
+void render_pipeline_destroy(render *r, render_pipeline *p);
+/* Compiles a run-time shader template (includes and the OCIO display function resolved, see
+ * device/shader_library.h). */
+int render_compile(const render *r, const char *template_path, shc_stage stage, uint32_t **spv, size_t *spv_size,
+		   char *err, size_t err_size);
+
+/* ---- frame/draw.c: drawing the scene, timestamps, the command buffer ---- */
+#define RENDER_ALPHA_BIT(m) (1u << (m))
+#define RENDER_OPAQUE_BIT RENDER_ALPHA_BIT(SCENE_ALPHA_OPAQUE)
+#define RENDER_MASK_BIT RENDER_ALPHA_BIT(SCENE_ALPHA_MASK)
+#define RENDER_BLEND_BIT RENDER_ALPHA_BIT(SCENE_ALPHA_BLEND)
+
+void render_bind_scene(render *r, VkCommandBuffer cmd, const render_pipeline *p);
+void render_set_viewport(VkCommandBuffer cmd, uint32_t w, uint32_t h);
+void render_draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
+			size_t i, int set_cull);
+/* Draws the objects whose material alpha mode is in `modes` (RENDER_ALPHA_BIT set), in scene order. */
+void render_draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
+			 unsigned modes, int shadow_casters_only, int set_cull);
+int render_has_alpha_mode(const render *r, scene_alpha_mode mode);
+/* Writes the next timestamp (call before each pass and once at the end of the frame). */
+void render_ts(render *r, VkCommandBuffer cmd);
+/* The render's command buffer: reset + begin; end + submit + wait on its fence (render_frame, analysis). */
+VkResult render_cmd_begin(render *r);
+VkResult render_cmd_submit_wait(render *r);
+/* A global memory barrier between two stage/access sets. */
+void render_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+		    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
+
+/* Formats "what failed: VkResult" into err and returns TL_ERR_VULKAN (for `return render_vk_error(...)`). */
+int render_vk_error(char *err, size_t err_size, const char *what, VkResult res);
+/* In functions with `int rc`, `err`, `err_size` and a `fail:` label: checks a VkResult, records file:line
+ * and the call (Mesa's vk_error habit), sets rc = TL_ERR_VULKAN and jumps to fail. */
+#define CHECK_VK(call)                                                                                     \
+	do {                                                                                               \
+		VkResult vr_ = (call);                                                                     \
+		if (vr_ != VK_SUCCESS) {                                                                   \
+			char what_[256];                                                                   \
+			snprintf(what_, sizeof what_, "%s:%d: %s", __FILE__, __LINE__, #call);               \
+			rc = render_vk_error(err, err_size, what_, vr_);                                   \
+			goto fail;                                                                         \
+		}                                                                                          \
+	} while (0)
+
+/* render_create with a method that is not in the registry (analysis passes). */
+int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *m, render **out, char *err,
+		      size_t err_size);
+
+#endif

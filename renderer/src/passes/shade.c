@@ -1,0 +1,139 @@
+/* shade.c — forward shading of the visible samples (depth EQUAL after the pre-pass) and "over" compositing
+ * of glTF BLEND surfaces, sorted back to front per object. */
+#include "passes.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "shaders/ref/shade_frag.h"
+#include "shaders/ref/trivial_frag.h"
+
+void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot)
+{
+	render_pass_shade_with(r, cmd, slot, &r->shade_pipe, VK_NULL_HANDLE);
+}
+
+void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const render_pipeline *opaque,
+			    VkDescriptorSet method_set)
+{
+	uint32_t w = r->desc.width, h = r->desc.height;
+	const scene *s = r->scene;
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT, 0,
+			    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+	/* Background: sky radiance (times exposure), coverage 0. */
+	VkRenderingAttachmentInfo ca = {
+		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+		.imageView = r->hdr.view,
+		.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+		.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
+		.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+		.clearValue = {.color = {{s->sky[0] * s->exposure, s->sky[1] * s->exposure, s->sky[2] * s->exposure, 0.0f}}},
+	};
+	VkRenderingAttachmentInfo da = {
+		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+		.imageView = r->depth.view,
+		.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+		.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD,
+		.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+	};
+	VkRenderingInfo ri = {
+		.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
+		.renderArea = {{0, 0}, {w, h}},
+		.layerCount = 1,
+		.colorAttachmentCount = 1,
+		.pColorAttachments = &ca,
+		.pDepthAttachment = &da,
+	};
+	if (r->stats_pool) { /* reset here so any number of shading passes may run per command buffer */
+		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
+		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
+	}
+	vkCmdBeginRendering(cmd, &ri);
+	render_bind_scene(r, cmd, opaque);
+	if (method_set)
+		vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, opaque->layout, 1, 1, &method_set, 0, NULL);
+	render_set_viewport(cmd, w, h);
+	render_draw_objects(r, cmd, opaque, slot, 0, RENDER_OPAQUE_BIT | RENDER_MASK_BIT, 0, 1);
+	if (r->blend_count) {
+		/* glTF BLEND: "over" compositing after the opaque surfaces, objects sorted back to front by the
+		 * distance of their bounds centre from the camera (per object, not per triangle). */
+		const scene *sc = r->scene;
+		float *dist = malloc(r->blend_count * sizeof *dist);
+		uint32_t n = 0;
+		for (size_t i = 0; dist && i < sc->object_count; i++) {
+			const scene_object *o = &sc->objects[i];
+			if (o->mesh < 0 || sc->materials[o->material].alpha_mode != SCENE_ALPHA_BLEND)
+				continue;
+			const scene_mesh *m = &sc->meshes[o->mesh];
+			tlm_vec3 c = tlm_mat4_mul_point(r->world[i], tlm_v3_scale(tlm_v3_add(m->bounds_min, m->bounds_max), 0.5f));
+			uint32_t k = n++;
+			float d = tlm_v3_length(tlm_v3_sub(c, r->eye));
+			while (k > 0 && dist[k - 1] < d) { /* insertion sort, farthest first; ties keep scene order */
+				dist[k] = dist[k - 1];
+				r->blend_order[k] = r->blend_order[k - 1];
+				k--;
+			}
+			dist[k] = d;
+			r->blend_order[k] = (uint32_t)i;
+		}
+		free(dist);
+		render_bind_scene(r, cmd, &r->shade_blend_pipe);
+		for (uint32_t k = 0; k < n; k++)
+			render_draw_object(r, cmd, &r->shade_blend_pipe, slot, 0, r->blend_order[k], 1);
+	}
+	vkCmdEndRendering(cmd);
+	if (r->stats_pool)
+		vkCmdEndQuery(cmd, r->stats_pool, 0);
+}
+
+/* The reference shading pipelines (opaque/masked and BLEND); they sample shadow maps, so they are
+ * re-created when the shadow pool outgrows the chunk count they were specialised for. */
+static VkResult make_shade_pipelines(render *r)
+{
+	render_pipe_desc shade = {.attributes = RENDER_ATTR_ALL, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
+				  .fs = shade_frag, .fs_size = sizeof shade_frag};
+	if (r->desc.trivial_shading) {
+		shade.fs = trivial_frag;
+		shade.fs_size = sizeof trivial_frag;
+	}
+	VkResult res = render_make_graphics(r, &shade, &r->shade_pipe);
+	if (!res && render_has_alpha_mode(r, SCENE_ALPHA_BLEND)) {
+		render_pipe_desc sb = shade;
+		sb.depth_op = VK_COMPARE_OP_LESS_OR_EQUAL;
+		sb.blend = 1;
+		sb.fs_alpha_blend = !r->desc.trivial_shading;
+		res = render_make_graphics(r, &sb, &r->shade_blend_pipe);
+	}
+	return res;
+}
+
+int render_shade_init(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	CHECK_VK(make_shade_pipelines(r));
+	if (render_has_alpha_mode(r, SCENE_ALPHA_BLEND)) {
+		for (size_t i = 0; i < r->scene->object_count; i++) {
+			const scene_object *o = &r->scene->objects[i];
+			r->blend_count += o->mesh >= 0 && r->scene->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND;
+		}
+		if (!(r->blend_order = calloc(r->blend_count, sizeof *r->blend_order)))
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+fail:
+	return rc;
+}
+
+/* After render_shadow_plan added chunks beyond what the shading pipelines were specialised for. */
+int render_shade_rebuild(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	render_pipeline_destroy(r, &r->shade_pipe);
+	render_pipeline_destroy(r, &r->shade_blend_pipe);
+	r->shadow.chunks_compiled = r->shadow.chunk_count;
+	CHECK_VK(make_shade_pipelines(r));
+	if (r->method->rebuild)
+		rc = r->method->rebuild(r, err, err_size);
+fail:
+	return rc;
+}

@@ -1,0 +1,217 @@
+/* test_base.c — the base layer: error codes and messages, mkdir -p, the atomic-write helper, temp-file
+ * cleanup, path checks, JSON files. */
+#include <dirent.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "taslab/tl_clock.h"
+#include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
+#include "test_util.h"
+
+static int count_entries(const char *dir)
+{
+	DIR *d = opendir(dir);
+	int n = 0;
+	struct dirent *e;
+	while (d && (e = readdir(d)))
+		n += e->d_name[0] != '.' || (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."));
+	if (d)
+		closedir(d);
+	return n;
+}
+
+static void test_errors(void **state)
+{
+	(void)state;
+	char err[64];
+	/* Every code has its own description; exit statuses: 2 for the user's input, 1 for the rest. */
+	for (int a = TL_ERR_MIN; a <= 0; a++)
+		for (int b = TL_ERR_MIN; b < a; b++)
+			assert_string_not_equal(tl_strerror(a), tl_strerror(b));
+	assert_string_equal(tl_strerror(-100), "unknown error");
+	assert_int_equal(tl_exit_status(TL_OK), 0);
+	assert_int_equal(tl_exit_status(TL_ERR_ARG), 2);
+	assert_int_equal(tl_exit_status(TL_ERR_INPUT), 2);
+	assert_int_equal(tl_exit_status(TL_ERR_VULKAN), 1);
+	assert_int_equal(tl_exit_status(TL_ERR_OUTPUT), 1);
+	assert_int_equal(tl_error(err, sizeof err, TL_ERR_INPUT, "%s: %d", "x", 7), TL_ERR_INPUT);
+	assert_string_equal(err, "x: 7");
+	assert_int_equal(tl_error(err, 4, TL_ERR_ARG, "truncated message"), TL_ERR_ARG);
+	assert_string_equal(err, "tru");
+}
+
+static void test_mkdirs(void **state)
+{
+	(void)state;
+	char err[512], p[4096];
+	const char *d = tu_tmpdir("base_mkdirs");
+	snprintf(p, sizeof p, "%s/a/b/c", d);
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), TL_OK);
+	assert_true(tl_is_dir(p));
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), TL_OK); /* exists: fine */
+	snprintf(p, sizeof p, "%s/file", d);
+	FILE *f = fopen(p, "w");
+	fclose(f);
+	snprintf(p, sizeof p, "%s/file/sub", d);
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), TL_ERR_OUTPUT);
+	assert_non_null(strstr(err, "not a folder"));
+}
+
+static void test_atomic_write(void **state)
+{
+	(void)state;
+	char err[512], p[4096];
+	const char *d = tu_tmpdir("base_atomic");
+	snprintf(p, sizeof p, "%s/out.txt", d);
+	/* Committed: the content is there, no temporary file is left. */
+	tl_atomic a;
+	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_OK);
+	assert_false(tu_file_exists(p)); /* nothing under the final name until the commit */
+	fprintf(a.f, "hello\n");
+	assert_int_equal(tl_atomic_commit(&a, err, sizeof err), TL_OK);
+	char *text = tu_read_file(p, NULL);
+	assert_string_equal(text, "hello\n");
+	free(text);
+	assert_int_equal(count_entries(d), 1);
+	/* Aborted: the old content stays, the temporary file is gone. */
+	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_OK);
+	fprintf(a.f, "replacement\n");
+	tl_atomic_abort(&a);
+	text = tu_read_file(p, NULL);
+	assert_string_equal(text, "hello\n");
+	free(text);
+	assert_int_equal(count_entries(d), 1);
+	/* Detached (writers that take a file name). */
+	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_OK);
+	assert_int_equal(tl_atomic_detach(&a, err, sizeof err), TL_OK);
+	FILE *f = fopen(a.tmp, "w");
+	fputs("by name\n", f);
+	fclose(f);
+	assert_int_equal(tl_atomic_commit(&a, err, sizeof err), TL_OK);
+	text = tu_read_file(p, NULL);
+	assert_string_equal(text, "by name\n");
+	free(text);
+	/* Two writers at once get different temporary names. */
+	tl_atomic b;
+	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_OK);
+	assert_int_equal(tl_atomic_open(&b, p, err, sizeof err), TL_OK);
+	assert_string_not_equal(a.tmp, b.tmp);
+	tl_atomic_abort(&a);
+	tl_atomic_abort(&b);
+	/* A missing folder is an output error with the path. */
+	snprintf(p, sizeof p, "%s/missing/out.txt", d);
+	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_ERR_OUTPUT);
+	assert_non_null(strstr(err, "missing/out.txt"));
+	assert_int_equal(tl_write_file("", "x", 1, err, sizeof err), TL_ERR_ARG);
+}
+
+/* A write that fails at flush (a full disk) is reported and leaves nothing: needs a tiny tmpfs, so only as
+ * root; /dev/full cannot stand in because the helper writes next to the final name. */
+static void test_atomic_full_disk(void **state)
+{
+	(void)state;
+	char err[512], p[4096], cmd[4200];
+	const char *base = getenv("TASLAB_TMP");
+	snprintf(cmd, sizeof cmd, "umount '%s/base_full' 2>/dev/null", base ? base : "/tmp/taslab-tests");
+	if (geteuid() == 0 && system(cmd)) { /* a mount left by an interrupted earlier run is gone now */
+	}
+	const char *d = tu_tmpdir("base_full");
+	if (geteuid() != 0) {
+		fprintf(stderr, "test_atomic_full_disk: skipped (needs root to mount a 64 KiB tmpfs)\n");
+		return;
+	}
+	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=64k tmpfs %s 2>/dev/null", d);
+	if (system(cmd) != 0) {
+		fprintf(stderr, "test_atomic_full_disk: skipped (cannot mount a tmpfs here)\n");
+		return;
+	}
+	snprintf(p, sizeof p, "%s/big.bin", d);
+	size_t n = 1 << 20;
+	char *data = calloc(1, n);
+	assert_int_equal(tl_write_file(p, data, n, err, sizeof err), TL_ERR_OUTPUT);
+	assert_non_null(strstr(err, "No space"));
+	assert_false(tu_file_exists(p));
+	assert_int_equal(count_entries(d), 0); /* the temporary file is gone too */
+	free(data);
+	snprintf(cmd, sizeof cmd, "umount %s", d);
+	assert_int_equal(system(cmd), 0);
+}
+
+static void test_clean_temps(void **state)
+{
+	(void)state;
+	char p[4096];
+	const char *d = tu_tmpdir("base_clean");
+	const char *names[] = {".a.png.tmp.Ab12Cd", ".stats.csv.tmp.xyzXYZ", "keep.tmp.abcdef", ".keep.tmp.abc", "plain"};
+	for (size_t i = 0; i < 5; i++) {
+		snprintf(p, sizeof p, "%s/%s", d, names[i]);
+		fclose(fopen(p, "w"));
+	}
+	assert_int_equal(tl_fs_clean_temps(d), 2);
+	assert_int_equal(count_entries(d), 3);
+}
+
+static void test_paths(void **state)
+{
+	(void)state;
+	char a[4096], b[4096];
+	const char *d = tu_tmpdir("base_paths");
+	snprintf(a, sizeof a, "%s/run", d);
+	mkdir(a, 0777);
+	snprintf(b, sizeof b, "%s/run/frames/000000.png", d); /* need not exist */
+	assert_true(tl_path_inside(b, a));
+	snprintf(b, sizeof b, "%s/run/../run/x", d);
+	assert_true(tl_path_inside(b, a));
+	snprintf(b, sizeof b, "%s/runs/x", d);
+	assert_false(tl_path_inside(b, a)); /* a prefix is not a parent */
+	snprintf(b, sizeof b, "%s/run/.", d);
+	assert_true(tl_same_file(a, b));
+	assert_false(tl_same_file(a, d));
+}
+
+static void test_json(void **state)
+{
+	(void)state;
+	char err[512], p[4096];
+	const char *d = tu_tmpdir("base_json");
+	snprintf(p, sizeof p, "%s/x.json", d);
+	json_t *j = json_pack("{s:i, s:s}", "b", 2, "a", "text");
+	assert_int_equal(tl_json_write(p, j, err, sizeof err), TL_OK);
+	json_decref(j);
+	char *text = tu_read_file(p, NULL);
+	assert_true(strstr(text, "\"a\"") < strstr(text, "\"b\"")); /* sorted keys: deterministic files */
+	free(text);
+	json_t *r = NULL;
+	assert_int_equal(tl_json_read(p, &r, err, sizeof err), TL_OK);
+	assert_int_equal(json_integer_value(json_object_get(r, "b")), 2);
+	json_decref(r);
+	/* Malformed, too deep, duplicate keys: input errors naming the file. */
+	const char *bad[] = {"{\"a\": }", "{\"a\": 1, \"a\": 2}", NULL};
+	char deep[400];
+	memset(deep, '[', 300);
+	deep[300] = 0;
+	for (int i = 0; i < 3; i++) {
+		FILE *f = fopen(p, "w");
+		fputs(bad[i] ? bad[i] : deep, f);
+		fclose(f);
+		assert_int_equal(tl_json_read(p, &r, err, sizeof err), TL_ERR_INPUT);
+		assert_non_null(strstr(err, "x.json"));
+	}
+	assert_true(tl_clock_s() > 0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_errors),	   cmocka_unit_test(test_mkdirs), cmocka_unit_test(test_atomic_write),
+		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths),
+		cmocka_unit_test(test_json),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

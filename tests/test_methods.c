@@ -1,0 +1,116 @@
+/* test_methods.c — the method registry, option tables and variant syntax (method.h, DESIGN section 4). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "taslab/method.h"
+#include "test_util.h"
+
+static void test_registry(void **state)
+{
+	(void)state;
+	size_t n;
+	const method_info *const *m = method_list(&n);
+	/* The methods of DESIGN section 4, each listed once, available or planned. */
+	const char *design[] = {"ref", "tfr", "rrc", "tarc", "sa", "sau", "tasa"};
+	for (size_t i = 0; i < sizeof design / sizeof design[0]; i++) {
+		const method_info *x = method_find(design[i]);
+		assert_non_null(x);
+		assert_non_null(x->summary);
+	}
+	for (size_t i = 0; i < n; i++) {
+		for (size_t j = 0; j < i; j++)
+			assert_string_not_equal(m[i]->name, m[j]->name);
+		assert_true(m[i]->options_size <= METHOD_OPTIONS_MAX_B);
+		for (size_t k = 0; k < m[i]->option_count; k++) { /* tables are well formed */
+			const method_option *o = &m[i]->options[k];
+			assert_non_null(o->help);
+			assert_true(o->offset < m[i]->options_size);
+			assert_true(o->type == METHOD_OPT_BOOL || o->type == METHOD_OPT_CHOICE || o->min <= o->def || isnan(o->def));
+		}
+	}
+	assert_true(method_find("ref")->available && method_find("tfr")->available);
+	assert_null(method_find("magic"));
+}
+
+static void expect_variant(const char *token, const char *variant, const char *name, const char *id, double T,
+			   uint32_t N)
+{
+	char err[256], buf[96];
+	method_config c;
+	if (method_config_parse_variant(&c, token, err, sizeof err))
+		fail_msg("%s: %s", token, err);
+	method_config_variant(&c, buf, sizeof buf);
+	assert_string_equal(buf, variant);
+	method_config_name(&c, buf, sizeof buf);
+	assert_string_equal(buf, name);
+	method_config_id(&c, buf, sizeof buf);
+	assert_string_equal(buf, id);
+	if (isnan(T))
+		assert_true(isnan(method_config_threshold(&c)));
+	else
+		assert_true(method_config_threshold(&c) == T);
+	assert_int_equal(method_config_period(&c), N);
+}
+
+static void test_variants(void **state)
+{
+	(void)state;
+	expect_variant("ref", "ref", "ref", "ref", NAN, 0);
+	expect_variant("tfr@8", "tfr@8", "tfr", "tfr-T8", 8, 0);
+	expect_variant("tfr@2.5", "tfr@2.5", "tfr", "tfr-T2.5", 2.5, 0);
+	char err[256];
+	method_config c;
+	struct {
+		const char *token, *needle;
+	} bad[] = {
+		{"tfr", "tfr@8"},		  /* the threshold is required in a variant */
+		{"ref@8", "takes no '@'"},	  /* ref has no threshold */
+		{"tfr@x", "not a number"},	  {"tfr@0", "out of range"},
+		{"tfr@8@9", "once"},		  {"tfr-oracle@8", "no '-oracle' form"},
+		{"magic@8", "unknown method"},	  {"", "empty"},
+		{"tasa@8", "not implemented"},	  {"tfr/4", "takes no '/'"},
+	};
+	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+		int rc = method_config_parse_variant(&c, bad[i].token, err, sizeof err);
+		if (rc != TL_ERR_ARG && rc != TL_ERR_UNSUPPORTED)
+			fail_msg("'%s' parsed (%d)", bad[i].token, rc);
+		if (!strstr(err, bad[i].needle))
+			fail_msg("'%s': '%s' lacks '%s'", bad[i].token, err, bad[i].needle);
+	}
+}
+
+static void test_options(void **state)
+{
+	(void)state;
+	char err[256];
+	method_config c;
+	assert_int_equal(method_config_init(&c, "tfr", err, sizeof err), TL_OK);
+	assert_true(method_config_threshold(&c) == 8);		   /* the table's default */
+	assert_true(method_config_number(&c, "max-age") == 119); /* K */
+	assert_int_equal(method_config_set(&c, "max-age", "3", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_set(&c, "max-age", "0", err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(method_config_set(&c, "max-age", "3.5", err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(method_config_set(&c, "period", "4", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "not an option of tfr") ? err : strstr(err, "no option"));
+	/* Manifest entries: every option, defaults included. */
+	run_option o[8];
+	size_t n = method_config_run_options(&c, o, 8);
+	assert_int_equal(n, 2);
+	assert_string_equal(o[0].key, "threshold");
+	assert_true(o[1].type == RUN_VALUE_NUMBER && o[1].number == 3);
+	assert_int_equal(method_config_init(&c, "ref", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_run_options(&c, o, 8), 0);
+	assert_int_equal(method_config_set(&c, "threshold", "8", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "it applies to: tfr"));
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_registry),
+		cmocka_unit_test(test_variants),
+		cmocka_unit_test(test_options),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
