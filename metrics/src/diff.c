@@ -18,7 +18,6 @@
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
-#include "plot.h"
 
 typedef struct sequence {
 	char dir[4096];
@@ -168,12 +167,11 @@ static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_
 static int write_plots(const char *out, char *err, size_t err_size)
 {
 	char script[4096];
+	mtr_plot plot;
 	snprintf(script, sizeof script, "%s/plots/plots.gp", out);
-	FILE *f = fopen(script, "w");
-	if (!f) {
-		snprintf(err, err_size, "%s: cannot write", script);
-		return -1;
-	}
+	FILE *f = mtr_plot_begin(&plot, script, err, err_size);
+	if (!f)
+		return TL_ERR_OUTPUT;
 	/* Per-frame series and exceedance, from frames.csv (columns per DESIGN section 6). */
 	fprintf(f,
 		"set datafile separator ','\n"
@@ -197,8 +195,7 @@ static int write_plots(const char *out, char *err, size_t err_size)
 		"set style fill solid 0.6\n"
 		"plot '%s/distribution.csv' using 1:($4 > 0 ? $4 : 1/0) every ::1 with boxes notitle\n",
 		out, out, out, out, out, out);
-	fclose(f);
-	return mtr_gnuplot(script, err, err_size);
+	return mtr_plot_end(&plot, err, err_size);
 }
 
 int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)

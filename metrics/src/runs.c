@@ -9,11 +9,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "taslab/metrics.h"
 #include "taslab/run.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
-#include "plot.h"
 
 
 static int cmpd(const void *a, const void *b)
@@ -215,12 +215,11 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
 {
 	char path[4096];
+	mtr_plot plot;
 	snprintf(path, sizeof path, "%s/runs.gp", dir);
-	FILE *f = fopen(path, "w");
-	if (!f) {
-		snprintf(err, err_size, "%s: cannot write", path);
-		return -1;
-	}
+	FILE *f = mtr_plot_begin(&plot, path, err, err_size);
+	if (!f)
+		return TL_ERR_OUTPUT;
 	/* Per-T summaries: reuse and invocation reduction against T, one line per method (from runs.csv). */
 	char methods[2048] = "";
 	for (size_t i = 0; i < n; i++) {
@@ -244,10 +243,9 @@ int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err
 		"set output '%s/speedup.png'\nset title 'speedup against ref (median GPU frame time)'\nset ylabel 'speedup (x)'\n"
 		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):11 every ::1 with linespoints title m\n",
 		methods, dir, dir, dir, dir, dir, dir);
-	fclose(f);
 	if (!methods[0]) {
-		snprintf(err, err_size, "no non-ref runs: per-T plots skipped");
-		return -1;
+		tl_atomic_abort(&plot.file);
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED, "no non-ref runs: per-T plots skipped");
 	}
-	return mtr_gnuplot(path, err, err_size);
+	return mtr_plot_end(&plot, err, err_size);
 }

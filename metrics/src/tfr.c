@@ -8,7 +8,6 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "plot.h"
 #include "taslab/metrics.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
@@ -35,19 +34,22 @@ static int write_json(json_t *j, const char *dir, const char *name, char *err, s
 	return rc;
 }
 
-/* Plots: DIR/NAME.gp is written by the caller into the returned file, then plot_run draws it (gnuplot). */
-static FILE *plot_open(const char *dir, const char *name, char *script, size_t size)
+/* Plots: DIR/NAME.gp is written into the returned stream, then plot_run draws it (gnuplot). */
+static FILE *plot_open(mtr_plot *p, const char *dir, const char *name)
 {
-	snprintf(script, size, "%s/%s.gp", dir, name);
-	return fopen(script, "w");
+	char script[TL_PATH_MAX], err[512];
+	snprintf(script, sizeof script, "%s/%s.gp", dir, name);
+	FILE *f = mtr_plot_begin(p, script, err, sizeof err);
+	if (!f)
+		fprintf(stderr, "taslab: %s\n", err);
+	return f;
 }
 
-static void plot_run(FILE *g, const char *script)
+static void plot_run(mtr_plot *p)
 {
-	char perr[512];
-	fclose(g);
-	if (mtr_gnuplot(script, perr, sizeof perr))
-		fprintf(stderr, "taslab: %s\n", perr);
+	char err[512];
+	if (mtr_plot_end(p, err, sizeof err))
+		fprintf(stderr, "taslab: %s\n", err);
 }
 
 static json_t *meta_json(const analyze_result *frames, size_t n, const mtr_tfr_meta *m)
@@ -120,8 +122,8 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 		return -1;
 	}
 	if (plots) {
-		char script[4200];
-		FILE *g = plot_open(dir, "coherence", script, sizeof script);
+		mtr_plot plot;
+		FILE *g = plot_open(&plot, dir, "coherence");
 		if (g) {
 			fprintf(g, "set terminal pngcairo size 900,560\nset output '%s/coherence.png'\nset datafile separator ','\n"
 				   "set title 'Temporal coherence of shading (TFR, cf. paper Fig. 4)'\nset xlabel 'frames k'\n"
@@ -132,7 +134,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 				fprintf(g, "%s'%s/coherence.csv' using ($1==%g ? $2 : 1/0):5 with lines lw 2 title 'T = %g'",
 					i ? ", " : "", dir, (double)meta->thresholds[i], (double)meta->thresholds[i]);
 			fprintf(g, "\n");
-			plot_run(g, script);
+			plot_run(&plot);
 		}
 	}
 	json_t *j = meta_json(frames, n, meta);
@@ -196,8 +198,8 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 	}
 	if (plots) {
 		/* Stacked bars: one group per T, bars single/long/inst, unfiltered then filtered (Figs. 7, 9). */
-		char script[4200];
-		FILE *g = plot_open(dir, "predictors", script, sizeof script);
+		mtr_plot plot;
+		FILE *g = plot_open(&plot, dir, "predictors");
 		if (g) {
 			fprintf(g, "set terminal pngcairo size 1200,560\nset output '%s/predictors.png'\nset datafile separator ','\n"
 				   "set title 'Gradient predictors on TFR histories (cf. paper Figs. 7, 9): bars per T = single, long, inst; "
@@ -210,7 +212,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 				   "lc rgb '#ff9f1c', '' every ::1 using 11 title 'on time' lc rgb '#2ca02c', '' every ::1 using 12 "
 				   "title 'unchanged' lc rgb '#bbbbbb'\n",
 				dir, dir);
-			plot_run(g, script);
+			plot_run(&plot);
 		}
 	}
 	json_t *j = meta_json(frames, n, meta);

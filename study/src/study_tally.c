@@ -609,7 +609,9 @@ close:
 	if (rc == TL_OK) {
 		/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). */
 		snprintf(path, sizeof path, "%s/fig3.gp", td->out);
-		FILE *g = fopen(path, "w");
+		mtr_plot plot;
+		char note[512];
+		FILE *g = mtr_plot_begin(&plot, path, note, sizeof note);
 		if (g) {
 			fprintf(g,
 				"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10' noenhanced\n"
@@ -625,11 +627,8 @@ close:
 				"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):6 every ::1 axes x1y2 "
 				"with linespoints dt 3 title 'p_ref '.m\n",
 				td->out, methods, td->out);
-			fclose(g);
-			char cmd[8600];
-			snprintf(cmd, sizeof cmd, "gnuplot '%s' >/dev/null 2>&1", path);
-			if (system(cmd) != 0)
-				fprintf(stderr, "taslab study: note: gnuplot failed or is missing; fig3.png not drawn\n");
+			if (mtr_plot_end(&plot, note, sizeof note))
+				fprintf(stderr, "taslab study: note: %s; fig3.png not drawn\n", note);
 		}
 	}
 done:

@@ -22,8 +22,10 @@
 #define TASLAB_METRICS_H
 
 #include "taslab/tl_error.h"
+#include "taslab/tl_fs.h"
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -82,6 +84,18 @@ void mtr_colormap(double u, uint8_t rgb[3]);
 /* Writes `map` (width*height, values 0..vmax) as a PNG with a legend bar and tick labels drawn below. */
 int mtr_heatmap_write(const char *path, const float *map, uint32_t width, uint32_t height, double vmax, char *err,
 		      size_t err_size);
+
+/* ---- plots for people (gnuplot) ----
+ * A script is written to `script_path` through the atomic-write helper and gnuplot then draws the PNGs it
+ * names: mtr_plot_begin returns the stream to write the script into (NULL with a message on failure);
+ * mtr_plot_end commits it and runs gnuplot (TL_ERR_UNSUPPORTED with a note when gnuplot is missing or
+ * fails: plots are optional, the CSV/JSON beside them are the results). */
+typedef struct mtr_plot {
+	tl_atomic file;
+} mtr_plot;
+
+FILE *mtr_plot_begin(mtr_plot *p, const char *script_path, char *err, size_t err_size);
+int mtr_plot_end(mtr_plot *p, char *err, size_t err_size);
 
 #ifdef __cplusplus
 }

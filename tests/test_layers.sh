@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# test_layers.sh — the dependency rules inside the renderer (ARCHITECTURE.md), which one library target
+# cannot enforce by itself: device/ includes nothing above it; frame/ not passes/ or methods/; passes/ not
+# methods/ or analysis/; only render.c and run_render.c (the composition root) see everything. Across
+# libraries the build enforces the rules (include paths, the poisoned vulkan.h); this also checks that no
+# library includes the CLI header and no library calls exit().
+set -u
+cd "$(dirname "$0")/.."
+bad=0
+check() { # check DIR PATTERN WHAT
+  local hits
+  hits=$(grep -rnE "$2" "$1" --include=*.c --include=*.h --include=*.cpp 2>/dev/null)
+  if [ -n "$hits" ]; then echo "layer rule broken ($3):"; echo "$hits" | sed 's/^/  /'; bad=1; fi
+}
+check renderer/src/device '#include "\.\./(frame|passes|methods|analysis)/' "device/ must not include the layers above it"
+check renderer/src/frame '#include "\.\./(passes|methods|analysis)/' "frame/ must not include passes/, methods/, analysis/"
+check renderer/src/passes '#include "\.\./(methods|analysis)/' "passes/ must not include methods/ or analysis/"
+check renderer/src/methods '#include "\.\./analysis/' "methods/ must not include analysis/"
+for lib in scenes renderer/base renderer/output renderer/src metrics/src study/src; do
+  check "$lib" '#include "(cli|commands)\.h"' "a library including the CLI header"
+  check "$lib" '(^|[^_a-z])exit\(' "exit() in a library (return a tl_err instead)"
+done
+check scenes '#include "taslab/(render|vkdev|run|metrics|study)' "scenes/ sees only base"
+check renderer/output '#include "taslab/(render|vkdev|scene|metrics|study|method)' "output/ sees only base"
+check metrics/src '#include "taslab/(render|vkdev|analyze|method|study)' "metrics/ sees only output and base"
+[ $bad = 0 ] && echo "layers: all rules hold"
+exit $bad
