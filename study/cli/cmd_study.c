@@ -11,7 +11,7 @@
 
 static const cli_opt db_option[] = {
 	{.name = "db", .arg = "STUDY.db",
-	 .help = "the study database (SQLite)",
+	 .help = "the study database (an SQLite file; design and import create it and never overwrite one)",
 	 .type = CLI_STRING, .offset = offsetof(study_opts, db)},
 	{0},
 };
@@ -119,16 +119,18 @@ static int study_main(void *opts, cli_ctx *ctx)
 	const char *sub = strrchr(ctx->name, ' ') + 1;
 	char *err = ctx->err;
 	size_t err_size = sizeof ctx->err;
+	/* design and import build a new study in a temporary file and move it into place only on success
+	 * (sty_create/sty_commit): a failure leaves nothing behind, and an existing study is refused. */
 	int create = !strcmp(sub, "design") || !strcmp(sub, "import");
 	sty *s = NULL;
-	int rc = sty_open(o->db, create, &s, err, err_size);
+	int rc = create ? sty_create(o->db, &s, err, err_size) : sty_open(o->db, &s, err, err_size);
 	if (rc)
 		return rc;
 	if (!strcmp(sub, "design")) {
 		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
 				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every};
 		sty_design_summary sm;
-		if (!(rc = sty_design(s, &d, &sm, err, err_size))) {
+		if (!(rc = sty_design(s, &d, &sm, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {
 			printf("study %s: %u conditions from %u set(s), %u participants, %u trials each, %u break(s); "
 			       "estimated session %.1f min\nlinks: taslab study links --db %s; run: taslab study serve --db %s\n",
 			       ov.db, sm.conditions, sm.sets, sm.participants, sm.trials_per_participant, sm.breaks, sm.session_minutes,
@@ -137,18 +139,25 @@ static int study_main(void *opts, cli_ctx *ctx)
 	} else if (!strcmp(sub, "links")) {
 		char **codes;
 		size_t n;
+		/* The base: --base, else the URL the server last listened on (stored by 'study serve'), else the default
+		 * address of 'study serve'. */
+		const char *base = ov.base ? ov.base : sty_served_url(s)[0] ? sty_served_url(s) : "http://127.0.0.1:8080";
+		if (!ov.base && strstr(base, "://0.0.0.0:"))
+			fprintf(stderr, "taslab study links: the server listened on all addresses (0.0.0.0); give --base "
+					"http://HOST:PORT with an address participants can reach\n");
 		if (!(rc = sty_participant_codes(s, &codes, &n, err, err_size))) {
 			for (size_t i = 0; i < n; i++) {
-				printf("P%03zu %s/p/%s\n", i + 1, ov.base ? ov.base : "http://127.0.0.1:8080", codes[i]);
+				printf("P%03zu %s/p/%s\n", i + 1, base, codes[i]);
 				free(codes[i]);
 			}
 			free(codes);
 		}
 	} else if (!strcmp(sub, "serve")) {
 		sty_server *sv = NULL;
-		if (!(rc = sty_server_start(s, ov.bind, (uint16_t)ov.port, ov.threads, &sv, err, err_size))) {
-			printf("listening on http://%s:%u\nadmin token %s (/admin/export.csv?token=...)\n", ov.bind ? ov.bind : "127.0.0.1",
-			       sty_server_port(sv), sty_admin_token(s));
+		sty_server_desc sd = {.bind = ov.bind, .port = (uint16_t)ov.port, .threads = ov.threads};
+		if (!(rc = sty_server_start(s, &sd, &sv, err, err_size))) {
+			printf("listening on %s\nadmin token %s (send it as the header 'Authorization: Bearer TOKEN' to "
+			       "/admin/export.csv and /admin/export-pwcmp.csv)\n", sty_served_url(s), sty_admin_token(s));
 			fflush(stdout);
 			struct sigaction sa = {.sa_handler = on_signal};
 			sigaction(SIGINT, &sa, NULL);
@@ -169,7 +178,7 @@ static int study_main(void *opts, cli_ctx *ctx)
 			rc = sty_export_pwcmp(s, ov.pwcmp, err, err_size);
 	} else {
 		size_t rows;
-		if (!(rc = sty_import_long(s, ctx->pos[0], &rows, err, err_size))) {
+		if (!(rc = sty_import_long(s, ctx->pos[0], &rows, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {
 			fprintf(stderr, "taslab: imported %zu ratings into %s\n", rows, ov.db);
 		}
 	}
@@ -218,7 +227,7 @@ static const cli_command study_export = {
 };
 static const cli_command study_import = {
 	.name = "study import",
-	.summary = "load a long-format ratings file into a new study (validated; all or nothing)",
+	.summary = "load a long-format ratings file into a new study database (validated; all or nothing)",
 	.synopsis = "taslab study import --db STUDY.db RATINGS.csv",
 	.options = db_option,
 	.min_pos = 1,

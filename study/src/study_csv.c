@@ -1,4 +1,5 @@
 /* study_csv.c — ratings in and out: long-format CSV (DESIGN section 7) and pwcmp layout (study.h). */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -19,11 +20,41 @@ static const char *ANSWERS_SQL =
 	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
 	" WHERE t.kind = 'test' ORDER BY p.id, t.idx";
 
+int sty_csv_formula(const char *s)
+{
+	return s[0] == '=' || s[0] == '+' || s[0] == '-' || s[0] == '@' || s[0] == '\t' || s[0] == '\r';
+}
+
+const char *sty_csv_cell(const char *s, char *buf, size_t n)
+{
+	/* OWASP "CSV injection": a spreadsheet runs a cell starting with = + - @ (and TAB/CR before them) as a
+	 * formula; a leading ' makes it text. RFC 4180: a cell holding , " CR or LF is quoted, " doubled. */
+	int quote = strpbrk(s, ",\"\r\n") != NULL;
+	size_t k = 0;
+	if (n == 0)
+		return buf;
+#define PUT(c) do { if (k + 1 < n) buf[k++] = (c); } while (0)
+	if (quote)
+		PUT('"');
+	if (sty_csv_formula(s))
+		PUT('\'');
+	for (; *s; s++) {
+		if (*s == '"')
+			PUT('"');
+		PUT(*s);
+	}
+	if (quote)
+		PUT('"');
+#undef PUT
+	buf[k] = 0;
+	return buf;
+}
+
 /* Opens the output (atomic-write helper, tl_fs.h) and the answers query shared by both export formats. The
  * output may not be the study database itself (or its journal): that would replace every answer. */
 static int begin_export(sty *s, const char *path, tl_atomic *out, sqlite3_stmt **st, char *err, size_t err_size)
 {
-	char wal[TL_PATH_MAX];
+	char wal[TL_PATH_MAX + 8];
 	snprintf(wal, sizeof wal, "%s-wal", sty_path(s));
 	if (tl_same_file(path, sty_path(s)) || !strcmp(path, sty_path(s)) || tl_same_file(path, wal))
 		return tl_error(err, err_size, TL_ERR_ARG, "%s is the study database: exporting there would replace every answer "
@@ -38,6 +69,9 @@ static int begin_export(sty *s, const char *path, tl_atomic *out, sqlite3_stmt *
 	return TL_OK;
 }
 
+/* Column `i` of the answers query as a safe CSV text cell. */
+#define CELL(st, i, buf) sty_csv_cell((const char *)sqlite3_column_text(st, i), buf, sizeof buf)
+
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 {
 	tl_atomic out;
@@ -49,9 +83,9 @@ int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 	fprintf(f, "%s\n", LONG_HEADER);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
-		fprintf(f, "%s,%d,%s,%s,%s,%s,", sqlite3_column_text(st, 0), sqlite3_column_int(st, 1),
-			sqlite3_column_text(st, 2), sqlite3_column_text(st, 3), sqlite3_column_text(st, 4),
-			sqlite3_column_text(st, 5));
+		char c0[160], c2[160], c3[160], c4[40], c5[80];
+		fprintf(f, "%s,%d,%s,%s,%s,%s,", CELL(st, 0, c0), sqlite3_column_int(st, 1), CELL(st, 2, c2), CELL(st, 3, c3),
+			CELL(st, 4, c4), CELL(st, 5, c5));
 		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
 			fprintf(f, "%g", sqlite3_column_double(st, 6));
 		fprintf(f, ",%d,%d,%d,", ref_first, answer, ref_first ? -answer : answer);
@@ -73,19 +107,21 @@ int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 	FILE *f = out.f;
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
-		char cond[64], grp[160];
+		char cond[80], grp[160], obs[160], cgrp[340], ccond[180];
 		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
 			snprintf(cond, sizeof cond, "%s_T%g", sqlite3_column_text(st, 5), sqlite3_column_double(st, 6));
 		else
 			snprintf(cond, sizeof cond, "%s", sqlite3_column_text(st, 5));
 		snprintf(grp, sizeof grp, "%s/%s", sqlite3_column_text(st, 2), sqlite3_column_text(st, 3));
+		sty_csv_cell(cond, ccond, sizeof ccond);
+		sty_csv_cell(grp, cgrp, sizeof cgrp);
+		CELL(st, 0, obs);
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
-		const char *a = ref_first ? "ref" : cond, *b = ref_first ? cond : "ref";
-		const char *obs = (const char *)sqlite3_column_text(st, 0);
+		const char *a = ref_first ? "ref" : ccond, *b = ref_first ? ccond : "ref";
 		if (answer == 0) { /* "same": half a vote each way */
-			fprintf(f, "%s,%s,%s,%s,1\n%s,%s,%s,%s,0\n", obs, grp, a, b, obs, grp, a, b);
+			fprintf(f, "%s,%s,%s,%s,1\n%s,%s,%s,%s,0\n", obs, cgrp, a, b, obs, cgrp, a, b);
 		} else {
-			fprintf(f, "%s,%s,%s,%s,%d\n", obs, grp, a, b, answer < 0 ? 1 : 0); /* answer < 0: first clip better */
+			fprintf(f, "%s,%s,%s,%s,%d\n", obs, cgrp, a, b, answer < 0 ? 1 : 0); /* answer < 0: first clip better */
 		}
 	}
 	sqlite3_finalize(st);
@@ -125,21 +161,25 @@ static int split(char *line, char **f, int max)
 static int parse_long(const char *s, long lo, long hi, long *out)
 {
 	char *e;
+	if (!(isdigit((unsigned char)s[0]) || (s[0] == '-' && isdigit((unsigned char)s[1])))) /* no blanks or '+' */
+		return -1;
 	errno = 0;
 	long v = strtol(s, &e, 10);
-	if (!*s || *e || errno || v < lo || v > hi)
+	if (*e || errno || v < lo || v > hi)
 		return -1;
 	*out = v;
 	return 0;
 }
 
+/* A plain text cell: non-empty, fits, no quotes or control characters, and nothing a spreadsheet would run
+ * as a formula (sty_csv_formula): such values are refused rather than stored. */
 static int safe_name(const char *s, size_t max)
 {
 	size_t n = strlen(s);
-	if (n == 0 || n >= max)
+	if (n == 0 || n >= max || sty_csv_formula(s))
 		return 0;
 	for (; *s; s++)
-		if (*s == '"' || *s == '\'' || (unsigned char)*s < 32)
+		if (*s == '"' || *s == '\'' || (unsigned char)*s < 32 || *s == 127)
 			return 0;
 	return 1;
 }
@@ -155,7 +195,8 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 	long v;
 	if (!safe_name(f[0], sizeof r->participant) || !safe_name(f[2], sizeof r->scene) ||
 	    !safe_name(f[3], sizeof r->camera) || !safe_name(f[5], sizeof r->method)) {
-		snprintf(why, why_size, "participant, scene, camera and method must be non-empty plain text");
+		snprintf(why, why_size, "participant, scene, camera and method must be non-empty plain text (no quotes, control "
+			 "characters, or a leading = + - @ that a spreadsheet would run as a formula)");
 		return -1;
 	}
 	snprintf(r->participant, sizeof r->participant, "%s", f[0]);
@@ -172,14 +213,25 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 		return -1;
 	}
 	snprintf(r->motion, sizeof r->motion, "%s", f[4]);
+	int has_T = sty_method_has_threshold(r->method);
+	if (has_T < 0) {
+		snprintf(why, why_size, "method '%s' is not one of ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle", r->method);
+		return -1;
+	}
 	r->T = NAN;
 	if (f[6][0]) {
 		char *e;
+		errno = 0;
 		r->T = strtod(f[6], &e);
-		if (*e || !isfinite(r->T) || r->T <= 0) {
-			snprintf(why, why_size, "T '%s' is not a positive number (leave it empty for methods without one)", f[6]);
+		if (*e || errno || !isfinite(r->T) || !(r->T > 0 && r->T <= 255) || isspace((unsigned char)f[6][0])) {
+			snprintf(why, why_size, "T '%s' is not a number in (0, 255]", f[6]);
 			return -1;
 		}
+	}
+	if (has_T != !isnan(r->T)) {
+		snprintf(why, why_size, has_T ? "method %s needs a threshold T" : "method %s has no threshold: leave T empty",
+			 r->method);
+		return -1;
 	}
 	if (parse_long(f[7], 0, 1, &v)) {
 		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[7]);
@@ -203,7 +255,7 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 	}
 	r->rt_ms = -1;
 	if (f[10][0]) {
-		if (parse_long(f[10], 0, 86400000, &v)) {
+		if (parse_long(f[10], 0, STY_RT_MS_MAX, &v)) {
 			snprintf(why, why_size, "rt_ms '%s' is not a whole number of milliseconds", f[10]);
 			return -1;
 		}

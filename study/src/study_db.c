@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/random.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "study_internal.h"
 #include "taslab/pairs.h"
@@ -30,12 +31,15 @@ static const char *SCHEMA =
 	" PRIMARY KEY(participant, idx));"
 	"CREATE TABLE IF NOT EXISTS answers(participant INTEGER NOT NULL, idx INTEGER NOT NULL,"
 	" answer INTEGER NOT NULL CHECK(answer BETWEEN -2 AND 2), rt_ms INTEGER, at TEXT NOT NULL,"
-	" PRIMARY KEY(participant, idx), FOREIGN KEY(participant, idx) REFERENCES trials(participant, idx));";
+	" PRIMARY KEY(participant, idx), FOREIGN KEY(participant, idx) REFERENCES trials(participant, idx));"
+	/* The opaque clip names of the trials served so far: slot 0 is the clip shown first (A), 1 the second. */
+	"CREATE TABLE IF NOT EXISTS clip_names(name TEXT PRIMARY KEY, participant INTEGER NOT NULL, idx INTEGER NOT NULL,"
+	" slot INTEGER NOT NULL CHECK(slot IN (0, 1)), UNIQUE(participant, idx, slot),"
+	" FOREIGN KEY(participant, idx) REFERENCES trials(participant, idx)) WITHOUT ROWID;";
 
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what)
 {
-	snprintf(err, err_size, "%s: %s: %s", s->path, what, sqlite3_errmsg(s->db));
-	return TL_ERR_DB;
+	return tl_error(err, err_size, TL_ERR_DB, "%s: %s: %s", s->path, what, s->db ? sqlite3_errmsg(s->db) : "not open");
 }
 
 static int meta_get(sty *s, const char *key, char *val, size_t size)
@@ -64,8 +68,7 @@ static int meta_set(sty *s, const char *key, const char *val)
 	return rc;
 }
 
-/* 128 random bits as 32 hex digits, from the kernel (link codes and tokens must be unguessable). */
-static int random_hex(char out[33])
+int sty_random_hex(char out[33])
 {
 	uint8_t b[16];
 	if (getrandom(b, sizeof b, 0) != (ssize_t)sizeof b)
@@ -75,49 +78,173 @@ static int random_hex(char out[33])
 	return 0;
 }
 
-int sty_open(const char *path, bool create, sty **out, char *err, size_t err_size)
+/* Names SQLite does not treat as a file: "" (a temporary database), ":memory:", "file:" URIs. */
+static int sqlite_special_name(const char *path)
 {
-	*out = NULL;
-	struct stat sb;
-	if (!create && stat(path, &sb) != 0) {
-		snprintf(err, err_size, "%s: no such study database (create one with 'taslab study design')", path);
-		return TL_ERR_ARG;
-	}
-	sty *s = calloc(1, sizeof *s);
-	if (!s) {
-		snprintf(err, err_size, "out of memory");
-		return TL_ERR_ARG;
-	}
-	snprintf(s->path, sizeof s->path, "%s", path);
-	pthread_mutex_init(&s->lock, NULL);
-	int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
-	if (sqlite3_open_v2(path, &s->db, flags, NULL) != SQLITE_OK) {
-		snprintf(err, err_size, "%s: cannot open: %s", path, s->db ? sqlite3_errmsg(s->db) : "out of memory");
-		sty_close(&s);
-		return TL_ERR_DB;
-	}
+	return !*path || !strcmp(path, ":memory:") || !strncmp(path, "file:", 5);
+}
+
+/* Opens `file` (SQLite) for the study `s`, applies the pragmas and, when `init`, creates the schema, the admin
+ * token and the markers; otherwise checks that it is a taslab study and brings the schema up to date. */
+static int db_connect(sty *s, const char *file, bool init, char *err, size_t err_size)
+{
+	int flags = SQLITE_OPEN_READWRITE | (init ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+	if (sqlite3_open_v2(file, &s->db, flags, NULL) != SQLITE_OK)
+		return tl_error(err, err_size, TL_ERR_DB, "%s: cannot open: %s", s->path,
+				s->db ? sqlite3_errmsg(s->db) : "out of memory");
 	sqlite3_busy_timeout(s->db, 5000);
 	/* Durability: WAL with synchronous=FULL fsyncs the log at every commit, so an answer acknowledged after
 	 * its COMMIT survives a crash of the server or the machine. */
-	char *msg = NULL;
+	char *msg = NULL, mark[8];
 	if (sqlite3_exec(s->db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA foreign_keys=ON;", NULL, NULL,
-			 &msg) != SQLITE_OK ||
-	    sqlite3_exec(s->db, SCHEMA, NULL, NULL, &msg) != SQLITE_OK) {
-		snprintf(err, err_size, "%s: not a taslab study database (%s)", path, msg ? msg : "?");
+			 &msg) != SQLITE_OK) {
+		int rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab study database (%s)", s->path, msg ? msg : "?");
 		sqlite3_free(msg);
-		sty_close(&s);
-		return TL_ERR_DB;
+		return rc;
 	}
-	if (meta_get(s, "admin_token", s->token, sizeof s->token)) {
-		if (random_hex(s->token) || meta_set(s, "admin_token", s->token) || meta_set(s, "taslab_study", "1")) {
-			snprintf(err, err_size, "%s: cannot initialise the study", path);
-			sty_close(&s);
-			return TL_ERR_DB;
-		}
+	if (!init) {
+		sqlite3_stmt *st;
+		int has_meta = sqlite3_prepare_v2(s->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'meta'", -1,
+						  &st, NULL) == SQLITE_OK &&
+			       sqlite3_step(st) == SQLITE_ROW;
+		sqlite3_finalize(st);
+		if (!has_meta || meta_get(s, "taslab_study", mark, sizeof mark))
+			return tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab study database (made by 'taslab study design')",
+					s->path);
 	}
+	if (sqlite3_exec(s->db, SCHEMA, NULL, NULL, &msg) != SQLITE_OK) {
+		int rc = tl_error(err, err_size, TL_ERR_DB, "%s: cannot set up the study tables (%s)", s->path, msg ? msg : "?");
+		sqlite3_free(msg);
+		return rc;
+	}
+	if (init && (sty_random_hex(s->token) || meta_set(s, "admin_token", s->token) || meta_set(s, "taslab_study", "1")))
+		return tl_error(err, err_size, TL_ERR_DB, "%s: cannot initialise the study", s->path);
+	if (meta_get(s, "admin_token", s->token, sizeof s->token) || strlen(s->token) != 32)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: the study has no admin token (damaged?)", s->path);
 	meta_get(s, "stimuli", s->stimuli, sizeof s->stimuli);
+	meta_get(s, "served_url", s->served_url, sizeof s->served_url);
+	return TL_OK;
+}
+
+static sty *sty_alloc(const char *path)
+{
+	sty *s = calloc(1, sizeof *s);
+	if (!s)
+		return NULL;
+	snprintf(s->path, sizeof s->path, "%s", path);
+	snprintf(s->open_path, sizeof s->open_path, "%s", path);
+	pthread_mutex_init(&s->lock, NULL);
+	return s;
+}
+
+int sty_open(const char *path, sty **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	if (!path || sqlite_special_name(path))
+		return tl_error(err, err_size, TL_ERR_ARG, "--db '%s' is not a file name (SQLite would not keep the study in a file)",
+				path ? path : "");
+	if (strlen(path) >= TL_PATH_MAX)
+		return tl_error(err, err_size, TL_ERR_ARG, "%.64s...: path too long", path);
+	if (!tl_is_file(path))
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: no such study database (create one with 'taslab study design')",
+				path);
+	sty *s = sty_alloc(path);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	int rc = db_connect(s, path, false, err, err_size);
+	if (rc) {
+		sty_close(&s);
+		return rc;
+	}
 	*out = s;
 	return TL_OK;
+}
+
+/* Removes SQLite's side files of a database file (best effort). */
+static void unlink_side_files(const char *file)
+{
+	const char *suffix[3] = {"-wal", "-shm", "-journal"};
+	char p[TL_PATH_MAX + 16];
+	for (int i = 0; i < 3; i++) {
+		snprintf(p, sizeof p, "%s%s", file, suffix[i]);
+		unlink(p);
+	}
+}
+
+/* TL_ERR_CONFLICT when `path` or a side file of a database by that name exists. */
+static int check_free(const char *path, char *err, size_t err_size)
+{
+	struct stat sb;
+	if (lstat(path, &sb) == 0)
+		return tl_error(err, err_size, TL_ERR_CONFLICT, "%s exists: a study is never overwritten (choose a new --db file, "
+				"or delete the old one first)", path);
+	const char *suffix[3] = {"-wal", "-shm", "-journal"};
+	char p[TL_PATH_MAX + 16];
+	for (int i = 0; i < 3; i++) {
+		snprintf(p, sizeof p, "%s%s", path, suffix[i]);
+		if (lstat(p, &sb) == 0)
+			return tl_error(err, err_size, TL_ERR_CONFLICT, "%s exists (left by a deleted study?): SQLite would apply it to "
+					"the new study; remove it or choose another --db file", p);
+	}
+	return TL_OK;
+}
+
+int sty_create(const char *path, sty **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	if (!path || sqlite_special_name(path))
+		return tl_error(err, err_size, TL_ERR_ARG, "--db '%s' is not a file name: give the file the study is kept in "
+				"(\"\", \":memory:\" and file: URIs are not kept)", path ? path : "");
+	if (strlen(path) >= TL_PATH_MAX - 32)
+		return tl_error(err, err_size, TL_ERR_ARG, "%.64s...: path too long", path);
+	int rc = check_free(path, err, err_size);
+	if (rc)
+		return rc;
+	sty *s = sty_alloc(path);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	/* tl_fs.h detach pattern: SQLite writes the temporary file by name; sty_commit renames it into place. */
+	if ((rc = tl_atomic_open(&s->pending, path, err, err_size)) || (rc = tl_atomic_detach(&s->pending, err, err_size))) {
+		sty_close(&s);
+		return rc;
+	}
+	/* The study holds the admin token and every participant's link code: owner only. SQLite gives its -wal and
+	 * -shm files the mode of the database file. */
+	if (chmod(s->pending.tmp, 0600) != 0) {
+		rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot restrict the permissions: %s", path, strerror(errno));
+		sty_close(&s);
+		return rc;
+	}
+	snprintf(s->open_path, sizeof s->open_path, "%s", s->pending.tmp);
+	if ((rc = db_connect(s, s->open_path, true, err, err_size))) {
+		sty_close(&s);
+		return rc;
+	}
+	*out = s;
+	return TL_OK;
+}
+
+int sty_commit(sty *s, char *err, size_t err_size)
+{
+	if (!s->pending.open)
+		return TL_OK;
+	/* Closing the last connection checkpoints the WAL into the file and deletes it, so the one file holds
+	 * the whole study before it is renamed. */
+	if (sqlite3_close(s->db) != SQLITE_OK) {
+		int rc = sty_db_fail(s, err, err_size, "closing the new study");
+		return rc;
+	}
+	s->db = NULL;
+	int rc = check_free(s->path, err, err_size);
+	if (!rc)
+		rc = tl_atomic_commit(&s->pending, err, err_size);
+	unlink_side_files(s->pending.tmp);
+	if (rc) {
+		tl_atomic_abort(&s->pending);
+		return rc;
+	}
+	snprintf(s->open_path, sizeof s->open_path, "%s", s->path);
+	return db_connect(s, s->path, false, err, err_size);
 }
 
 void sty_close(sty **ps)
@@ -127,6 +254,10 @@ void sty_close(sty **ps)
 	sty *s = *ps;
 	if (s->db)
 		sqlite3_close(s->db);
+	if (s->pending.open) { /* never committed: the new study goes away */
+		unlink_side_files(s->pending.tmp);
+		tl_atomic_abort(&s->pending);
+	}
 	pthread_mutex_destroy(&s->lock);
 	free(s);
 	*ps = NULL;
@@ -135,6 +266,33 @@ void sty_close(sty **ps)
 const char *sty_stimuli(const sty *s) { return s->stimuli; }
 const char *sty_path(const sty *s) { return s->path; }
 const char *sty_admin_token(const sty *s) { return s->token; }
+const char *sty_served_url(const sty *s) { return s->served_url; }
+
+int sty_set_served_url(sty *s, const char *url, char *err, size_t err_size)
+{
+	if (strlen(url) >= sizeof s->served_url)
+		return tl_error(err, err_size, TL_ERR_ARG, "served URL too long");
+	pthread_mutex_lock(&s->lock);
+	int bad = meta_set(s, "served_url", url);
+	if (!bad)
+		snprintf(s->served_url, sizeof s->served_url, "%s", url);
+	pthread_mutex_unlock(&s->lock);
+	return bad ? sty_db_fail(s, err, err_size, "storing the served URL") : TL_OK;
+}
+
+int sty_method_has_threshold(const char *method)
+{
+	/* DESIGN section 4: --threshold T belongs to tfr, tarc, tasa (and the oracle variants of tarc/tasa). */
+	static const char *const with[] = {"tfr", "tarc", "tasa", "tarc-oracle", "tasa-oracle"};
+	static const char *const without[] = {"ref", "rrc", "sa", "sau"};
+	for (size_t i = 0; i < sizeof with / sizeof *with; i++)
+		if (!strcmp(method, with[i]))
+			return 1;
+	for (size_t i = 0; i < sizeof without / sizeof *without; i++)
+		if (!strcmp(method, without[i]))
+			return 0;
+	return -1;
+}
 
 /* ------------------------------------------------------------------ design */
 
@@ -170,6 +328,17 @@ static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, c
 			pairs_free(&set);
 			return tl_error(err, err_size, TL_ERR_INPUT, "%s: clip %s does not exist (render the set again with 'taslab pair')",
 					file, clip);
+		}
+	}
+	for (size_t i = 0; i < set.count; i++) {
+		const pairs_condition *c = &set.conditions[i];
+		int has_T = sty_method_has_threshold(c->method);
+		if (has_T < 0 || has_T != !isnan(c->T)) {
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: condition '%s': %s", file, c->id,
+				      has_T < 0 ? "unknown method (DESIGN section 4 names: ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle)"
+				      : has_T ? "this method needs a threshold T" : "this method has no threshold T");
+			pairs_free(&set);
+			return rc;
 		}
 	}
 	for (size_t i = 0; i < set.count; i++) {
@@ -329,7 +498,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	uint32_t breaks = 0;
 	for (uint32_t pi = 0; ok && pi < d->participants; pi++) {
 		char code[33], label[32];
-		if (random_hex(code)) {
+		if (sty_random_hex(code)) {
 			ok = 0;
 			break;
 		}
@@ -443,18 +612,68 @@ static int64_t participant_id(sty *s, const char *code)
 	return id;
 }
 
+/* The extension a clip's opaque name keeps, so the browser knows the container: ".webm" / ".mp4", else none. */
+static const char *clip_ext(const char *path)
+{
+	size_t n = strlen(path);
+	if (n >= 5 && !strcmp(path + n - 5, ".webm"))
+		return ".webm";
+	if (n >= 4 && !strcmp(path + n - 4, ".mp4"))
+		return ".mp4";
+	return "";
+}
+
+/* The opaque name of side `slot` of trial (pid, idx), made (random, stored) when missing. Caller holds the lock
+ * and an open transaction. */
+static int clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n)
+{
+	sqlite3_stmt *st;
+	if (sqlite3_prepare_v2(s->db, "SELECT name FROM clip_names WHERE participant = ? AND idx = ? AND slot = ?", -1, &st,
+			       NULL))
+		return -1;
+	sqlite3_bind_int64(st, 1, pid);
+	sqlite3_bind_int64(st, 2, idx);
+	sqlite3_bind_int(st, 3, slot);
+	int r = sqlite3_step(st);
+	if (r == SQLITE_ROW)
+		snprintf(out, n, "%s", (const char *)sqlite3_column_text(st, 0));
+	sqlite3_finalize(st);
+	if (r == SQLITE_ROW)
+		return 0;
+	if (r != SQLITE_DONE)
+		return -1;
+	char hex[33];
+	if (sty_random_hex(hex))
+		return -1;
+	snprintf(out, n, "%s%s", hex, clip_ext(path));
+	if (sqlite3_prepare_v2(s->db, "INSERT INTO clip_names(name, participant, idx, slot) VALUES(?, ?, ?, ?)", -1, &st, NULL))
+		return -1;
+	sqlite3_bind_text(st, 1, out, -1, SQLITE_STATIC);
+	sqlite3_bind_int64(st, 2, pid);
+	sqlite3_bind_int64(st, 3, idx);
+	sqlite3_bind_int(st, 4, slot);
+	r = sqlite3_step(st);
+	sqlite3_finalize(st);
+	return r == SQLITE_DONE ? 0 : -1;
+}
+
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size)
 {
 	memset(t, 0, sizeof *t);
 	pthread_mutex_lock(&s->lock);
-	int rc = TL_OK;
+	int rc = TL_OK, in_tx = 0;
 	int64_t pid = participant_id(s, code);
 	sqlite3_stmt *st = NULL;
 	if (pid < 0) {
-		snprintf(err, err_size, "unknown participant");
-		rc = TL_ERR_NOTFOUND;
+		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant");
 		goto done;
 	}
+	/* One transaction: the clip names made for a trial shown for the first time are committed together. */
+	if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
+		rc = sty_db_fail(s, err, err_size, "next trial");
+		goto done;
+	}
+	in_tx = 1;
 	if (sqlite3_prepare_v2(s->db,
 			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1),"
 			       " (SELECT count(*) FROM answers WHERE participant = ?1),"
@@ -470,17 +689,27 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 	if (r == SQLITE_ROW) {
 		t->total = (uint32_t)sqlite3_column_int(st, 0);
 		t->answered = (uint32_t)sqlite3_column_int(st, 1);
-		t->index = (uint32_t)sqlite3_column_int(st, 2);
+		t->index = (uint32_t)sqlite3_column_int64(st, 2);
 		int ref_first = sqlite3_column_int(st, 3);
 		snprintf(t->kind, sizeof t->kind, "%s", (const char *)sqlite3_column_text(st, 4));
 		t->break_before = sqlite3_column_int(st, 5) != 0;
-		const char *ref = (const char *)sqlite3_column_text(st, 6), *test = (const char *)sqlite3_column_text(st, 7);
-		snprintf(t->clip_a, sizeof t->clip_a, "%s", ref_first ? ref : test);
-		snprintf(t->clip_b, sizeof t->clip_b, "%s", ref_first ? test : ref);
+		char ref[TL_PATH_MAX], test[TL_PATH_MAX];
+		snprintf(ref, sizeof ref, "%s", (const char *)sqlite3_column_text(st, 6));
+		snprintf(test, sizeof test, "%s", (const char *)sqlite3_column_text(st, 7));
+		sqlite3_finalize(st);
+		st = NULL;
+		if (clip_name(s, pid, t->index, 0, ref_first ? ref : test, t->clip_a, sizeof t->clip_a) ||
+		    clip_name(s, pid, t->index, 1, ref_first ? test : ref, t->clip_b, sizeof t->clip_b)) {
+			rc = sty_db_fail(s, err, err_size, "naming the clips");
+			goto done;
+		}
 	} else if (r == SQLITE_DONE) {
 		sqlite3_finalize(st);
 		st = NULL;
-		sqlite3_prepare_v2(s->db, "SELECT count(*) FROM trials WHERE participant = ?", -1, &st, NULL);
+		if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM trials WHERE participant = ?", -1, &st, NULL)) {
+			rc = sty_db_fail(s, err, err_size, "next trial");
+			goto done;
+		}
 		sqlite3_bind_int64(st, 1, pid);
 		if (sqlite3_step(st) == SQLITE_ROW)
 			t->total = t->answered = (uint32_t)sqlite3_column_int(st, 0);
@@ -490,27 +719,69 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 	}
 done:
 	sqlite3_finalize(st);
+	if (in_tx && (rc || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK)) {
+		if (!rc)
+			rc = sty_db_fail(s, err, err_size, "next trial");
+		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
+	}
+	if (rc)
+		memset(t, 0, sizeof *t);
 	pthread_mutex_unlock(&s->lock);
 	return rc;
 }
 
-int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_ms, char *err, size_t err_size)
+int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *err, size_t err_size)
 {
-	if (answer < -2 || answer > 2) {
-		snprintf(err, err_size, "answer must be an integer from -2 to 2");
-		return TL_ERR_ARG;
+	rel[0] = 0;
+	sqlite3_stmt *st;
+	pthread_mutex_lock(&s->lock);
+	int rc = TL_OK;
+	if (sqlite3_prepare_v2(s->db,
+			       "SELECT CASE WHEN (k.slot = 0) = (t.ref_first != 0) THEN c.ref_clip ELSE c.test_clip END"
+			       " FROM clip_names k JOIN trials t ON t.participant = k.participant AND t.idx = k.idx"
+			       " JOIN conditions c ON c.id = t.condition WHERE k.name = ?", -1, &st, NULL)) {
+		rc = sty_db_fail(s, err, err_size, "clip");
+		goto done;
 	}
+	sqlite3_bind_text(st, 1, name, -1, SQLITE_STATIC);
+	int r = sqlite3_step(st);
+	if (r == SQLITE_ROW && sqlite3_column_text(st, 0) && sqlite3_column_text(st, 0)[0])
+		snprintf(rel, rel_size, "%s", (const char *)sqlite3_column_text(st, 0));
+	else if (r == SQLITE_ROW || r == SQLITE_DONE)
+		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "no such clip");
+	else
+		rc = sty_db_fail(s, err, err_size, "clip");
+	sqlite3_finalize(st);
+done:
+	pthread_mutex_unlock(&s->lock);
+	return rc;
+}
+
+int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t rt_ms, char *err, size_t err_size)
+{
+	if (answer < -2 || answer > 2)
+		return tl_error(err, err_size, TL_ERR_ARG, "answer must be an integer from -2 to 2");
+	if (rt_ms < -1 || rt_ms > STY_RT_MS_MAX)
+		return tl_error(err, err_size, TL_ERR_ARG, "rt_ms must be a whole number of milliseconds from 0 to %d",
+				STY_RT_MS_MAX);
 	pthread_mutex_lock(&s->lock);
 	int rc = TL_OK;
 	sqlite3_stmt *st = NULL;
 	int64_t pid = participant_id(s, code);
 	if (pid < 0) {
-		snprintf(err, err_size, "unknown participant");
-		rc = TL_ERR_NOTFOUND;
+		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant");
 		goto done;
 	}
-	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
-				  " (SELECT count(*) FROM answers WHERE participant = ?1 AND idx = ?2)", -1, &st, NULL);
+	/* Does the trial exist, is it answered, and which trial is current (the lowest-index unanswered one). The
+	 * lock serialises this check with the INSERT below against the other server threads. */
+	if (sqlite3_prepare_v2(s->db,
+			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
+			       " (SELECT count(*) FROM answers WHERE participant = ?1 AND idx = ?2),"
+			       " (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
+			       "  idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))", -1, &st, NULL)) {
+		rc = sty_db_fail(s, err, err_size, "answer");
+		goto done;
+	}
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, trial);
 	if (sqlite3_step(st) != SQLITE_ROW) {
@@ -518,34 +789,39 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_
 		goto done;
 	}
 	if (sqlite3_column_int(st, 0) == 0) {
-		snprintf(err, err_size, "no trial %u for this participant", trial);
-		rc = TL_ERR_NOTFOUND;
+		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "no trial %u for this participant", trial);
 		goto done;
 	}
 	if (sqlite3_column_int(st, 1) != 0) {
-		snprintf(err, err_size, "trial %u was answered already", trial);
-		rc = TL_ERR_CONFLICT;
+		rc = tl_error(err, err_size, TL_ERR_CONFLICT, "trial %u was answered already", trial);
+		goto done;
+	}
+	if (sqlite3_column_int64(st, 2) != (sqlite3_int64)trial) {
+		rc = tl_error(err, err_size, TL_ERR_ARG, "trial %u is not the current trial (%lld): trials are answered in order",
+			      trial, (long long)sqlite3_column_int64(st, 2));
 		goto done;
 	}
 	sqlite3_finalize(st);
+	st = NULL;
 	/* A single autocommit INSERT: when sqlite3_step returns DONE the row is committed (and, with
 	 * synchronous=FULL, on disk); only then is the answer acknowledged. */
-	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at)"
-				  " VALUES(?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))", -1, &st, NULL);
+	if (sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at)"
+				      " VALUES(?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))", -1, &st, NULL)) {
+		rc = sty_db_fail(s, err, err_size, "storing the answer");
+		goto done;
+	}
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, trial);
-	sqlite3_bind_int(st, 3, answer);
+	sqlite3_bind_int64(st, 3, answer);
 	if (rt_ms >= 0)
 		sqlite3_bind_int64(st, 4, rt_ms);
 	else
 		sqlite3_bind_null(st, 4);
 	int r = sqlite3_step(st);
-	if (r == SQLITE_CONSTRAINT) {
-		snprintf(err, err_size, "trial %u was answered already", trial);
-		rc = TL_ERR_CONFLICT;
-	} else if (r != SQLITE_DONE) {
+	if (r == SQLITE_CONSTRAINT)
+		rc = tl_error(err, err_size, TL_ERR_CONFLICT, "trial %u was answered already", trial);
+	else if (r != SQLITE_DONE)
 		rc = sty_db_fail(s, err, err_size, "storing the answer");
-	}
 done:
 	sqlite3_finalize(st);
 	pthread_mutex_unlock(&s->lock);

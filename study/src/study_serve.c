@@ -1,71 +1,242 @@
-/* study_serve.c — the study web server (libmicrohttpd): participant pages, the answer API, clips with HTTP
- * Range support from the stimulus folder only, and token-protected export endpoints (study_serve.h). */
-#define _DEFAULT_SOURCE /* realpath, getrandom */
+/* study_serve.c — the study web server (study_serve.h). sty_server_handle answers one parsed request (routing,
+ * the answer API, clips by opaque name with RFC 7233 ranges, the token-protected exports); the libmicrohttpd
+ * callback only collects the request (headers, a body of at most STY_MAX_BODY_B) and sends the response. Keeping
+ * the sockets out of the request logic lets tests and the fuzzer (tests/fuzz/fuzz_serve.c) drive all of it. */
+#define _DEFAULT_SOURCE /* realpath, mkdtemp, strncasecmp */
 #include "taslab/study_serve.h"
 
+#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <jansson.h>
 #include <limits.h>
 #include <microhttpd.h>
-#include <arpa/inet.h>
 #include <netinet/in.h>
+#include <pthread.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "study_internal.h"
+#include "taslab/tl_fs.h"
 #include "web/study_html.h"
 
-#define MAX_BODY 4096
+#define MAX_HEADERS 64
+#define LOG_LINES_PER_S 10 /* more log lines than this in one second are counted, not printed */
 
 struct sty_server {
 	sty *study;
 	struct MHD_Daemon *mhd;
 	char root[PATH_MAX]; /* realpath of the stimulus folder */
 	uint16_t port;
+	sty_server_desc desc;
+	pthread_mutex_t log_lock;
+	int starting;        /* while MHD_start_daemon runs, its messages explain a failure: keep the last */
+	char start_msg[256];
+	time_t log_second;
+	unsigned log_count, log_dropped;
 };
 
-typedef struct req {
-	char body[MAX_BODY + 1];
-	size_t len;
-	int too_large;
-} req;
+/* ------------------------------------------------------------------ log */
 
-static enum MHD_Result send_text(struct MHD_Connection *c, unsigned code, const char *type, const char *text)
+static void default_log(void *cls, const char *line)
 {
-	struct MHD_Response *r = MHD_create_response_from_buffer(strlen(text), (void *)text, MHD_RESPMEM_MUST_COPY);
-	MHD_add_response_header(r, "Content-Type", type);
-	MHD_add_response_header(r, "Cache-Control", "no-store");
-	enum MHD_Result ret = MHD_queue_response(c, code, r);
-	MHD_destroy_response(r);
-	return ret;
+	(void)cls;
+	fprintf(stderr, "taslab study serve: %s\n", line);
 }
 
-static enum MHD_Result send_error(struct MHD_Connection *c, unsigned code, const char *msg)
+/* One line to the configured log, at most LOG_LINES_PER_S per second (a flood of bad requests must not become a
+ * flood on the terminal). */
+static void sv_log(struct sty_server *sv, const char *fmt, ...)
 {
-	char buf[512];
+	char line[512];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(line, sizeof line, fmt, ap);
+	va_end(ap);
+	for (char *c = line; *c; c++)
+		if (*c == '\n' || *c == '\r')
+			*c = ' ';
+	size_t n = strlen(line);
+	while (n && line[n - 1] == ' ')
+		line[--n] = 0;
+	pthread_mutex_lock(&sv->log_lock);
+	if (sv->starting) {
+		snprintf(sv->start_msg, sizeof sv->start_msg, "%s", line);
+		pthread_mutex_unlock(&sv->log_lock);
+		return;
+	}
+	time_t now = time(NULL);
+	unsigned dropped = 0;
+	int print = 1;
+	if (now != sv->log_second) {
+		dropped = sv->log_dropped;
+		sv->log_second = now;
+		sv->log_count = sv->log_dropped = 0;
+	}
+	if (++sv->log_count > LOG_LINES_PER_S) {
+		sv->log_dropped++;
+		print = 0;
+	}
+	void (*log)(void *, const char *) = sv->desc.log ? sv->desc.log : default_log;
+	if (dropped) {
+		char note[64];
+		snprintf(note, sizeof note, "(%u more messages not shown)", dropped);
+		log(sv->desc.log_cls, note);
+	}
+	if (print)
+		log(sv->desc.log_cls, line);
+	pthread_mutex_unlock(&sv->log_lock);
+}
+
+/* libmicrohttpd's error log (MHD_OPTION_EXTERNAL_LOGGER): through sv_log, one line each. */
+static void mhd_log(void *cls, const char *fmt, va_list ap)
+{
+	char msg[400];
+	vsnprintf(msg, sizeof msg, fmt, ap);
+	sv_log(cls, "%s", msg);
+}
+
+/* ------------------------------------------------------------------ responses */
+
+static void resp_init(sty_response *r)
+{
+	memset(r, 0, sizeof *r);
+	r->fd = -1;
+	r->content_type = "application/json";
+}
+
+void sty_response_release(sty_response *r)
+{
+	if (!r)
+		return;
+	free(r->body);
+	r->body = NULL;
+	if (r->fd >= 0)
+		close(r->fd);
+	r->fd = -1;
+}
+
+static void set_body(sty_response *r, unsigned status, const char *type, const char *text, size_t len)
+{
+	free(r->body);
+	r->status = status;
+	r->content_type = type;
+	r->body = malloc(len + 1);
+	r->body_size = r->body ? len : 0;
+	if (r->body) {
+		memcpy(r->body, text, len);
+		r->body[len] = 0;
+	} else {
+		r->status = 500;
+	}
+}
+
+static void set_error(sty_response *r, unsigned status, const char *msg)
+{
 	json_t *j = json_pack("{s:s}", "error", msg);
-	char *s = json_dumps(j, JSON_COMPACT);
-	snprintf(buf, sizeof buf, "%s", s ? s : "{\"error\":\"?\"}");
+	char *s = j ? json_dumps(j, JSON_COMPACT) : NULL;
+	const char *text = s ? s : "{\"error\":\"?\"}";
+	set_body(r, status, "application/json", text, strlen(text));
 	free(s);
 	json_decref(j);
-	return send_text(c, code, "application/json", buf);
 }
 
-static enum MHD_Result send_json(struct MHD_Connection *c, json_t *j)
+/* A 500: the client learns nothing about the server (paths, SQLite messages); the details go to the log. */
+static void set_internal(struct sty_server *sv, sty_response *r, const sty_request *rq, const char *detail)
 {
-	char *s = json_dumps(j, JSON_COMPACT);
-	json_decref(j);
-	enum MHD_Result r = send_text(c, 200, "application/json", s ? s : "{}");
-	free(s);
-	return r;
+	sv_log(sv, "%s %.40s...: %s", rq->method, rq->path, detail);
+	set_error(r, 500, "internal error");
 }
 
-/* A 32-hex-digit participant code (anything else is rejected before touching the database). */
-static int valid_code(const char *s, size_t len)
+static void set_json(sty_response *r, json_t *j)
+{
+	char *s = j ? json_dumps(j, JSON_COMPACT) : NULL;
+	json_decref(j);
+	if (!s) {
+		set_error(r, 500, "internal error");
+		return;
+	}
+	set_body(r, 200, "application/json", s, strlen(s));
+	free(s);
+}
+
+/* ------------------------------------------------------------------ request helpers */
+
+static const char *header(const sty_request *rq, const char *name, size_t *count)
+{
+	const char *v = NULL;
+	size_t n = 0;
+	for (size_t i = 0; i < rq->header_count; i++)
+		if (rq->headers[i].name && !strcasecmp(rq->headers[i].name, name)) {
+			if (!n)
+				v = rq->headers[i].value ? rq->headers[i].value : "";
+			n++;
+		}
+	if (count)
+		*count = n;
+	return v;
+}
+
+static int is_ows(char c) { return c == ' ' || c == '\t'; }
+static int is_digit(char c) { return c >= '0' && c <= '9'; }
+
+/* 1*DIGIT at *p, saturating at UINT64_MAX; advances *p. 0 when there is no digit. */
+static int parse_digits(const char **p, uint64_t *v)
+{
+	const char *s = *p;
+	uint64_t x = 0;
+	if (!is_digit(*s))
+		return 0;
+	for (; is_digit(*s); s++) {
+		uint64_t d = (uint64_t)(*s - '0');
+		x = x > (UINT64_MAX - d) / 10 ? UINT64_MAX : x * 10 + d;
+	}
+	*p = s;
+	*v = x;
+	return 1;
+}
+
+/* Message framing, RFC 7230 section 3.3.3: Content-Length fields (each possibly a list, "42, 42") must all be
+ * 1*DIGIT and equal, and may not come with Transfer-Encoding; otherwise the framing is invalid and the request
+ * gets 400 with the connection closed. *length = the declared length (UINT64_MAX: none). */
+static int framing_ok(const sty_request *rq, uint64_t *length)
+{
+	*length = UINT64_MAX;
+	int seen = 0;
+	for (size_t i = 0; i < rq->header_count; i++) {
+		if (!rq->headers[i].name || strcasecmp(rq->headers[i].name, "Content-Length"))
+			continue;
+		const char *p = rq->headers[i].value ? rq->headers[i].value : "";
+		for (;;) {
+			while (is_ows(*p))
+				p++;
+			uint64_t v;
+			if (!parse_digits(&p, &v))
+				return 0;
+			if (seen && v != *length)
+				return 0;
+			*length = v, seen = 1;
+			while (is_ows(*p))
+				p++;
+			if (!*p)
+				break;
+			if (*p++ != ',')
+				return 0;
+		}
+	}
+	size_t te;
+	header(rq, "Transfer-Encoding", &te);
+	return !(seen && te);
+}
+
+/* A 32-hex-digit code (anything else is rejected before touching the database). */
+static int valid_hex32(const char *s, size_t len)
 {
 	if (len != 32)
 		return 0;
@@ -75,240 +246,529 @@ static int valid_code(const char *s, size_t len)
 	return 1;
 }
 
-/* Serves ROOT/rel with single-range support; only regular files whose real path lies inside ROOT. */
-static enum MHD_Result send_clip(struct sty_server *sv, struct MHD_Connection *c, const char *rel)
+/* Compares the presented token with the admin token in time that does not depend on where they differ. */
+static int token_equal(const char *given, size_t given_len, const char *token)
 {
-	if (!*rel || rel[0] == '/' || strstr(rel, "..") || strchr(rel, '\\') || strlen(rel) > 1024)
-		return send_error(c, 403, "clip paths are relative to the stimulus folder and may not contain '..'");
-	char path[PATH_MAX + 1100], real[PATH_MAX];
-	snprintf(path, sizeof path, "%s/%s", sv->root, rel);
-	size_t rl = strlen(sv->root);
-	if (!realpath(path, real) || strncmp(real, sv->root, rl) || real[rl] != '/')
-		return send_error(c, 404, "no such clip");
-	int fd = open(real, O_RDONLY | O_CLOEXEC);
-	struct stat sb;
-	if (fd < 0 || fstat(fd, &sb) || !S_ISREG(sb.st_mode)) {
-		if (fd >= 0)
-			close(fd);
-		return send_error(c, 404, "no such clip");
-	}
-	uint64_t size = (uint64_t)sb.st_size, start = 0, end = size ? size - 1 : 0;
-	int partial = 0;
-	const char *range = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Range");
-	if (range) {
-		unsigned long long a = 0, b = 0;
-		int n = 0;
-		if (sscanf(range, "bytes=%llu-%n", &a, &n) == 1 && n > 0) {
-			const char *rest = range + n;
-			if (*rest && sscanf(rest, "%llu", &b) == 1)
-				end = b < end ? b : end;
-			start = a;
-		} else if (sscanf(range, "bytes=-%llu", &b) == 1 && b > 0) {
-			start = b >= size ? 0 : size - b;
-		} else {
-			close(fd);
-			return send_error(c, 416, "unsupported Range (one bytes=a-b range)");
-		}
-		if (start >= size || start > end) {
-			close(fd);
-			char cr[64];
-			snprintf(cr, sizeof cr, "bytes */%llu", (unsigned long long)size);
-			struct MHD_Response *r = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);
-			MHD_add_response_header(r, "Content-Range", cr);
-			enum MHD_Result ret = MHD_queue_response(c, 416, r);
-			MHD_destroy_response(r);
-			return ret;
-		}
-		partial = 1;
-	}
-	struct MHD_Response *r = MHD_create_response_from_fd_at_offset64(end - start + 1, fd, start);
-	if (!r) {
-		close(fd);
-		return send_error(c, 500, "cannot serve the file");
-	}
-	const char *type = strstr(real, ".webm") ? "video/webm" : strstr(real, ".png") ? "image/png" : "application/octet-stream";
-	MHD_add_response_header(r, "Content-Type", type);
-	MHD_add_response_header(r, "Accept-Ranges", "bytes");
-	if (partial) {
-		char cr[96];
-		snprintf(cr, sizeof cr, "bytes %llu-%llu/%llu", (unsigned long long)start, (unsigned long long)end,
-			 (unsigned long long)size);
-		MHD_add_response_header(r, "Content-Range", cr);
-	}
-	enum MHD_Result ret = MHD_queue_response(c, partial ? 206 : 200, r);
-	MHD_destroy_response(r);
-	return ret;
+	size_t n = strlen(token);
+	volatile unsigned char d = (unsigned char)(given_len != n);
+	for (size_t i = 0; i < n; i++)
+		d |= (unsigned char)((i < given_len ? given[i] : 0) ^ token[i]);
+	return d == 0;
 }
 
-static enum MHD_Result send_export(struct sty_server *sv, struct MHD_Connection *c, int pwcmp)
+/* "Authorization: Bearer <token>" (RFC 6750 section 2.1; the scheme is case-insensitive, RFC 7235). Exactly one
+ * Authorization field. */
+static int authorised(struct sty_server *sv, const sty_request *rq)
 {
-	char tmp[] = "/tmp/taslab-export-XXXXXX", err[512];
-	int fd = mkstemp(tmp);
-	if (fd < 0)
-		return send_error(c, 500, "cannot create a temporary file");
-	close(fd);
-	int rc = pwcmp ? sty_export_pwcmp(sv->study, tmp, err, sizeof err) : sty_export_long(sv->study, tmp, err, sizeof err);
-	fd = rc ? -1 : open(tmp, O_RDONLY | O_CLOEXEC);
-	unlink(tmp);
+	size_t n;
+	const char *v = header(rq, "Authorization", &n);
+	if (n != 1 || strncasecmp(v, "Bearer", 6) || !is_ows(v[6]))
+		return 0;
+	v += 6;
+	while (is_ows(*v))
+		v++;
+	size_t len = strlen(v);
+	while (len && is_ows(v[len - 1]))
+		len--;
+	return token_equal(v, len, sty_admin_token(sv->study));
+}
+
+/* ------------------------------------------------------------------ clips */
+
+enum { RANGE_IGNORE, RANGE_ONE, RANGE_416 };
+
+/* The Range header of a GET for a representation of `size` bytes (RFC 7233 section 2.1, 3.1):
+ *   byte-ranges-specifier = bytes-unit "=" byte-range-set; byte-range-set = 1#( byte-range-spec / suffix-byte-range-spec )
+ * A header that does not match the grammar (or another unit) is ignored: RANGE_IGNORE, send the whole file.
+ * More than one range is ignored as well ("A server MAY ignore the Range header field", section 3.1): no
+ * multipart/byteranges, which also keeps many small ranges from multiplying the work. One range that is invalid
+ * (last-byte-pos < first-byte-pos, section 2.1) or unsatisfiable (first-byte-pos >= size, or a zero suffix) is
+ * RANGE_416 ("the server SHOULD send a 416", section 3.1). Otherwise RANGE_ONE with [*first, *last]. */
+static int parse_range(const char *h, uint64_t size, uint64_t *first, uint64_t *last)
+{
+	if (strncasecmp(h, "bytes=", 6)) /* range units are case-insensitive */
+		return RANGE_IGNORE;
+	const char *p = h + 6;
+	size_t n = 0;
+	int kind = RANGE_IGNORE;
+	/* The list rule (RFC 7230 section 7): elements separated by "," with optional whitespace, empty ones allowed. */
+	for (;;) {
+		while (is_ows(*p) || *p == ',')
+			p++;
+		if (!*p)
+			break;
+		uint64_t a = 0, b = 0;
+		int has_a = parse_digits(&p, &a);
+		if (*p++ != '-')
+			return RANGE_IGNORE;
+		int has_b = parse_digits(&p, &b);
+		if (!has_a && !has_b)
+			return RANGE_IGNORE;
+		while (is_ows(*p))
+			p++;
+		if (*p && *p != ',')
+			return RANGE_IGNORE;
+		if (++n > 1)
+			continue; /* still checked for syntax; several ranges are ignored below */
+		if (has_a) {                   /* first-byte-pos "-" [ last-byte-pos ] */
+			if (has_b && b < a)
+				kind = RANGE_416;      /* invalid */
+			else if (a >= size)
+				kind = RANGE_416;      /* unsatisfiable */
+			else
+				kind = RANGE_ONE, *first = a, *last = has_b && b < size - 1 ? b : size - 1;
+		} else if (b == 0) {           /* "-" suffix-length: the last b bytes */
+			kind = RANGE_416;
+		} else if (size == 0) {
+			kind = RANGE_IGNORE;           /* nothing to send a part of */
+		} else {
+			kind = RANGE_ONE, *first = b >= size ? 0 : size - b, *last = size - 1;
+		}
+	}
+	if (n != 1)
+		return RANGE_IGNORE;
+	return kind;
+}
+
+static const char *clip_type(const char *path)
+{
+	size_t n = strlen(path);
+	if (n >= 5 && !strcmp(path + n - 5, ".webm"))
+		return "video/webm";
+	if (n >= 4 && !strcmp(path + n - 4, ".mp4"))
+		return "video/mp4";
+	return "application/octet-stream";
+}
+
+/* /clips/<name>: only names handed out by the trial API (sty_clip_file), and only files inside the stimulus
+ * folder (realpath), so nothing else there (a study database, pairs.json, manifests) is ever served. */
+static void serve_clip(struct sty_server *sv, const sty_request *rq, const char *name, sty_response *r)
+{
+	size_t hexlen = strspn(name, "0123456789abcdef");
+	const char *ext = name + hexlen;
+	if (!valid_hex32(name, hexlen) || (*ext && strcmp(ext, ".webm") && strcmp(ext, ".mp4"))) {
+		set_error(r, 404, "no such clip");
+		return;
+	}
+	char rel[TL_PATH_MAX], err[512];
+	int rc = sty_clip_file(sv->study, name, rel, sizeof rel, err, sizeof err);
+	if (rc == TL_ERR_NOTFOUND) {
+		set_error(r, 404, "no such clip");
+		return;
+	}
+	if (rc) {
+		set_internal(sv, r, rq, err);
+		return;
+	}
+	char path[PATH_MAX + TL_PATH_MAX + 2], real[PATH_MAX];
+	snprintf(path, sizeof path, "%s/%s", sv->root, rel);
+	struct stat sb;
+	int fd = -1;
+	if (!realpath(path, real) || !tl_path_inside(real, sv->root) || (fd = open(real, O_RDONLY | O_CLOEXEC)) < 0 ||
+	    fstat(fd, &sb) || !S_ISREG(sb.st_mode)) {
+		if (fd >= 0)
+			close(fd);
+		set_internal(sv, r, rq, "a clip of the design is missing or outside the stimulus folder");
+		return;
+	}
+	uint64_t size = (uint64_t)sb.st_size, first = 0, last = size ? size - 1 : 0;
+	size_t nrange, nifrange;
+	const char *range = header(rq, "Range", &nrange);
+	header(rq, "If-Range", &nifrange);
+	/* Range only for GET (RFC 7233 section 3.1); If-Range cannot match since we send no validators (section 3.2:
+	 * then the Range is ignored); a repeated Range field is not something we can interpret: ignore it. */
+	int kind = range && nrange == 1 && !nifrange && !strcmp(rq->method, "GET") ? parse_range(range, size, &first, &last)
+										  : RANGE_IGNORE;
+	if (kind == RANGE_416) {
+		close(fd);
+		set_body(r, 416, "text/plain", "", 0);
+		snprintf(r->content_range, sizeof r->content_range, "bytes */%llu", (unsigned long long)size);
+		return;
+	}
+	if (kind == RANGE_IGNORE)
+		first = 0, last = size ? size - 1 : 0;
+	r->status = kind == RANGE_ONE ? 206 : 200;
+	r->content_type = clip_type(real);
+	r->fd = fd;
+	r->file_offset = first;
+	r->file_size = size ? last - first + 1 : 0;
+	r->accept_ranges = true;
+	r->cacheable = false;
+	if (kind == RANGE_ONE)
+		snprintf(r->content_range, sizeof r->content_range, "bytes %llu-%llu/%llu", (unsigned long long)first,
+			 (unsigned long long)last, (unsigned long long)size);
+}
+
+/* ------------------------------------------------------------------ API */
+
+static void serve_export(struct sty_server *sv, const sty_request *rq, int pwcmp, sty_response *r)
+{
+	/* A private folder (0700) for the file, removed before replying; the open descriptor is what is sent. */
+	const char *tmp = getenv("TMPDIR");
+	char dir[TL_PATH_MAX], file[TL_PATH_MAX + 16], err[1024];
+	snprintf(dir, sizeof dir, "%s/taslab-export-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+	if (!mkdtemp(dir)) {
+		set_internal(sv, r, rq, "cannot create a temporary folder for the export");
+		return;
+	}
+	snprintf(file, sizeof file, "%s/export.csv", dir);
+	int rc = pwcmp ? sty_export_pwcmp(sv->study, file, err, sizeof err) : sty_export_long(sv->study, file, err, sizeof err);
+	int fd = rc ? -1 : open(file, O_RDONLY | O_CLOEXEC);
+	unlink(file);
+	rmdir(dir);
 	struct stat sb;
 	if (fd < 0 || fstat(fd, &sb)) {
 		if (fd >= 0)
 			close(fd);
-		return send_error(c, 500, rc ? err : "export failed");
+		set_internal(sv, r, rq, rc ? err : "export failed");
+		return;
 	}
-	struct MHD_Response *r = MHD_create_response_from_fd((size_t)sb.st_size, fd);
-	MHD_add_response_header(r, "Content-Type", "text/csv");
-	MHD_add_response_header(r, "Cache-Control", "no-store");
-	enum MHD_Result ret = MHD_queue_response(c, 200, r);
-	MHD_destroy_response(r);
+	r->status = 200;
+	r->content_type = "text/csv; charset=utf-8";
+	r->fd = fd;
+	r->file_offset = 0;
+	r->file_size = (uint64_t)sb.st_size;
+}
+
+/* POST /api/<code>/answer: exactly {"trial": int, "answer": int, "rt_ms": int} (JSON integers, no other keys, no
+ * duplicates), range-checked before any narrowing conversion; the storage rules are sty_answer's. */
+static void serve_answer(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
+{
+	if (rq->body_too_large) {
+		set_error(r, 413, "request body larger than 4096 bytes");
+		return;
+	}
+	json_error_t je;
+	json_t *j = json_loadb(rq->body, rq->body_size, JSON_REJECT_DUPLICATES, &je);
+	const char *why = NULL;
+	json_t *t = json_object_get(j, "trial"), *a = json_object_get(j, "answer"), *rt = json_object_get(j, "rt_ms");
+	if (!json_is_object(j))
+		why = "body must be a JSON object {\"trial\": int, \"answer\": int, \"rt_ms\": int}";
+	else if (json_object_size(j) != 3 || !t || !a || !rt)
+		why = "body must have exactly the keys trial, answer and rt_ms";
+	else if (!json_is_integer(t) || json_integer_value(t) < 0 || json_integer_value(t) > UINT32_MAX)
+		why = "trial must be a whole number >= 0";
+	else if (!json_is_integer(a) || json_integer_value(a) < -2 || json_integer_value(a) > 2)
+		why = "answer must be an integer from -2 to 2";
+	else if (!json_is_integer(rt) || json_integer_value(rt) < 0 || json_integer_value(rt) > STY_RT_MS_MAX)
+		why = "rt_ms must be a whole number of milliseconds from 0 to 86400000";
+	if (why) {
+		json_decref(j);
+		set_error(r, 400, why);
+		return;
+	}
+	char err[512];
+	int rc = sty_answer(sv->study, code, (uint32_t)json_integer_value(t), (int64_t)json_integer_value(a),
+			    (int64_t)json_integer_value(rt), err, sizeof err);
+	json_decref(j);
+	switch (rc) {
+	case TL_OK: set_json(r, json_pack("{s:b}", "ok", 1)); break;
+	case TL_ERR_ARG: set_error(r, 400, err); break;
+	case TL_ERR_NOTFOUND: set_error(r, 404, err); break;
+	case TL_ERR_CONFLICT: set_error(r, 409, err); break;
+	default: set_internal(sv, r, rq, err);
+	}
+}
+
+static void serve_trial(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
+{
+	sty_trial t;
+	char err[512];
+	int rc = sty_next_trial(sv->study, code, &t, err, sizeof err);
+	if (rc == TL_ERR_NOTFOUND) {
+		set_error(r, 404, "unknown participant");
+		return;
+	}
+	if (rc) {
+		set_internal(sv, r, rq, err);
+		return;
+	}
+	if (t.done) {
+		set_json(r, json_pack("{s:b, s:i, s:i}", "done", 1, "total", (json_int_t)t.total, "answered",
+				      (json_int_t)t.answered));
+		return;
+	}
+	char a[64], b[64];
+	snprintf(a, sizeof a, "/clips/%s", t.clip_a);
+	snprintf(b, sizeof b, "/clips/%s", t.clip_b);
+	set_json(r, json_pack("{s:b, s:I, s:I, s:I, s:s, s:s, s:s, s:b}", "done", 0, "index", (json_int_t)t.index, "total",
+			      (json_int_t)t.total, "answered", (json_int_t)t.answered, "clip_a", a, "clip_b", b, "kind", t.kind,
+			      "break_before", t.break_before));
+}
+
+void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
+{
+	resp_init(r);
+	const char *method = rq->method ? rq->method : "", *url = rq->path ? rq->path : "";
+	uint64_t length;
+	if (!framing_ok(rq, &length)) {
+		set_error(r, 400, "conflicting or invalid Content-Length (RFC 7230 section 3.3.3)");
+		r->close = true;
+		return;
+	}
+	if (!rq->body) { /* head only: refuse what can be refused before reading a body */
+		if (length != UINT64_MAX && length > STY_MAX_BODY_B) {
+			set_error(r, 413, "request body larger than 4096 bytes");
+			r->close = true;
+		}
+		return;
+	}
+	int get = !strcmp(method, "GET") || !strcmp(method, "HEAD"), post = !strcmp(method, "POST");
+	if (!get && !post) {
+		set_error(r, 405, "only GET, HEAD and POST");
+		return;
+	}
+	if (!strncmp(url, "/p/", 3)) {
+		if (!get) {
+			set_error(r, 405, "GET only");
+			return;
+		}
+		sty_trial t;
+		char err[512];
+		int rc = valid_hex32(url + 3, strlen(url + 3)) ? sty_next_trial(sv->study, url + 3, &t, err, sizeof err)
+							       : TL_ERR_NOTFOUND;
+		if (rc == TL_ERR_NOTFOUND)
+			set_error(r, 404, "unknown participant link");
+		else if (rc)
+			set_internal(sv, r, rq, err);
+		else
+			set_body(r, 200, "text/html; charset=utf-8", study_html, strlen(study_html));
+		return;
+	}
+	if (!strncmp(url, "/api/", 5)) {
+		const char *code = url + 5, *slash = strchr(code, '/');
+		if (!slash || !valid_hex32(code, (size_t)(slash - code))) {
+			set_error(r, 404, "unknown participant");
+			return;
+		}
+		char cb[33];
+		memcpy(cb, code, 32);
+		cb[32] = 0;
+		if (!strcmp(slash, "/trial") && get)
+			serve_trial(sv, rq, cb, r);
+		else if (!strcmp(slash, "/answer") && post)
+			serve_answer(sv, rq, cb, r);
+		else if (!strcmp(slash, "/trial") || !strcmp(slash, "/answer"))
+			set_error(r, 405, "GET /trial, POST /answer");
+		else
+			set_error(r, 404, "no such endpoint");
+		return;
+	}
+	if (!strncmp(url, "/clips/", 7)) {
+		if (get)
+			serve_clip(sv, rq, url + 7, r);
+		else
+			set_error(r, 405, "GET only");
+		return;
+	}
+	if (!strncmp(url, "/admin/", 7)) {
+		if (!get) {
+			set_error(r, 405, "GET only");
+		} else if (!authorised(sv, rq)) {
+			set_error(r, 401, "admin endpoints need the header 'Authorization: Bearer TOKEN' (the token is printed by "
+					  "'taslab study serve')");
+			r->authenticate = true;
+		} else if (!strcmp(url, "/admin/export.csv")) {
+			serve_export(sv, rq, 0, r);
+		} else if (!strcmp(url, "/admin/export-pwcmp.csv")) {
+			serve_export(sv, rq, 1, r);
+		} else {
+			set_error(r, 404, "no such endpoint (export.csv, export-pwcmp.csv)");
+		}
+		return;
+	}
+	if (!strcmp(url, "/") && get) {
+		const char *text = "taslab study server: open your participant link (/p/<code>).\n";
+		set_body(r, 200, "text/plain; charset=utf-8", text, strlen(text));
+		return;
+	}
+	set_error(r, 404, "not found");
+}
+
+/* ------------------------------------------------------------------ libmicrohttpd adapter */
+
+typedef struct conn_state {
+	char body[STY_MAX_BODY_B + 1];
+	size_t len;
+	bool too_large;
+} conn_state;
+
+typedef struct header_list {
+	sty_http_field f[MAX_HEADERS];
+	size_t n;
+	bool overflow;
+} header_list;
+
+static enum MHD_Result collect_header(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
+{
+	(void)kind;
+	header_list *h = cls;
+	if (h->n == MAX_HEADERS) {
+		h->overflow = true;
+		return MHD_NO;
+	}
+	h->f[h->n++] = (sty_http_field){key, value};
+	return MHD_YES;
+}
+
+static enum MHD_Result queue(struct MHD_Connection *c, sty_response *r)
+{
+	struct MHD_Response *m;
+	if (r->fd >= 0) {
+		m = MHD_create_response_from_fd_at_offset64(r->file_size, r->fd, r->file_offset);
+		if (m)
+			r->fd = -1; /* MHD closes it */
+	} else {
+		m = MHD_create_response_from_buffer(r->body_size, r->body ? r->body : (char *)"", MHD_RESPMEM_MUST_COPY);
+	}
+	if (!m) {
+		sty_response_release(r);
+		return MHD_NO;
+	}
+	MHD_add_response_header(m, "Content-Type", r->content_type);
+	MHD_add_response_header(m, "X-Content-Type-Options", "nosniff");
+	if (!r->cacheable)
+		MHD_add_response_header(m, "Cache-Control", "no-store");
+	if (r->accept_ranges)
+		MHD_add_response_header(m, "Accept-Ranges", "bytes");
+	if (r->content_range[0])
+		MHD_add_response_header(m, "Content-Range", r->content_range);
+	if (r->authenticate)
+		MHD_add_response_header(m, "WWW-Authenticate", "Bearer realm=\"taslab study\"");
+	if (r->close)
+		MHD_add_response_header(m, "Connection", "close");
+	enum MHD_Result ret = MHD_queue_response(c, r->status, m);
+	MHD_destroy_response(m);
+	sty_response_release(r);
 	return ret;
 }
 
-static enum MHD_Result handle_answer(struct sty_server *sv, struct MHD_Connection *c, const char *code, req *rq)
-{
-	if (rq->too_large)
-		return send_error(c, 413, "request body larger than 4096 bytes");
-	json_error_t je;
-	json_t *j = json_loadb(rq->body, rq->len, JSON_REJECT_DUPLICATES, &je);
-	json_t *t = json_object_get(j, "trial"), *a = json_object_get(j, "answer"), *rt = json_object_get(j, "rt_ms");
-	if (!json_is_object(j) || !json_is_integer(t) || !json_is_integer(a) || (rt && !json_is_integer(rt) && !json_is_null(rt)) ||
-	    json_integer_value(t) < 0 || json_integer_value(t) > 1000000 || json_object_size(j) > 3) {
-		json_decref(j);
-		return send_error(c, 400, "body must be JSON {\"trial\": int, \"answer\": int -2..2, \"rt_ms\": int}");
-	}
-	char err[256];
-	int rc = sty_answer(sv->study, code, (uint32_t)json_integer_value(t), (int)json_integer_value(a),
-			    json_is_integer(rt) ? json_integer_value(rt) : -1, err, sizeof err);
-	json_decref(j);
-	switch (rc) {
-	case TL_OK: return send_json(c, json_pack("{s:b}", "ok", 1));
-	case TL_ERR_ARG: return send_error(c, 400, err);
-	case TL_ERR_NOTFOUND: return send_error(c, 404, err);
-	case TL_ERR_CONFLICT: return send_error(c, 409, err);
-	default: return send_error(c, 500, err);
-	}
-}
-
-static enum MHD_Result handler(void *cls, struct MHD_Connection *c, const char *url, const char *method,
-			       const char *version, const char *upload_data, size_t *upload_size, void **con_cls)
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
+				  const char *version, const char *upload_data, size_t *upload_size, void **con_cls)
 {
 	(void)version;
 	struct sty_server *sv = cls;
-	int post = !strcmp(method, "POST");
-	if (!*con_cls) { /* first call for this request */
-		req *rq = calloc(1, sizeof *rq);
-		if (!rq)
-			return MHD_NO;
-		*con_cls = rq;
-		return MHD_YES;
-	}
-	req *rq = *con_cls;
-	if (*upload_size) {
-		if (rq->len + *upload_size > MAX_BODY)
-			rq->too_large = 1;
+	conn_state *cs = *con_cls;
+	if (cs && *upload_size) { /* a piece of the body: keep up to STY_MAX_BODY_B */
+		if (cs->len + *upload_size > STY_MAX_BODY_B)
+			cs->too_large = true;
 		else {
-			memcpy(rq->body + rq->len, upload_data, *upload_size);
-			rq->len += *upload_size;
+			memcpy(cs->body + cs->len, upload_data, *upload_size);
+			cs->len += *upload_size;
 		}
 		*upload_size = 0;
 		return MHD_YES;
 	}
-	if (strcmp(method, "GET") && strcmp(method, "HEAD") && !post)
-		return send_error(c, 405, "only GET and POST");
-	if (!strncmp(url, "/p/", 3)) {
-		if (post)
-			return send_error(c, 405, "GET only");
-		if (!valid_code(url + 3, strlen(url + 3)))
-			return send_error(c, 404, "unknown participant link");
-		sty_trial t;
-		char err[256];
-		if (sty_next_trial(sv->study, url + 3, &t, err, sizeof err))
-			return send_error(c, 404, "unknown participant link");
-		return send_text(c, 200, "text/html; charset=utf-8", study_html);
+	header_list h = {.n = 0};
+	MHD_get_connection_values(c, MHD_HEADER_KIND, collect_header, &h);
+	sty_response r;
+	if (h.overflow) {
+		resp_init(&r);
+		set_error(&r, 431, "too many header fields");
+		r.close = true;
+		return queue(c, &r);
 	}
-	if (!strncmp(url, "/api/", 5)) {
-		const char *code = url + 5, *slash = strchr(code, '/');
-		if (!slash || !valid_code(code, (size_t)(slash - code)))
-			return send_error(c, 404, "unknown participant");
-		char cb[33];
-		memcpy(cb, code, 32);
-		cb[32] = 0;
-		if (!strcmp(slash, "/trial") && !post) {
-			sty_trial t;
-			char err[256];
-			int rc = sty_next_trial(sv->study, cb, &t, err, sizeof err);
-			if (rc)
-				return send_error(c, rc == TL_ERR_NOTFOUND ? 404 : 500, err);
-			if (t.done)
-				return send_json(c, json_pack("{s:b, s:i, s:i}", "done", 1, "total", t.total, "answered", t.answered));
-			return send_json(c, json_pack("{s:b, s:i, s:i, s:i, s:s, s:s, s:s, s:b}", "done", 0, "index", t.index, "total",
-						      t.total, "answered", t.answered, "clip_a", t.clip_a, "clip_b", t.clip_b, "kind",
-						      t.kind, "break_before", t.break_before));
-		}
-		if (!strcmp(slash, "/answer") && post)
-			return handle_answer(sv, c, cb, rq);
-		return send_error(c, 404, "no such endpoint");
+	sty_request rq = {.method = method, .path = url, .headers = h.f, .header_count = h.n};
+	if (!cs) { /* first call: the head has arrived */
+		if (!(cs = calloc(1, sizeof *cs)))
+			return MHD_NO;
+		*con_cls = cs;
+		sty_server_handle(sv, &rq, &r);
+		if (r.status == 0)
+			return MHD_YES;
+		return queue(c, &r);
 	}
-	if (!strncmp(url, "/clips/", 7) && !post)
-		return send_clip(sv, c, url + 7);
-	if (!strncmp(url, "/admin/", 7) && !post) {
-		const char *tok = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "token");
-		if (!tok || strcmp(tok, sty_admin_token(sv->study)))
-			return send_error(c, 403, "admin endpoints need ?token= (printed by 'taslab study serve')");
-		if (!strcmp(url, "/admin/export.csv"))
-			return send_export(sv, c, 0);
-		if (!strcmp(url, "/admin/export-pwcmp.csv"))
-			return send_export(sv, c, 1);
-		return send_error(c, 404, "no such endpoint (export.csv, export-pwcmp.csv)");
+	rq.body = cs->body;
+	rq.body_size = cs->len;
+	rq.body_too_large = cs->too_large;
+	sty_server_handle(sv, &rq, &r);
+	if (r.status == 0) { /* cannot happen with a body; be safe */
+		resp_init(&r);
+		set_error(&r, 500, "internal error");
 	}
-	if (!strcmp(url, "/") && !post)
-		return send_text(c, 200, "text/plain", "taslab study server: open your participant link (/p/<code>).\n");
-	return send_error(c, 404, "not found");
+	return queue(c, &r);
 }
 
-static void completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
+static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
 	(void)cls, (void)c, (void)toe;
 	free(*con_cls);
 	*con_cls = NULL;
 }
 
-int sty_server_start(sty *s, const char *bind_addr, uint16_t port, unsigned threads, sty_server **out, char *err,
-		     size_t err_size)
+/* ------------------------------------------------------------------ lifecycle */
+
+int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
 {
 	*out = NULL;
-	if (!sty_stimuli(s)[0]) {
-		snprintf(err, err_size, "this study has no stimulus folder (an imported study cannot be served)");
-		return TL_ERR_ARG;
-	}
+	if (!sty_stimuli(s)[0])
+		return tl_error(err, err_size, TL_ERR_ARG, "this study has no stimulus folder (an imported study cannot be served)");
 	sty_server *sv = calloc(1, sizeof *sv);
-	if (!sv) {
-		snprintf(err, err_size, "out of memory");
-		return TL_ERR_ARG;
-	}
+	if (!sv)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	sv->study = s;
+	if (desc)
+		sv->desc = *desc;
+	pthread_mutex_init(&sv->log_lock, NULL);
 	if (!realpath(sty_stimuli(s), sv->root)) {
-		snprintf(err, err_size, "%s: stimulus folder missing: %s", sty_stimuli(s), strerror(errno));
-		free(sv);
-		return TL_ERR_ARG;
+		int rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: stimulus folder missing: %s", sty_stimuli(s), strerror(errno));
+		sty_server_stop(&sv);
+		return rc;
 	}
-	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(port)};
-	if (inet_pton(AF_INET, bind_addr ? bind_addr : "127.0.0.1", &sa.sin_addr) != 1) {
-		snprintf(err, err_size, "--bind '%s' is not an IPv4 address", bind_addr);
-		free(sv);
-		return TL_ERR_ARG;
+	*out = sv;
+	return TL_OK;
+}
+
+int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
+{
+	sty_server *sv;
+	int rc = sty_server_create(s, desc, &sv, err, err_size);
+	if (rc)
+		return rc;
+	const sty_server_desc *d = &sv->desc;
+	const char *bind = d->bind ? d->bind : "127.0.0.1";
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(d->port)};
+	if (inet_pton(AF_INET, bind, &sa.sin_addr) != 1) {
+		sty_server_stop(&sv);
+		return tl_error(err, err_size, TL_ERR_ARG, "--bind '%s' is not an IPv4 address", bind);
 	}
-	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_ERROR_LOG, 0, NULL, NULL, handler, sv,
-				   MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE,
-				   (unsigned)(threads ? threads : 4), MHD_OPTION_NOTIFY_COMPLETED, completed, sv,
-				   MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)30, MHD_OPTION_END);
+	sv->starting = 1;
+	/* Limits against one client locking the others out: connections per client address and in all, and an
+	 * idle timeout (slow or silent connections are closed). */
+	/* The logger comes first, or MHD prints the messages of the options before it itself. */
+	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG, 0, NULL, NULL,
+				   on_request, sv, MHD_OPTION_EXTERNAL_LOGGER, mhd_log, sv, MHD_OPTION_SOCK_ADDR,
+				   (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE, d->threads ? d->threads : 4u,
+				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_CONNECTION_TIMEOUT,
+				   d->timeout_s ? d->timeout_s : 15u, MHD_OPTION_CONNECTION_LIMIT,
+				   d->max_connections ? d->max_connections : 256u, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+				   d->max_per_client ? d->max_per_client : 32u, MHD_OPTION_END);
+	pthread_mutex_lock(&sv->log_lock);
+	sv->starting = 0;
+	pthread_mutex_unlock(&sv->log_lock);
 	if (!sv->mhd) {
-		snprintf(err, err_size, "cannot listen on %s:%u (port in use?)", bind_addr ? bind_addr : "127.0.0.1", port);
-		free(sv);
-		return TL_ERR_ARG;
+		/* MHD's own words ("Failed to bind to port 0: Address already in use" — it names the port it was given
+		 * apart from the address, 0): keep the system's reason and say what to do. */
+		const char *why = strrchr(sv->start_msg, ':') ? strrchr(sv->start_msg, ':') + 1 : sv->start_msg;
+		while (*why == ' ')
+			why++;
+		const char *hint = strstr(why, "in use") ? "choose another --port, or --port 0 for any free one"
+				   : strstr(why, "assign") ? "--bind must be an address of this machine"
+				   : "see the message";
+		if (!*why)
+			why = "libmicrohttpd could not start";
+		rc = tl_error(err, err_size, TL_ERR_ARG, "cannot listen on %s:%u: %s (%s)", bind, (unsigned)d->port, why, hint);
+		sty_server_stop(&sv);
+		return rc;
 	}
 	const union MHD_DaemonInfo *info = MHD_get_daemon_info(sv->mhd, MHD_DAEMON_INFO_BIND_PORT);
-	sv->port = info ? info->port : port;
+	sv->port = info ? info->port : d->port;
+	char url[128];
+	snprintf(url, sizeof url, "http://%s:%u", bind, (unsigned)sv->port);
+	if ((rc = sty_set_served_url(s, url, err, err_size))) {
+		sty_server_stop(&sv);
+		return rc;
+	}
 	*out = sv;
 	return TL_OK;
 }
@@ -319,7 +779,9 @@ void sty_server_stop(sty_server **psv)
 {
 	if (!psv || !*psv)
 		return;
-	MHD_stop_daemon((*psv)->mhd);
+	if ((*psv)->mhd)
+		MHD_stop_daemon((*psv)->mhd);
+	pthread_mutex_destroy(&(*psv)->log_lock);
 	free(*psv);
 	*psv = NULL;
 }

@@ -183,7 +183,8 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 		int64_t pid = sqlite3_column_int64(st, 0);
 		int n = sqlite3_column_int(st, 2), strong = sqlite3_column_int(st, 4);
 		int flag = n > 0 && 2 * strong > n;
-		fprintf(observers, "%s,%d,", sqlite3_column_text(st, 1), n);
+		char label[160];
+		fprintf(observers, "%s,%d,", sty_csv_cell((const char *)sqlite3_column_text(st, 1), label, sizeof label), n);
 		if (n)
 			fprintf(observers, "%.4f", sqlite3_column_double(st, 3));
 		fprintf(observers, ",%d,%d\n", strong, flag);
@@ -447,8 +448,9 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	int64_t *pids = calloc((size_t)d.max_pid + 1, sizeof *pids);
 	double *boot = calloc(B, sizeof *boot);
 	for (size_t m = 0; m < nmt; m++) {
-		char Ts[32];
+		char Ts[32], cm[80]; /* cm: the method as a CSV cell (sty_csv_cell: no spreadsheet formulas) */
 		T_str(&mts[m], Ts, sizeof Ts);
+		sty_csv_cell(mts[m].method, cm, sizeof cm);
 		/* Rows: every (scene, camera) of this method/T, then pooled. */
 		for (size_t i = 0; i <= d.nc; i++) {
 			sel sl = {&mts[m], NULL, NULL, NULL};
@@ -462,13 +464,16 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			if (row_compute(&d, &sl, NULL, &r))
 				continue;
 			const char *sc = sl.scene ? sl.scene : "all", *ca = sl.camera ? sl.camera : "all";
-			fprintf(fc, "%s,%s,%s,%s,%zu,", mts[m].method, Ts, sc, ca, r.n);
+			char csc[160], cca[160];
+			sty_csv_cell(sc, csc, sizeof csc);
+			sty_csv_cell(ca, cca, sizeof cca);
+			fprintf(fc, "%s,%s,%s,%s,%zu,", cm, Ts, csc, cca, r.n);
 			csv_num(fc, r.Q, "%.6f"), fputc(',', fc);
 			csv_num(fc, r.Q_lo, "%.6f"), fputc(',', fc);
 			csv_num(fc, r.Q_hi, "%.6f"), fputc(',', fc);
 			fprintf(fc, "%.6f,%.6f,%.6f,%.6f\n", r.j.p, r.j.p_lo, r.j.p_hi, r.j.jnd);
 			if (i == d.nc && !isnan(mts[m].T)) { /* pooled row: one point of the Fig. 3 plot */
-				fprintf(ff, "%s,%s,%.6f,", mts[m].method, Ts, r.Q);
+				fprintf(ff, "%s,%s,%.6f,", cm, Ts, r.Q);
 				csv_num(ff, r.Q_lo, "%.6f"), fputc(',', ff);
 				csv_num(ff, r.Q_hi, "%.6f");
 				fprintf(ff, ",%.4f,%.4f,%.4f\n", 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi);
@@ -507,7 +512,7 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 					bf[nb++] = (float)boot[b];
 			double lo = nb ? mtr_percentile(bf, nb, 2.5) : NAN, hi = nb ? mtr_percentile(bf, nb, 97.5) : NAN;
 			free(bf);
-			fprintf(fj, "%s,%s,%s,%s,%.6f,", mts[m].method, Ts, sc, ca, -r.j.jnd);
+			fprintf(fj, "%s,%s,%s,%s,%.6f,", cm, Ts, csc, cca, -r.j.jnd);
 			csv_num(fj, lo, "%.6f"), fputc(',', fj);
 			csv_num(fj, hi, "%.6f");
 			fprintf(fj, ",%zu\n", np);
@@ -546,7 +551,7 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			for (int e = 0; e < 3; e++) {
 				if (!(eff[e].df1 > 0))
 					continue; /* a factor with one level has no effect to test */
-				fprintf(fa, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", mts[m].method, Ts, enames[e], eff[e].df1, eff[e].df2,
+				fprintf(fa, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", cm, Ts, enames[e], eff[e].df1, eff[e].df2,
 					eff[e].F, eff[e].p, eff[e].p_gg, eff[e].epsilon_gg);
 				json_array_append_new(ja, json_pack("{s:s, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}", "method",
 								    mts[m].method, "T",
@@ -571,8 +576,10 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 							u[i] = xl[i * nl + l1], v[i] = xl[i * nl + l2];
 						double t, df, p;
 						paired_t(u, v, n, &t, &df, &p);
-						fprintf(fp, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", mts[m].method, Ts, f == 0 ? "camera" : "scene",
-							f == 0 ? mo_lv[l1] : sc_lv[l1], f == 0 ? mo_lv[l2] : sc_lv[l2], t, df, p,
+						char l1c[160], l2c[160];
+						fprintf(fp, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", cm, Ts, f == 0 ? "camera" : "scene",
+							sty_csv_cell(f == 0 ? mo_lv[l1] : sc_lv[l1], l1c, sizeof l1c),
+							sty_csv_cell(f == 0 ? mo_lv[l2] : sc_lv[l2], l2c, sizeof l2c), t, df, p,
 							fmin(1.0, p * ncmp));
 					}
 				free(u);

@@ -1,15 +1,21 @@
 /* study.h — pairwise-comparison studies (paper sec. 3 and 7.2; DESIGN section 7): a randomised
  * within-subject design stored in SQLite, answers, export/import of ratings, and the statistics.
  *
- * One study = one SQLite database. Conditions come from `taslab pair` sets (pairs.json) found in a
- * stimulus folder; clip paths are stored relative to that folder, and only files inside it are ever served.
+ * One study = one SQLite database file (mode 0600: it holds the admin token and the participants' link codes).
+ * Conditions come from `taslab pair` sets (pairs.json) found in a stimulus folder; clip paths are stored
+ * relative to that folder. Participants never see those paths: each trial's two clips get random 128-bit names
+ * (sty_next_trial), so the page cannot tell which clip is the reference (the study stays blind).
  * Every participant rates every condition against the reference of the same scene and camera path.
  *
  * Rating convention (DESIGN section 7): the participant answers a in {-2..+2} for the clips as shown
  * (A first, B second; + = second clip better). The reference-relative rating is r = +a when the reference
  * was second, r = -a when it was first; r = +2 means "reference much better".
  *
- * Errors: negative return, one line in `err`. Ownership: sty_open / sty_close.
+ * A new study is built in a temporary file next to its name and appears under that name only when
+ * sty_commit succeeds (tl_fs.h atomic-write pattern), so a failed design or import leaves nothing behind
+ * and an existing study is never overwritten.
+ *
+ * Errors: a tl_err code, one line in `err`. Ownership: sty_create or sty_open / sty_close.
  */
 #ifndef TASLAB_STUDY_H
 #define TASLAB_STUDY_H
@@ -26,8 +32,22 @@ extern "C" {
 typedef struct sty sty;
 
 
-/* Opens (creating the schema when `create`) a study database. */
-int sty_open(const char *path, bool create, sty **out, char *err, size_t err_size);
+/* Longest accepted reaction time (24 h, the same bound for answers and imports): anything longer is not a
+ * reaction time but a broken or hostile client. */
+#define STY_RT_MS_MAX 86400000
+
+/* Opens an existing study database: TL_ERR_INPUT when `path` is not an existing taslab study file. */
+int sty_open(const char *path, sty **out, char *err, size_t err_size);
+/* Starts a new study that will be stored at `path`. `path` must name a file: "", ":memory:" and "file:"
+ * URIs are refused (TL_ERR_ARG: SQLite would keep them in memory or elsewhere). An existing `path` (or a
+ * leftover PATH-wal / PATH-shm / PATH-journal of a deleted study) is refused with TL_ERR_CONFLICT: a study is
+ * never overwritten. The database is built in a temporary file in the same folder (mode 0600); sty_commit
+ * moves it into place, sty_close without a commit deletes it. */
+int sty_create(const char *path, sty **out, char *err, size_t err_size);
+/* Makes a study from sty_create appear at its path (fsync, rename, fsync of the folder) and reopens it
+ * there; a no-op for a study from sty_open. TL_ERR_CONFLICT if `path` appeared in the meantime. */
+int sty_commit(sty *s, char *err, size_t err_size);
+/* Closes the study; an uncommitted new study is deleted. Accepts NULL, nulls the pointer. */
 void sty_close(sty **s);
 /* The stimulus folder recorded at design time ("" for imported studies). */
 const char *sty_stimuli(const sty *s);
@@ -35,6 +55,14 @@ const char *sty_stimuli(const sty *s);
 const char *sty_path(const sty *s);
 /* The admin token for export endpoints (random, created with the study). */
 const char *sty_admin_token(const sty *s);
+/* The base URL the study was last served on ("http://127.0.0.1:8080"), "" if never; `taslab study links`
+ * uses it as the default base. sty_set_served_url stores it (the server does so when it starts listening). */
+const char *sty_served_url(const sty *s);
+int sty_set_served_url(sty *s, const char *url, char *err, size_t err_size);
+
+/* Whether a method (DESIGN section 4 names, the variant's method name) has a threshold T: 1 for tfr, tarc,
+ * tasa and their -oracle forms, 0 for ref, rrc, sa, sau, -1 for an unknown name. */
+int sty_method_has_threshold(const char *method);
 
 typedef struct sty_design_desc {
 	const char *stimuli;      /* folder with pairs.json sets (DIR/pairs.json and DIR/<set>/pairs.json) */
@@ -63,25 +91,40 @@ int sty_participant_codes(sty *s, char ***codes, size_t *n, char *err, size_t er
 /* One trial as the participant page needs it. */
 typedef struct sty_trial {
 	uint32_t index, total, answered;
-	char clip_a[512], clip_b[512]; /* paths relative to the stimulus folder */
+	char clip_a[48], clip_b[48];   /* opaque clip names ("<32 hex digits>.webm"), served as /clips/<name> */
 	char kind[16];                 /* test, catch, training */
 	bool break_before;
 	bool done;                     /* all trials answered (the other fields are unset) */
 } sty_trial;
 
+/* The participant's current trial: the lowest-index unanswered one. Its two clips get random 128-bit names the
+ * first time it is asked for (stored before returning, so a reload shows the same names); names are per
+ * trial and side, so the reference's name never recurs across trials. TL_ERR_NOTFOUND for an unknown code. */
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size);
-/* Stores an answer durably (committed before returning). TL_ERR_CONFLICT if that trial was answered,
- * TL_ERR_NOTFOUND for an unknown participant or trial, TL_ERR_ARG for an answer outside -2..2. */
-int sty_answer(sty *s, const char *code, uint32_t trial, int answer, int64_t rt_ms, char *err, size_t err_size);
+/* The clip behind an opaque name from sty_next_trial: its path relative to the stimulus folder.
+ * TL_ERR_NOTFOUND for any other name. */
+int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *err, size_t err_size);
+/* Stores an answer durably (committed before returning). Rule: a participant answers the current trial only
+ * (the one sty_next_trial returns; the page answers in order), so an answer to a trial not yet shown is
+ * TL_ERR_ARG. TL_ERR_CONFLICT if that trial was answered already (a retried request), TL_ERR_NOTFOUND for an
+ * unknown participant or trial, TL_ERR_ARG for an answer outside -2..2 or rt_ms outside 0..STY_RT_MS_MAX
+ * (rt_ms = -1: not measured). */
+int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t rt_ms, char *err, size_t err_size);
 
 /* Long-format ratings CSV (DESIGN section 7):
- * participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms  (test trials only). */
+ * participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms  (test trials only).
+ * Text cells are written so that a spreadsheet cannot run them (OWASP "CSV injection"): a cell starting with
+ * = + - @ TAB or CR gets a leading ', and a cell holding , " CR or LF is quoted (RFC 4180). The same holds for
+ * every CSV the study module writes. */
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size);
 /* pwcmp layout (pw_scale_table defaults): observer,scene,condition_A,condition_B,selected_A — one row per
  * answer, condition names "ref" and METHOD_T<T>; a tie ("same") is written as two rows, one for each side. */
 int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size);
-/* Imports a long-format ratings file into an empty or import-only study; validates every row first and
- * imports nothing if any row is bad (the message names the line). */
+/* Imports a long-format ratings file into a new study (sty_create; a study that holds participants is refused);
+ * validates every row first and imports nothing if any row is bad (the message names the line). Rules beyond
+ * the column types: method is a DESIGN section 4 name; T is given exactly for methods with a threshold (tfr,
+ * tarc, tasa and -oracle forms; 0 < T <= 255) and empty for the others; text cells (participant, scene,
+ * camera, method) may not start with = + - @ (spreadsheet formulas) nor hold quotes or control characters. */
 int sty_import_long(sty *s, const char *path, size_t *rows, char *err, size_t err_size);
 
 /* Statistics into DIR: conditions.csv, anova.csv (DESIGN section 7), posthoc.csv, observers.csv, jod.csv,

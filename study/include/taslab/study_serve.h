@@ -1,13 +1,28 @@
 /* study_serve.h — the study's web server (libmicrohttpd), bound to 127.0.0.1 by default.
  *   GET  /p/<code>               the participant page (an unguessable 128-bit link code)
- *   GET  /api/<code>/trial       the next unanswered trial (JSON), or {"done": true}
- *   POST /api/<code>/answer      {"trial": i, "answer": -2..2, "rt_ms": n}: committed to SQLite before the
- *                                200 reply; 400 malformed, 404 unknown trial, 409 answered already, 413 too large
- *   GET  /clips/<path>           files inside the stimulus folder only, with single-range Range support
- *   GET  /admin/export.csv?token=T, /admin/export-pwcmp.csv?token=T   (403 without the study's token) */
+ *   GET  /api/<code>/trial       the current trial (JSON: index, total, answered, kind, break_before and the
+ *                                clip URLs clip_a/clip_b = /clips/<opaque name>), or {"done": true}
+ *   POST /api/<code>/answer      {"trial": i, "answer": -2..2, "rt_ms": 0..STY_RT_MS_MAX}, exactly these keys,
+ *                                JSON integers; committed to SQLite before the 200 reply. 400 malformed or not
+ *                                the current trial (answers are given in order), 404 unknown participant or
+ *                                trial, 409 answered already (a retry), 413 body larger than STY_MAX_BODY_B
+ *   GET  /clips/<name>           the clips of trials served so far, by the opaque names of the trial API only;
+ *                                every other name is 404 (nothing else under the stimulus folder is served).
+ *                                Range (RFC 7233): one byte range -> 206; a range that is invalid (last < first)
+ *                                or unsatisfiable -> 416 with a Content-Range naming the size; a header that does not
+ *                                parse, another unit, several ranges, If-Range (we send no validators) or a method
+ *                                other than GET -> the header is ignored and the whole file is sent (200; RFC 7233
+ *                                section 3.1 lets a server ignore Range).
+ *   GET  /admin/export.csv, /admin/export-pwcmp.csv   with "Authorization: Bearer <admin token>" (RFC 6750;
+ *                                compared in constant time); 401 otherwise. The token is never read from the URL.
+ * Framing: conflicting duplicate Content-Length, or Content-Length with Transfer-Encoding -> 400 (RFC 7230
+ * section 3.3.3). Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
+ * name server paths, go to the log). Each client address may hold at most max_per_client connections and an
+ * idle connection is closed after timeout_s, so one client cannot lock the others out. */
 #ifndef TASLAB_STUDY_SERVE_H
 #define TASLAB_STUDY_SERVE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -17,13 +32,65 @@
 extern "C" {
 #endif
 
+#define STY_MAX_BODY_B 4096
+
 typedef struct sty_server sty_server;
 
-/* Starts serving (own threads); port 0 picks a free port. The study must outlive the server. */
-int sty_server_start(sty *s, const char *bind_addr, uint16_t port, unsigned threads, sty_server **out, char *err,
-		     size_t err_size);
+/* Server configuration; zero fields take the defaults in brackets. */
+typedef struct sty_server_desc {
+	const char *bind;         /* IPv4 address to listen on [127.0.0.1] */
+	uint16_t port;            /* 0: any free port (see sty_server_port) */
+	unsigned threads;         /* worker threads [4] */
+	unsigned max_connections; /* connections in all [256] */
+	unsigned max_per_client;  /* connections per client address [32; a browser opens at most 6 per host] */
+	unsigned timeout_s;       /* an idle connection is closed after this many seconds [15] */
+	/* One line per event worth a look (500 details, libmicrohttpd's messages), without a newline;
+	 * NULL: "taslab study serve: LINE" on stderr. */
+	void (*log)(void *cls, const char *line);
+	void *log_cls;
+} sty_server_desc;
+
+/* Starts serving (own threads) and records the URL in the study (sty_set_served_url). The study must outlive
+ * the server. TL_ERR_ARG for a bad address or a port that cannot be bound (the reason in `err`). */
+int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size);
+/* A server that handles requests given to sty_server_handle but does not listen (tests, fuzzing). */
+int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size);
 uint16_t sty_server_port(const sty_server *sv);
+/* Stops listening, waits for the threads, frees. Accepts NULL, nulls the pointer. */
 void sty_server_stop(sty_server **sv);
+
+/* ---- request handling without sockets (the libmicrohttpd callback is a thin adapter around it) ---- */
+typedef struct sty_http_field {
+	const char *name, *value;
+} sty_http_field;
+
+typedef struct sty_request {
+	const char *method;            /* "GET", "POST", ... */
+	const char *path;              /* the decoded path, without the query string */
+	const sty_http_field *headers; /* every header field as received, duplicates kept */
+	size_t header_count;
+	const char *body;              /* NULL: only the head has arrived (framing checks; see status 0 below) */
+	size_t body_size;
+	bool body_too_large;           /* the body was longer than STY_MAX_BODY_B (and was not kept) */
+} sty_request;
+
+typedef struct sty_response {
+	unsigned status;               /* 0 only for a head-only request that may go on (read the body, ask again) */
+	const char *content_type;      /* static string */
+	char *body;                    /* malloc'ed; or NULL with fd >= 0 */
+	size_t body_size;
+	int fd;                        /* >= 0: send file_size bytes of this file from file_offset (owned) */
+	uint64_t file_offset, file_size;
+	char content_range[96];        /* "" when none */
+	bool accept_ranges;            /* Accept-Ranges: bytes */
+	bool authenticate;             /* WWW-Authenticate: Bearer */
+	bool cacheable;                /* false: Cache-Control: no-store */
+	bool close;                    /* close the connection after the reply (framing errors) */
+} sty_response;
+
+/* Handles one request; always fills `resp` (release it with sty_response_release). Thread-safe. */
+void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *resp);
+void sty_response_release(sty_response *resp);
 
 #ifdef __cplusplus
 }
