@@ -1,6 +1,7 @@
 // study_session.mjs — a simulated participant in Debian's Chromium (playwright-core): opens the participant
 // link, answers every trial by keyboard (cycling 1..5), reloads the page midway and resumes, takes breaks.
-// Then checks through the API and the token-protected export that every trial was answered exactly once.
+// Then checks through the API and the token-protected export (Authorization: Bearer) that every trial was
+// answered exactly once, and that the page only ever fetched clips by opaque names.
 //   node study_session.mjs BASE_URL CODE ADMIN_TOKEN EXPECTED_TEST_TRIALS
 import { chromium } from 'playwright-core';
 
@@ -19,6 +20,8 @@ try {
   const log = [];
   page.on('console', m => log.push('console: ' + m.text()));
   page.on('pageerror', e => log.push('pageerror: ' + e.message));
+  const clipUrls = [];                          // every clip the page fetched: opaque names only
+  page.on('request', r => { const u = new URL(r.url()); if (u.pathname.startsWith('/clips/')) clipUrls.push(u.pathname); });
   globalThis.dumpState = async () => log.concat([await page.evaluate(() =>
     [...document.querySelectorAll('.panel')].map(x => x.id + ':' + getComputedStyle(x).display).join(' ') +
     ' progress=' + document.getElementById('progress').textContent + ' msg=' + document.getElementById('msg').textContent)]);
@@ -48,10 +51,14 @@ try {
     }
   }
   const state = await (await fetch(`${base}/api/${code}/trial`)).json();
-  const csv = await (await fetch(`${base}/admin/export.csv?token=${token}`)).text();
+  // The admin token travels in a header (never in the URL); without it the export is refused.
+  const refused = (await fetch(`${base}/admin/export.csv?token=${token}`)).status;
+  const csv = await (await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } })).text();
   const rows = csv.trim().split('\n').slice(1);
   const trials = new Set(rows.map(r => r.split(',').slice(0, 2).join(',')));
-  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)); server: ${state.answered}/${state.total} done=${state.done}; export: ${rows.length} test ratings, ${trials.size} distinct`);
+  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${rows.length} test ratings, ${trials.size} distinct`);
+  if (refused !== 401) { console.error(`export with ?token= answered ${refused}, expected 401`); status = 1; }
+  if (!clipUrls.length || clipUrls.some(u => !/^\/clips\/[0-9a-f]{32}\.webm$/.test(u))) { console.error('clip URLs not opaque: ' + clipUrls.join(' ')); status = 1; }
   if (!state.done || state.answered !== state.total || answered !== state.total || rows.length !== expected || trials.size !== rows.length)
     status = 1;
 } catch (e) {
