@@ -29,6 +29,7 @@ typedef struct colour_desc {
 	const char *display;     /* NULL: the config's default display */
 	const char *view;        /* NULL: the display's default view */
 	int ignore_env;          /* do not read $OCIO (tests) */
+	int keep_ocio_glsl;      /* use OCIO's GLSL as emitted, without the curve rewrite (tests compare both) */
 } colour_desc;
 
 int colour_create(const colour_desc *desc, colour **out, char *err, size_t err_size);
