@@ -80,6 +80,48 @@ static void test_default_gpu_matches_cpu(void **state)
 	check_gpu_cpu(NULL, NULL, NULL);
 }
 
+/* The restructured curve functions (colour.cpp) compute bit-identical values to OCIO's GLSL as emitted, on
+ * the device, over the HDR/saturated grid and a dense ramp of every channel; and the rewrite happened. */
+static void test_glsl_rewrite_bit_identical(void **state)
+{
+	(void)state;
+	char err[1024];
+	colour *fast = NULL, *orig = NULL;
+	colour_desc cd = {.ignore_env = 1}, co = {.ignore_env = 1, .keep_ocio_glsl = 1};
+	if (colour_create(&cd, &fast, err, sizeof err) || colour_create(&co, &orig, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(colour_glsl_rewritten(fast), 2); /* the ACES RRT and ODT tone scales */
+	assert_int_equal(colour_glsl_rewritten(orig), 0);
+	assert_string_not_equal(colour_glsl(fast), colour_glsl(orig));
+	vkdev *dev = NULL;
+	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	if (vkdev_create(&vd, &dev, err, sizeof err))
+		fail_msg("%s", err);
+	float *a, *b;
+	size_t n = make_inputs(&a);
+	make_inputs(&b);
+	/* plus a ramp 0 .. 2^10 in 1/64-stop steps on each channel, so every knot interval is crossed */
+	size_t ramp = 64 * 24, total = n + ramp;
+	a = realloc(a, total * 16);
+	b = realloc(b, total * 16);
+	for (size_t i = 0; i < ramp; i++)
+		for (int c = 0; c < 4; c++)
+			a[(n + i) * 4 + c] = b[(n + i) * 4 + c] = c == 3 ? 1.0f : c == (int)(i % 3) ? exp2f(-14.0f + (float)i / 64.0f) : 0.18f;
+	if (colour_apply_gpu(dev, fast, a, total, err, sizeof err) || colour_apply_gpu(dev, orig, b, total, err, sizeof err))
+		fail_msg("%s", err);
+	size_t differ = 0;
+	for (size_t i = 0; i < total * 4; i++)
+		differ += memcmp(&a[i], &b[i], sizeof a[i]) != 0;
+	fprintf(stderr, "curve rewrite: %zu of %zu GPU values differ from OCIO's GLSL\n", differ, total * 4);
+	assert_int_equal(differ, 0);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	free(a);
+	free(b);
+	vkdev_destroy(&dev);
+	colour_destroy(&fast);
+	colour_destroy(&orig);
+}
+
 static void test_default_reference_points(void **state)
 {
 	(void)state;
@@ -148,7 +190,7 @@ static void test_user_config(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_default_gpu_matches_cpu),
+		cmocka_unit_test(test_default_gpu_matches_cpu), cmocka_unit_test(test_glsl_rewrite_bit_identical),
 		cmocka_unit_test(test_default_reference_points),
 		cmocka_unit_test(test_user_config),
 	};

@@ -105,10 +105,6 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 	if ((rc = render_upload_scene(r, err, err_size)) || (rc = render_targets_create(r, err, err_size)) ||
 	    (rc = render_descriptors_create(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)))
 		goto fail;
-	/* Shading pipelines are specialised for the shadow chunks in use: methods driven by render_frame
-	 * (they have `prepare`) start with one and are rebuilt when the pool grows; the analysis, which plans
-	 * its own slots, gets the worst case up front. */
-	r->shadow.chunks_compiled = m->prepare ? 1 : r->shadow.chunks_max;
 	if ((rc = render_depth_init(r, err, err_size)) || (rc = render_shade_init(r, err, err_size)) ||
 	    (rc = render_display_init(r, err, err_size)) || (rc = create_submission(r, err, err_size)))
 		goto fail;
@@ -143,9 +139,9 @@ void render_destroy(render **pr)
 	if (r->stats_pool)
 		vkDestroyQueryPool(d, r->stats_pool, NULL);
 	if (r->scene_set && getenv("TASLAB_DEBUG_SHADOWS")) /* shadow pool report (README "Renderer decisions") */
-		fprintf(stderr, "shadow pool: %llu layer renderings, %llu shared, %u of %u chunks of %u layers\n",
+		fprintf(stderr, "shadow pool: %llu layer renderings, %llu shared, %u of %u chunks\n",
 			(unsigned long long)r->shadow.rendered, (unsigned long long)r->shadow.reused, r->shadow.chunk_count,
-			r->shadow.chunks_max, r->shadow.chunk_layers);
+			r->shadow.chunks_max);
 	if (r->scene_set)
 		render_shadow_destroy(r);
 	render_targets_destroy(r);
@@ -164,8 +160,6 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 	VkResult res;
 	VkCommandBuffer cmd = r->cmd;
 	if (r->method->prepare && (rc = r->method->prepare(r, frame, err, err_size)))
-		return rc;
-	if (r->shadow.chunk_count > r->shadow.chunks_compiled && (rc = render_shade_rebuild(r, err, err_size)))
 		return rc;
 	if ((res = render_cmd_begin(r)))
 		return render_vk_error(err, err_size, "command buffer", res);

@@ -36,31 +36,49 @@ struct Surface {
 	vec3 emissive;
 };
 
-// Shadow-map chunks the renderer may use (render_shadow.c), set when the pipeline is created.
-layout(constant_id = 1) const int SHADOW_CHUNKS_USED = 1;
+// Lights and shadow chunks, fixed when the pipeline is created (passes/shadow.c). The shadow pool pins every
+// logical shadow layer to one array image ("chunk"), so the chunk a light samples is a constant: the light
+// loop is unrolled (TL_LIGHT below) and each light samples shadow_maps[] with a constant index. lavapipe has
+// no descriptor indexing and a SIMD CPU driver executes every branch some lane might take, so a run-time
+// chunk switch cost one lookup per chunk in use (3x the shadow filtering of the TFR history).
+// LIGHT_SHADOW_i: -1 no shadow; else bits 0-7 the chunk of faces below `split`, bits 8-15 the chunk of the
+// faces from `split` on, bits 16-23 `split` (a point light whose six faces did not fit one chunk).
+layout(constant_id = 2) const int LIGHT_COUNT = 0;
+layout(constant_id = 3) const int LIGHT_SHADOW_0 = -1;
+layout(constant_id = 4) const int LIGHT_SHADOW_1 = -1;
+layout(constant_id = 5) const int LIGHT_SHADOW_2 = -1;
+layout(constant_id = 6) const int LIGHT_SHADOW_3 = -1;
+layout(constant_id = 7) const int LIGHT_SHADOW_4 = -1;
+layout(constant_id = 8) const int LIGHT_SHADOW_5 = -1;
+layout(constant_id = 9) const int LIGHT_SHADOW_6 = -1;
+layout(constant_id = 10) const int LIGHT_SHADOW_7 = -1;
+layout(constant_id = 11) const int LIGHT_SHADOW_8 = -1;
+layout(constant_id = 12) const int LIGHT_SHADOW_9 = -1;
+layout(constant_id = 13) const int LIGHT_SHADOW_10 = -1;
+layout(constant_id = 14) const int LIGHT_SHADOW_11 = -1;
+layout(constant_id = 15) const int LIGHT_SHADOW_12 = -1;
+layout(constant_id = 16) const int LIGHT_SHADOW_13 = -1;
+layout(constant_id = 17) const int LIGHT_SHADOW_14 = -1;
+layout(constant_id = 18) const int LIGHT_SHADOW_15 = -1;
 
-float shadow_lookup(uint slot, int layer, vec3 world_pos)
+// Projects `world_pos` into shadow layer `layer` of `slot`: texture coordinates, depth, filter radius and
+// the layer within its chunk. False when the point lies outside the layer's frustum (then it is lit).
+bool shadow_coords(uint slot, int layer, vec3 world_pos, out vec2 uv, out float depth, out float radius, out float pl)
 {
 	vec4 lc = states[slot].shadow_matrix[layer] * vec4(world_pos, 1.0);
 	vec3 ndc = lc.xyz / lc.w;
-	vec2 uv = ndc.xy * 0.5 + 0.5;
-	if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z >= 1.0)
-		return 1.0;
-	float radius = states[slot].shadow_params.x * states[slot].shadow_params.y;
+	uv = ndc.xy * 0.5 + 0.5;
+	depth = ndc.z;
+	radius = states[slot].shadow_params.x * states[slot].shadow_params.y;
 	uint phys = states[slot].shadow_phys[layer >> 2][layer & 3];
-	float pl = float(phys & 0xFFFFu);
-	float lit = 0.0;
-	// No descriptor indexing on lavapipe: each chunk is sampled with a constant index, and only the
-	// SHADOW_CHUNKS_USED chunks the pool can ever use are compiled in (a SIMD CPU driver pays for every
-	// branch some lane might take, so a 16-way switch would cost 16 lookups).
-#define TL_PCF(c) if ((c) < SHADOW_CHUNKS_USED && (SHADOW_CHUNKS_USED == 1 || chunk == (c))) \
-	for (int i = 0; i < 16; i++) lit += texture(shadow_maps[c], vec4(uv + POISSON16[i] * radius, pl, ndc.z));
-	int chunk = int(phys >> 16);
-	TL_PCF(0) TL_PCF(1) TL_PCF(2) TL_PCF(3) TL_PCF(4) TL_PCF(5) TL_PCF(6) TL_PCF(7)
-	TL_PCF(8) TL_PCF(9) TL_PCF(10) TL_PCF(11) TL_PCF(12) TL_PCF(13) TL_PCF(14) TL_PCF(15)
-#undef TL_PCF
-	return lit * (1.0 / 16.0);
+	pl = float(phys & 0xFFFFu);
+	return !(any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z >= 1.0);
 }
+
+// 16-tap Poisson PCF of chunk c (a constant expression).
+#define TL_PCF(c, uv, depth, radius, pl, lit)                                                                   \
+	for (int k_ = 0; k_ < 16; k_++)                                                                         \
+		lit += texture(shadow_maps[(c)], vec4(uv + POISSON16[k_] * radius, pl, depth));
 
 // Cube face (shadow layer offset 0..5: +X, -X, +Y, -Y, +Z, -Z) seen from the light along d.
 int cube_face(vec3 d)
@@ -96,51 +114,76 @@ vec3 brdf_ggx(Surface s, vec3 v, vec3 l, vec3 radiance)
 	return (diffuse + F * D * V) * radiance * ndl;
 }
 
+// Direction, attenuation and shadow lookup point of light i at surface s (KHR_lights_punctual falloff, spot
+// cone, normal-offset bias). False when the light contributes nothing (outside range/cone, or behind).
+bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out vec3 p)
+{
+	GpuLight L = states[slot].lights[i];
+	uint kind = uint(L.direction_type.w);
+	atten = 1.0;
+	if (kind == LIGHT_DIRECTIONAL) {
+		l = -L.direction_type.xyz;
+	} else {
+		vec3 d = L.position_range.xyz - s.position;
+		float dist2 = max(dot(d, d), 1e-4);
+		l = d * inversesqrt(dist2);
+		float range = L.position_range.w;
+		float win = 1.0;
+		if (range > 0.0) {
+			float r = dist2 / (range * range);
+			win = clamp(1.0 - r * r, 0.0, 1.0);
+			win *= win;
+		}
+		atten = win / dist2;
+		if (kind == LIGHT_SPOT) {
+			float cd = dot(L.direction_type.xyz, -l);
+			float t = clamp((cd - L.cone_shadow.x) * L.cone_shadow.y, 0.0, 1.0);
+			atten *= t * t;
+		}
+	}
+	// Normal-offset bias: the shadow lookup point moves along the geometric normal.
+	p = s.position + s.normal * L.cone_shadow.w;
+	return !(atten <= 0.0 || dot(s.normal, l) <= 0.0);
+}
+
+// Light i with shadow code SH (LIGHT_SHADOW_i): accumulates its contribution into `sum`. Unrolled per light so
+// that the chunks sampled are constants.
+#define TL_LIGHT(i, SH)                                                                                         \
+	if ((i) < LIGHT_COUNT) {                                                                                \
+		vec3 l_, p_;                                                                                    \
+		float atten_;                                                                                   \
+		if (light_setup(slot, s, (i), l_, atten_, p_)) {                                                \
+			GpuLight L_ = states[slot].lights[(i)];                                                 \
+			float vis_ = 1.0;                                                                       \
+			if ((SH) >= 0) {                                                                        \
+				int layer_ = int(L_.cone_shadow.z);                                             \
+				int face_ = uint(L_.direction_type.w) == LIGHT_POINT ? cube_face(p_ - L_.position_range.xyz) : 0; \
+				vec2 uv_;                                                                       \
+				float d_, r_, pl_, lit_ = 0.0;                                                  \
+				bool in_ = shadow_coords(slot, layer_ + face_, p_, uv_, d_, r_, pl_);            \
+				TL_PCF((SH) & 255, uv_, d_, r_, pl_, lit_)                                      \
+				if ((((SH) >> 8) & 255) != ((SH) & 255)) {                                      \
+					float lit2_ = 0.0;                                                      \
+					TL_PCF(((SH) >> 8) & 255, uv_, d_, r_, pl_, lit2_)                      \
+					lit_ = face_ < (((SH) >> 16) & 255) ? lit_ : lit2_;                     \
+				}                                                                               \
+				vis_ = in_ ? lit_ * (1.0 / 16.0) : 1.0;                                         \
+			}                                                                                       \
+			if (vis_ > 0.0)                                                                         \
+				sum += brdf_ggx(s, v, l_, L_.color.rgb * (atten_ * vis_));                      \
+		}                                                                                               \
+	}
+
 vec3 shade_lights(uint slot, Surface s)
 {
 	vec3 eye = states[slot].camera_time.xyz;
 	vec3 v = normalize(eye - s.position);
-	uint count = uint(states[slot].sky_lights.w);
 	vec3 sum = vec3(0.0);
-	for (uint i = 0u; i < count; i++) {
-		GpuLight L = states[slot].lights[i];
-		uint kind = uint(L.direction_type.w);
-		vec3 l;
-		float atten = 1.0;
-		if (kind == LIGHT_DIRECTIONAL) {
-			l = -L.direction_type.xyz;
-		} else {
-			vec3 d = L.position_range.xyz - s.position;
-			float dist2 = max(dot(d, d), 1e-4);
-			l = d * inversesqrt(dist2);
-			float range = L.position_range.w;
-			float win = 1.0;
-			if (range > 0.0) {
-				float r = dist2 / (range * range);
-				win = clamp(1.0 - r * r, 0.0, 1.0);
-				win *= win;
-			}
-			atten = win / dist2;
-			if (kind == LIGHT_SPOT) {
-				float cd = dot(L.direction_type.xyz, -l);
-				float t = clamp((cd - L.cone_shadow.x) * L.cone_shadow.y, 0.0, 1.0);
-				atten *= t * t;
-			}
-		}
-		if (atten <= 0.0 || dot(s.normal, l) <= 0.0)
-			continue;
-		int layer = int(L.cone_shadow.z);
-		float vis = 1.0;
-		if (layer >= 0) {
-			// Normal-offset bias: move the lookup point along the geometric normal.
-			vec3 p = s.position + s.normal * L.cone_shadow.w;
-			if (kind == LIGHT_POINT)
-				layer += cube_face(p - L.position_range.xyz);
-			vis = shadow_lookup(slot, layer, p);
-		}
-		if (vis > 0.0)
-			sum += brdf_ggx(s, v, l, L.color.rgb * (atten * vis));
-	}
+	TL_LIGHT(0, LIGHT_SHADOW_0) TL_LIGHT(1, LIGHT_SHADOW_1) TL_LIGHT(2, LIGHT_SHADOW_2) TL_LIGHT(3, LIGHT_SHADOW_3)
+	TL_LIGHT(4, LIGHT_SHADOW_4) TL_LIGHT(5, LIGHT_SHADOW_5) TL_LIGHT(6, LIGHT_SHADOW_6) TL_LIGHT(7, LIGHT_SHADOW_7)
+	TL_LIGHT(8, LIGHT_SHADOW_8) TL_LIGHT(9, LIGHT_SHADOW_9) TL_LIGHT(10, LIGHT_SHADOW_10) TL_LIGHT(11, LIGHT_SHADOW_11)
+	TL_LIGHT(12, LIGHT_SHADOW_12) TL_LIGHT(13, LIGHT_SHADOW_13) TL_LIGHT(14, LIGHT_SHADOW_14)
+	TL_LIGHT(15, LIGHT_SHADOW_15)
 	vec3 ambient = states[slot].ambient_exposure.rgb * s.occlusion * s.base_color *
 		       (1.0 - 0.5 * s.metallic) * (0.75 + 0.25 * s.normal.y);
 	return sum + ambient + s.emissive;

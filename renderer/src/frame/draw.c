@@ -42,13 +42,13 @@ void render_draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p
 
 /* Draws the objects whose material alpha mode is in `modes` (RENDER_ALPHA_BIT set), in scene order. */
 void render_draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
-			 unsigned modes, int shadow_casters_only, int set_cull)
+			 unsigned modes, const uint8_t *only, int set_cull)
 {
 	const scene *s = r->scene;
 	for (size_t i = 0; i < s->object_count; i++) {
 		const scene_object *o = &s->objects[i];
-		if (o->mesh < 0 || (shadow_casters_only && !o->casts_shadow))
-			continue; /* transform-only node */
+		if (o->mesh < 0 || (only && !(only[i / 8] & (1u << (i % 8)))))
+			continue; /* transform-only node, or not selected */
 		if (modes & RENDER_ALPHA_BIT(s->materials[o->material].alpha_mode))
 			render_draw_object(r, cmd, p, slot, layer, i, set_cull);
 	}

@@ -8,6 +8,19 @@
 
 #include "shaders/common/scene_vert.h"
 
+void render_specialization(const render *r, int alpha_blend, render_spec *data, VkSpecializationInfo *out)
+{
+	memset(data, 0, sizeof *data);
+	data->values[0] = alpha_blend ? VK_TRUE : VK_FALSE;
+	data->values[1] = 0; /* constant_id 1: unused (was the shadow chunk count) */
+	data->values[2] = (int32_t)r->scene->light_count;
+	for (uint32_t i = 0; i < SCENE_MAX_LIGHTS; i++)
+		data->values[3 + i] = i < r->scene->light_count ? r->shadow.light_code[i] : -1;
+	for (uint32_t k = 0; k < RENDER_SPEC_COUNT; k++)
+		data->entries[k] = (VkSpecializationMapEntry){k, k * (uint32_t)sizeof(int32_t), sizeof(int32_t)};
+	*out = (VkSpecializationInfo){RENDER_SPEC_COUNT, data->entries, sizeof data->values, data->values};
+}
+
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
 {
 	const uint32_t *vs = pd->vs ? pd->vs : scene_vert, *fs = pd->fs;
@@ -29,14 +42,9 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	};
 	if ((res = vkCreatePipelineLayout(r->dev->device, &li, NULL, &out->layout)))
 		goto done;
-	/* Specialisation: 0 = shade.frag's ALPHA_BLEND, 1 = SHADOW_CHUNKS_USED (shading.glsl); entries for
-	 * constants a shader does not declare are ignored. */
-	struct {
-		VkBool32 blend;
-		int32_t chunks;
-	} spec_values = {pd->fs_alpha_blend ? VK_TRUE : VK_FALSE, (int32_t)r->shadow.chunks_compiled};
-	VkSpecializationMapEntry spec_entries[2] = {{0, 0, sizeof(VkBool32)}, {1, sizeof(VkBool32), sizeof(int32_t)}};
-	VkSpecializationInfo spec = {2, spec_entries, sizeof spec_values, &spec_values};
+	render_spec spec_data;
+	VkSpecializationInfo spec;
+	render_specialization(r, pd->fs_alpha_blend, &spec_data, &spec);
 	VkPipelineShaderStageCreateInfo stages[2] = {
 		{.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_VERTEX_BIT,
 		 .module = vm, .pName = "main"},
@@ -174,6 +182,9 @@ int render_compile(const render *r, const char *template_path, shc_stage stage, 
 
 VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, VkPipelineLayout layout, VkPipeline *out)
 {
+	render_spec spec_data;
+	VkSpecializationInfo spec;
+	render_specialization(r, 0, &spec_data, &spec);
 	VkShaderModule m;
 	VkResult res = vkdev_shader_module(r->dev, spv, spv_size, &m);
 	if (res)
@@ -181,7 +192,7 @@ VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, Vk
 	VkComputePipelineCreateInfo ci = {
 		.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
 		.stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_COMPUTE_BIT,
-			  .module = m, .pName = "main"},
+			  .module = m, .pName = "main", .pSpecializationInfo = &spec},
 		.layout = layout,
 	};
 	res = vkCreateComputePipelines(r->dev->device, VK_NULL_HANDLE, 1, &ci, NULL, out);

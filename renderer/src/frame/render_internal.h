@@ -36,8 +36,6 @@ typedef struct render_method {
 	/* Fills the method-specific statistics after the frame completed. */
 	void (*collect)(render *r, frame_stats *st);
 	void (*finish)(render *r);
-	/* Re-creates the method's shading pipelines (after the shadow pool grew; see render_frame). */
-	int (*rebuild)(render *r, char *err, size_t err_size);
 } render_method;
 
 /* The registry (methods/registry.c): the implementation of an available method, else NULL. */
@@ -47,21 +45,26 @@ extern const render_method render_method_tfr;
 
 /* ---- the render object ---- */
 
-/* Shadow maps: a pool of physical layers shared by the state slots (passes/shadow.c). */
+/* Shadow maps: a pool of physical layers shared by the state slots (passes/shadow.c). A physical layer's
+ * global index is chunk_base[c] + its layer in chunk c; every logical layer lives in its own pinned chunk. */
 typedef struct render_shadow_pool {
 	uint32_t layers;       /* logical layers per slot (lights: 1, point lights: 6) */
 	uint32_t size;         /* shadow map size */
-	uint32_t chunk_layers; /* physical layers per chunk image */
-	uint32_t chunk_count;
-	uint32_t chunks_max;   /* chunks the pool may need */
-	uint32_t chunks_compiled; /* chunks the shading pipelines are specialised for (SHADOW_CHUNKS_USED) */
+	uint32_t chunk_count;  /* chunk images allocated so far */
+	uint32_t chunks_max;   /* chunks the layers are pinned to */
+	uint32_t chunk_cap[GPU_SHADOW_CHUNKS];  /* layers of chunk c (its pinned layers' worst case) */
+	uint32_t chunk_base[GPU_SHADOW_CHUNKS]; /* global index of chunk c's first layer */
+	uint32_t *layer_chunk; /* per logical layer: its chunk */
+	int32_t *light_code;   /* per light: LIGHT_SHADOW_i of shading.glsl (chunks and split face), -1 none */
 	vkdev_image chunks[GPU_SHADOW_CHUNKS];
-	vkdev_image dummy;     /* bound while there are no chunks */
+	vkdev_image dummy;     /* bound for chunks not allocated (yet) */
 	VkImageView *views;    /* per physical layer */
 	uint32_t *refs;        /* per physical layer: slots mapping to it */
 	uint32_t *owner;       /* per physical layer: logical layer whose content it holds */
 	uint32_t *slot_phys;   /* state_ring x layers */
 	uint8_t *todo;         /* state_ring x layers: planned, not rendered yet */
+	uint8_t *casters;      /* state_ring x layers x caster_bytes: casters reaching into the layer (bits) */
+	size_t caster_bytes;
 	uint64_t *last_key;    /* per logical layer: inputs of its last rendering */
 	uint32_t *last_phys;
 	uint64_t rendered, reused; /* layer renderings and shares so far */
@@ -155,6 +158,15 @@ typedef struct render_pipe_desc {
 #define RENDER_ATTR_ALL 15u
 
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out);
+/* Specialisation constants of every pipeline (entries for constants a shader does not declare are ignored):
+ * 0 ALPHA_BLEND (shade.frag), 2 LIGHT_COUNT and 3 + i LIGHT_SHADOW_i (shading.glsl: the light loop unrolled,
+ * each light's shadow chunk a constant). */
+#define RENDER_SPEC_COUNT (3 + SCENE_MAX_LIGHTS)
+typedef struct render_spec {
+	int32_t values[RENDER_SPEC_COUNT];
+	VkSpecializationMapEntry entries[RENDER_SPEC_COUNT];
+} render_spec;
+void render_specialization(const render *r, int alpha_blend, render_spec *data, VkSpecializationInfo *out);
 /* Shading pipeline like the reference one (common/scene.vert, depth EQUAL) with fragment shader `fs` and an
  * optional descriptor set 1. */
 VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
@@ -177,9 +189,10 @@ void render_bind_scene(render *r, VkCommandBuffer cmd, const render_pipeline *p)
 void render_set_viewport(VkCommandBuffer cmd, uint32_t w, uint32_t h);
 void render_draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
 			size_t i, int set_cull);
-/* Draws the objects whose material alpha mode is in `modes` (RENDER_ALPHA_BIT set), in scene order. */
+/* Draws the objects whose material alpha mode is in `modes` (RENDER_ALPHA_BIT set), in scene order; with
+ * `only` (object_count bits, may be NULL) just the objects whose bit is set. */
 void render_draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
-			 unsigned modes, int shadow_casters_only, int set_cull);
+			 unsigned modes, const uint8_t *only, int set_cull);
 int render_has_alpha_mode(const render *r, scene_alpha_mode mode);
 /* Writes the next timestamp (call before each pass and once at the end of the frame). */
 void render_ts(render *r, VkCommandBuffer cmd);

@@ -58,9 +58,8 @@ static const char *const tfr_passes[] = {"shadow", "depth", "shade", "display", 
 		}                                                                                  \
 	} while (0)
 
-/* The shading pipeline (tfr.frag.in with the OCIO display function), specialised for the shadow chunks
- * in use; re-created when the shadow history grows into another chunk. */
-static int tfr_rebuild(render *r, char *err, size_t err_size)
+/* The shading pipeline (tfr.frag.in with the OCIO display function). */
+static int tfr_pipeline(render *r, char *err, size_t err_size)
 {
 	tfr_state *t = r->method_state;
 	uint32_t *spv = NULL;
@@ -121,7 +120,7 @@ static int tfr_init(render *r, char *err, size_t err_size)
 		};
 		vkUpdateDescriptorSets(d, 3, w, 0, NULL);
 	}
-	int rc = tfr_rebuild(r, err, err_size);
+	int rc = tfr_pipeline(r, err, err_size);
 	if (rc)
 		return rc;
 	VkCommandBuffer cmd;
@@ -231,5 +230,4 @@ const render_method render_method_tfr = {
 	.record = tfr_record,
 	.collect = tfr_collect,
 	.finish = tfr_finish,
-	.rebuild = tfr_rebuild,
 };

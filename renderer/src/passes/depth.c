@@ -11,7 +11,7 @@
  * objects write no depth and cast no shadow. */
 void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
 			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
-			    int shadow_pass)
+			    const uint8_t *casters)
 {
 	VkRenderingAttachmentInfo da = {
 		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
@@ -30,11 +30,11 @@ void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, ui
 	vkCmdBeginRendering(cmd, &ri);
 	render_bind_scene(r, cmd, pipe);
 	render_set_viewport(cmd, w, h);
-	/* Shadow passes draw shadow casters with culling off; the pre-pass culls per material. */
-	render_draw_objects(r, cmd, pipe, slot, layer, RENDER_OPAQUE_BIT, shadow_pass, !shadow_pass);
+	/* Shadow passes draw the casters reaching into the layer with culling off; the pre-pass culls per material. */
+	render_draw_objects(r, cmd, pipe, slot, layer, RENDER_OPAQUE_BIT, casters, !casters);
 	if (mask_pipe->pipeline) {
 		render_bind_scene(r, cmd, mask_pipe);
-		render_draw_objects(r, cmd, mask_pipe, slot, layer, RENDER_MASK_BIT, shadow_pass, !shadow_pass);
+		render_draw_objects(r, cmd, mask_pipe, slot, layer, RENDER_MASK_BIT, casters, !casters);
 	}
 	vkCmdEndRendering(cmd);
 }
@@ -48,7 +48,7 @@ void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	render_depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, 0);
+	render_depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, NULL);
 	VkMemoryBarrier2 mb = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
 		.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,

@@ -14,17 +14,17 @@ int render_shadow_plan(render *r, uint32_t slot, char *err, size_t err_size);
 void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot);
 
 /* ---- depth.c: depth-only rendering (shadow layers, depth pre-pass) ---- */
-/* Depth-only rendering of opaque + masked objects into `view` (cleared to 1). */
+/* Depth-only rendering of opaque + masked objects into `view` (cleared to 1). Shadow layers pass
+ * `casters` (object_count bits: the casters reaching into the layer; drawn without culling); the depth
+ * pre-pass passes NULL (every object, culled per material). */
 void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
 			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
-			    int shadow_pass);
+			    const uint8_t *casters);
 int render_depth_init(render *r, char *err, size_t err_size);
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot);
 
 /* ---- shade.c: forward shading (depth EQUAL after the pre-pass) and BLEND compositing ---- */
 int render_shade_init(render *r, char *err, size_t err_size);
-/* Re-creates the reference shading pipelines and the method's (after the shadow pool outgrew them). */
-int render_shade_rebuild(render *r, char *err, size_t err_size);
 /* Forward shading of every visible sample with depth EQUAL, inside a pipeline-statistics query. */
 void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot);
 /* The same with a method's pipeline for opaque/masked surfaces (and its descriptor set 1); BLEND

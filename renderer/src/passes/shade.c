@@ -54,7 +54,7 @@ void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const
 	if (method_set)
 		vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, opaque->layout, 1, 1, &method_set, 0, NULL);
 	render_set_viewport(cmd, w, h);
-	render_draw_objects(r, cmd, opaque, slot, 0, RENDER_OPAQUE_BIT | RENDER_MASK_BIT, 0, 1);
+	render_draw_objects(r, cmd, opaque, slot, 0, RENDER_OPAQUE_BIT | RENDER_MASK_BIT, NULL, 1);
 	if (r->blend_count) {
 		/* glTF BLEND: "over" compositing after the opaque surfaces, objects sorted back to front by the
 		 * distance of their bounds centre from the camera (per object, not per triangle). */
@@ -87,8 +87,7 @@ void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const
 		vkCmdEndQuery(cmd, r->stats_pool, 0);
 }
 
-/* The reference shading pipelines (opaque/masked and BLEND); they sample shadow maps, so they are
- * re-created when the shadow pool outgrows the chunk count they were specialised for. */
+/* The reference shading pipelines (opaque/masked and BLEND). */
 static VkResult make_shade_pipelines(render *r)
 {
 	render_pipe_desc shade = {.attributes = RENDER_ATTR_ALL, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
@@ -120,20 +119,6 @@ int render_shade_init(render *r, char *err, size_t err_size)
 		if (!(r->blend_order = calloc(r->blend_count, sizeof *r->blend_order)))
 			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
-fail:
-	return rc;
-}
-
-/* After render_shadow_plan added chunks beyond what the shading pipelines were specialised for. */
-int render_shade_rebuild(render *r, char *err, size_t err_size)
-{
-	int rc = 0;
-	render_pipeline_destroy(r, &r->shade_pipe);
-	render_pipeline_destroy(r, &r->shade_blend_pipe);
-	r->shadow.chunks_compiled = r->shadow.chunk_count;
-	CHECK_VK(make_shade_pipelines(r));
-	if (r->method->rebuild)
-		rc = r->method->rebuild(r, err, err_size);
 fail:
 	return rc;
 }

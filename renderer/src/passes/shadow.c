@@ -4,13 +4,17 @@
  * maps of up to K = 119 frames ago, so every state slot of the ring keeps its own shadow maps. Most
  * shadow layers do not change every frame (static lights whose frustum no moving caster enters), so
  * a slot's logical layer maps to a *physical* layer, and a layer whose inputs are unchanged since the
- * last rendering of that logical layer shares the physical layer instead of being rendered again.
- * The inputs are keyed exactly: the layer's light matrix plus index and world matrix of every shadow
- * caster whose bounds reach into the light frustum (bounding-box corners tested against the clip
- * planes, conservative), so sharing never changes a pixel.
+ * last rendering of that logical layer shares the physical layer instead of being rendered again (for
+ * every method: ref renders a layer only when its key changed). The inputs are keyed exactly: the layer's
+ * light matrix plus index and world matrix of every shadow caster whose bounds reach into the light frustum
+ * (bounding-box corners tested against the clip planes, conservative), so sharing never changes a pixel;
+ * a rendered layer draws only those casters.
  *
- * Physical layers live in up to GPU_SHADOW_CHUNKS array images ("chunks", at most 1 GiB each),
- * allocated when the pool runs out; the shader picks the chunk per lookup (shading.glsl). */
+ * Physical layers live in array images ("chunks", at most 15/16 of maxMemoryAllocationSize each, up to
+ * GPU_SHADOW_CHUNKS). Every logical layer is pinned to one chunk that can hold its worst case (one physical
+ * layer per state slot, plus one while a plan replaces a slot's layer), so the chunk a light samples is
+ * known when pipelines are created: shading.glsl unrolls its light loop and samples each light's chunk with
+ * a constant index (render_shadow_light_code). Chunk images are allocated when their first layer is needed. */
 #include "passes.h"
 
 #include <stdio.h>
@@ -56,12 +60,15 @@ static int box_in_frustum(const float m[16], const float world[16], tlm_vec3 lo,
 	return 1;
 }
 
-static uint64_t layer_key(const render *r, uint32_t slot, uint32_t layer)
+/* The inputs of logical layer `layer` at `slot`; `casters` (object_count bits) receives the casters that
+ * reach into the layer's frustum, the only ones drawn into it. */
+static uint64_t layer_key(const render *r, uint32_t slot, uint32_t layer, uint8_t *casters)
 {
 	const scene *s = r->scene;
 	const gpu_frame_state *st = (const gpu_frame_state *)r->states.mapped + slot;
 	const gpu_object *ob = (const gpu_object *)r->objects.mapped + (size_t)slot * s->object_count;
 	uint64_t h = fnv(1469598103934665603ull, st->shadow_matrix[layer], sizeof st->shadow_matrix[layer]);
+	memset(casters, 0, (s->object_count + 7) / 8);
 	for (size_t i = 0; i < s->object_count; i++) {
 		const scene_object *o = &s->objects[i];
 		if (o->mesh < 0 || !o->casts_shadow || s->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND)
@@ -69,6 +76,7 @@ static uint64_t layer_key(const render *r, uint32_t slot, uint32_t layer)
 		const scene_mesh *me = &s->meshes[o->mesh];
 		if (!box_in_frustum(st->shadow_matrix[layer], ob[i].world, me->bounds_min, me->bounds_max))
 			continue;
+		casters[i / 8] |= (uint8_t)(1u << (i % 8));
 		uint32_t idx = (uint32_t)i;
 		h = fnv(h, &idx, sizeof idx);
 		h = fnv(h, ob[i].world, sizeof ob[i].world);
@@ -82,8 +90,7 @@ static void write_descriptors(render *r)
 	VkDescriptorImageInfo ii[GPU_SHADOW_CHUNKS];
 	for (uint32_t c = 0; c < GPU_SHADOW_CHUNKS; c++)
 		ii[c] = (VkDescriptorImageInfo){r->shadow_sampler,
-						c < p->chunk_count ? p->chunks[c].view : p->chunk_count ? p->chunks[0].view
-													: p->dummy.view,
+						p->chunks[c].view ? p->chunks[c].view : p->dummy.view,
 						VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
 	VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
 				  .dstBinding = 5, .descriptorCount = GPU_SHADOW_CHUNKS,
@@ -108,28 +115,21 @@ static VkResult make_chunk(render *r, uint32_t size, uint32_t layers, const char
 	return vkdev_cmd_submit_wait(r->dev, cmd);
 }
 
-static int add_chunk(render *r, char *err, size_t err_size)
+/* Allocates chunk c (its image and one view per layer) when its first layer is needed. */
+static int add_chunk(render *r, uint32_t c, char *err, size_t err_size)
 {
 	render_shadow_pool *p = &r->shadow;
-	if (p->chunk_count == p->chunks_max) { /* cannot happen: chunks_max covers the worst case */
-		snprintf(err, err_size,
-			 "the shadow-map history needs more than %u layers of %ux%u (%u logical layers x %u slots); "
-			 "lower shadow_map_size in the scene",
-			 GPU_SHADOW_CHUNKS * p->chunk_layers, p->size, p->size, p->layers, r->state_ring);
-		return TL_ERR_NOMEM;
-	}
-	uint32_t c = p->chunk_count;
 	char name[32];
 	snprintf(name, sizeof name, "shadow chunk %u", c);
-	VkResult res = make_chunk(r, p->size, p->chunk_layers, name, &p->chunks[c]);
+	VkResult res = make_chunk(r, p->size, p->chunk_cap[c], name, &p->chunks[c]);
 	if (res) {
-		snprintf(err, err_size, "cannot allocate %u more shadow-map layers of %ux%u (%s); lower shadow_map_size in the scene",
-			 p->chunk_layers, p->size, p->size, vkdev_result_string(res));
 		vkdev_image_destroy(r->dev, &p->chunks[c]);
-		return res == VK_ERROR_OUT_OF_HOST_MEMORY || res == VK_ERROR_OUT_OF_DEVICE_MEMORY ? TL_ERR_NOMEM
-												  : TL_ERR_VULKAN;
+		return tl_error(err, err_size, res == VK_ERROR_OUT_OF_HOST_MEMORY || res == VK_ERROR_OUT_OF_DEVICE_MEMORY
+							? TL_ERR_NOMEM : TL_ERR_VULKAN,
+				"cannot allocate %u shadow-map layers of %ux%u (%s); lower shadow_map_size in the scene",
+				p->chunk_cap[c], p->size, p->size, vkdev_result_string(res));
 	}
-	for (uint32_t l = 0; l < p->chunk_layers; l++) {
+	for (uint32_t l = 0; l < p->chunk_cap[c]; l++) {
 		VkImageViewCreateInfo vi = {
 			.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
 			.image = p->chunks[c].image,
@@ -137,14 +137,60 @@ static int add_chunk(render *r, char *err, size_t err_size)
 			.format = VK_FORMAT_D32_SFLOAT,
 			.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, l, 1},
 		};
-		if ((res = vkCreateImageView(r->dev->device, &vi, NULL, &p->views[c * p->chunk_layers + l]))) {
-			snprintf(err, err_size, "vkCreateImageView (shadow layer) failed: %s", vkdev_result_string(res));
-			return TL_ERR_VULKAN;
-		}
+		if ((res = vkCreateImageView(r->dev->device, &vi, NULL, &p->views[p->chunk_base[c] + l])))
+			return render_vk_error(err, err_size, "vkCreateImageView (shadow layer)", res);
 	}
 	p->chunk_count++;
 	write_descriptors(r);
-	return 0;
+	return TL_OK;
+}
+
+/* Pins the logical layers to chunks: a light's layers stay together when its worst case fits one chunk
+ * (a point light's six faces), else its faces fill chunks one by one; lights are packed in order. */
+static int assign_chunks(render *r, uint32_t per_layer, uint32_t cap_max, char *err, size_t err_size)
+{
+	render_shadow_pool *p = &r->shadow;
+	const scene *s = r->scene;
+	uint32_t c = 0, used = 0;
+	for (size_t i = 0; i < s->light_count; i++) {
+		int first = r->light_shadow_layer[i];
+		r->shadow.light_code[i] = -1;
+		if (first < 0)
+			continue;
+		uint32_t faces = s->lights[i].kind == SCENE_LIGHT_POINT ? 6 : 1;
+		uint32_t together = faces * per_layer <= cap_max;
+		/* a light that fits starts a new chunk when this one is too full; a split one always does, so
+		 * that its faces span as few chunks as possible (two when half of them fit one) */
+		if (used && (!together || used + faces * per_layer > cap_max))
+			c++, used = 0;
+		uint32_t chunk_a = NO_PHYS, chunk_b = NO_PHYS, split = faces;
+		for (uint32_t f = 0; f < faces; f++) {
+			if (used + per_layer > cap_max)
+				c++, used = 0;
+			if (c >= GPU_SHADOW_CHUNKS)
+				return tl_error(err, err_size, TL_ERR_NOMEM,
+						"the shadow-map history needs more than %u array images of %u layers of %ux%u (%u "
+						"layers x %u slots); lower shadow_map_size in the scene",
+						GPU_SHADOW_CHUNKS, cap_max, p->size, p->size, p->layers, r->state_ring);
+			p->layer_chunk[first + f] = c;
+			p->chunk_cap[c] += per_layer;
+			used += per_layer;
+			if (chunk_a == NO_PHYS)
+				chunk_a = c;
+			else if (c != chunk_a && chunk_b == NO_PHYS)
+				chunk_b = c, split = f;
+			else if (c != chunk_a && c != chunk_b)
+				return tl_error(err, err_size, TL_ERR_NOMEM, "a point light's shadow history spans more than two "
+						"array images; lower shadow_map_size in the scene");
+		}
+		if (chunk_b == NO_PHYS)
+			chunk_b = chunk_a;
+		p->light_code[i] = (int32_t)(chunk_a | chunk_b << 8 | split << 16);
+	}
+	p->chunks_max = p->layers ? c + 1 : 0;
+	for (uint32_t k = 1; k < GPU_SHADOW_CHUNKS; k++)
+		p->chunk_base[k] = p->chunk_base[k - 1] + p->chunk_cap[k - 1];
+	return TL_OK;
 }
 
 int render_shadow_init(render *r, char *err, size_t err_size)
@@ -154,63 +200,60 @@ int render_shadow_init(render *r, char *err, size_t err_size)
 	p->size = s->shadow_map_size;
 	uint32_t max_layers = r->dev->props.limits.maxImageArrayLayers;
 	VkDeviceSize layer_B = (VkDeviceSize)p->size * p->size * 4;
-	/* Worst case: every slot's layers distinct, plus one slot's worth while a plan holds old and new. */
-	uint32_t need = p->layers * (r->state_ring + 1);
+	/* Worst case per logical layer: every slot's layer distinct, plus one while a plan replaces a slot's. */
+	uint32_t per_layer = r->state_ring + 1;
 	VkPhysicalDeviceMaintenance3Properties m3 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
 	VkPhysicalDeviceProperties2 pp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &m3};
 	vkGetPhysicalDeviceProperties2(r->dev->physical, &pp);
 	VkDeviceSize chunk_B = m3.maxMemoryAllocationSize ? m3.maxMemoryAllocationSize / 16 * 15 : CHUNK_BYTES_MAX;
-	p->chunk_layers = (uint32_t)(chunk_B / layer_B);
-	if (p->chunk_layers > max_layers)
-		p->chunk_layers = max_layers;
-	if (p->chunk_layers > need)
-		p->chunk_layers = need;
-	if (p->chunk_layers < 1)
-		p->chunk_layers = 1;
-	p->chunks_max = (need + p->chunk_layers - 1) / p->chunk_layers;
-	if (p->chunks_max < 1)
-		p->chunks_max = 1;
-	if (p->chunks_max > GPU_SHADOW_CHUNKS) {
-		snprintf(err, err_size,
-			 "the shadow-map history would need up to %u layers of %ux%u (%u per frame x %u frames), more than %u "
-			 "allocations of %u layers; lower shadow_map_size in the scene",
-			 need, p->size, p->size, p->layers, r->state_ring, GPU_SHADOW_CHUNKS, p->chunk_layers);
-		return TL_ERR_NOMEM;
-	}
-	size_t phys_max = (size_t)GPU_SHADOW_CHUNKS * p->chunk_layers;
-	p->views = calloc(phys_max, sizeof *p->views);
-	p->refs = calloc(phys_max, sizeof *p->refs);
-	p->owner = malloc(phys_max * sizeof *p->owner);
+	uint64_t cap_max = chunk_B / layer_B;
+	if (cap_max > max_layers)
+		cap_max = max_layers;
+	if (cap_max < per_layer)
+		return tl_error(err, err_size, TL_ERR_NOMEM,
+				"one shadow layer's history (%u layers of %ux%u) exceeds an array image; lower shadow_map_size "
+				"in the scene", per_layer, p->size, p->size);
+	p->layer_chunk = calloc(p->layers + 1, sizeof *p->layer_chunk);
+	p->light_code = calloc(s->light_count + 1, sizeof *p->light_code);
+	if (!p->layer_chunk || !p->light_code)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	int rc = assign_chunks(r, per_layer, (uint32_t)cap_max, err, err_size);
+	if (rc)
+		return rc;
+	size_t phys_max = (size_t)p->layers * per_layer, bits = (s->object_count + 7) / 8;
+	p->views = calloc(phys_max + 1, sizeof *p->views);
+	p->refs = calloc(phys_max + 1, sizeof *p->refs);
+	p->owner = malloc((phys_max + 1) * sizeof *p->owner);
 	p->slot_phys = malloc((size_t)r->state_ring * (p->layers + 1) * sizeof *p->slot_phys);
 	p->todo = calloc((size_t)r->state_ring * (p->layers + 1), 1);
+	p->casters = calloc((size_t)r->state_ring * (p->layers + 1) * (bits + 1), 1);
+	p->caster_bytes = bits + 1;
 	p->last_key = calloc(p->layers + 1, sizeof *p->last_key);
 	p->last_phys = malloc((p->layers + 1) * sizeof *p->last_phys);
-	if (!p->views || !p->refs || !p->owner || !p->slot_phys || !p->todo || !p->last_key || !p->last_phys) {
-		snprintf(err, err_size, "out of memory");
-		return TL_ERR_NOMEM;
-	}
+	if (!p->views || !p->refs || !p->owner || !p->slot_phys || !p->todo || !p->casters || !p->last_key || !p->last_phys)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	for (size_t i = 0; i < (size_t)r->state_ring * (p->layers + 1); i++)
 		p->slot_phys[i] = NO_PHYS;
 	for (uint32_t l = 0; l <= p->layers; l++)
 		p->last_phys[l] = NO_PHYS;
-	for (size_t i = 0; i < phys_max; i++)
+	for (size_t i = 0; i <= phys_max; i++)
 		p->owner[i] = NO_PHYS;
 	VkResult res = make_chunk(r, 1, 1, "shadow dummy", &p->dummy);
-	if (res) {
-		snprintf(err, err_size, "creating the shadow-map placeholder failed: %s", vkdev_result_string(res));
-		return TL_ERR_VULKAN;
-	}
+	if (res)
+		return render_vk_error(err, err_size, "creating the shadow-map placeholder", res);
 	write_descriptors(r);
-	return 0;
+	return TL_OK;
 }
 
 void render_shadow_destroy(render *r)
 {
 	render_shadow_pool *p = &r->shadow;
-	for (uint32_t c = 0; c < p->chunk_count; c++) {
-		for (uint32_t l = 0; l < p->chunk_layers; l++)
-			if (p->views[c * p->chunk_layers + l])
-				vkDestroyImageView(r->dev->device, p->views[c * p->chunk_layers + l], NULL);
+	for (uint32_t c = 0; c < GPU_SHADOW_CHUNKS; c++) {
+		if (!p->chunks[c].image)
+			continue;
+		for (uint32_t l = 0; l < p->chunk_cap[c]; l++)
+			if (p->views[p->chunk_base[c] + l])
+				vkDestroyImageView(r->dev->device, p->views[p->chunk_base[c] + l], NULL);
 		vkdev_image_destroy(r->dev, &p->chunks[c]);
 	}
 	vkdev_image_destroy(r->dev, &p->dummy);
@@ -219,8 +262,11 @@ void render_shadow_destroy(render *r)
 	free(p->owner);
 	free(p->slot_phys);
 	free(p->todo);
+	free(p->casters);
 	free(p->last_key);
 	free(p->last_phys);
+	free(p->layer_chunk);
+	free(p->light_code);
 	memset(p, 0, sizeof *p);
 }
 
@@ -232,9 +278,10 @@ int render_shadow_plan(render *r, uint32_t slot, char *err, size_t err_size)
 	uint8_t *todo = p->todo + (size_t)slot * p->layers;
 	uint32_t old[SCENE_MAX_SHADOW_LAYERS];
 	memcpy(old, map, p->layers * sizeof *map);
-	size_t phys_n = (size_t)p->chunk_count * p->chunk_layers, next_free = 0;
 	for (uint32_t l = 0; l < p->layers; l++) {
-		uint64_t key = layer_key(r, slot, l);
+		uint8_t *casters = p->casters + ((size_t)slot * p->layers + l) * p->caster_bytes;
+		uint64_t key = layer_key(r, slot, l, casters);
+		uint32_t c = p->layer_chunk[l];
 		todo[l] = 0;
 		/* A physical layer keeps the content of the logical layer that rendered it last until it is
 		 * handed to another layer (which clears last_phys), even while no slot references it. */
@@ -243,34 +290,34 @@ int render_shadow_plan(render *r, uint32_t slot, char *err, size_t err_size)
 			p->refs[map[l]]++;
 			p->reused++;
 		} else {
-			while (next_free < phys_n && p->refs[next_free])
-				next_free++;
-			if (next_free == phys_n) {
-				int rc = add_chunk(r, err, err_size);
-				if (rc) {
-					for (uint32_t k = 0; k < l; k++) /* undo this slot's new references */
-						p->refs[map[k]]--;
-					memcpy(map, old, p->layers * sizeof *map);
-					return rc;
-				}
-				phys_n += p->chunk_layers;
+			/* A free physical layer of the layer's own chunk; the chunk holds the worst case. */
+			uint32_t phys = p->chunk_base[c], end = phys + p->chunk_cap[c];
+			while (phys < end && p->refs[phys])
+				phys++;
+			if (phys == end || (!p->chunks[c].image && add_chunk(r, c, err, err_size))) {
+				if (phys == end)
+					tl_error(err, err_size, TL_ERR_INTERNAL, "shadow chunk %u is full (a pool invariant broke)", c);
+				for (uint32_t k = 0; k < l; k++) /* undo this slot's new references */
+					p->refs[map[k]]--;
+				memcpy(map, old, p->layers * sizeof *map);
+				return phys == end ? TL_ERR_INTERNAL : TL_ERR_NOMEM;
 			}
-			map[l] = (uint32_t)next_free;
-			p->refs[next_free] = 1;
-			if (p->owner[next_free] != NO_PHYS)
-				p->last_phys[p->owner[next_free]] = NO_PHYS;
-			p->owner[next_free] = l;
+			map[l] = phys;
+			p->refs[phys] = 1;
+			if (p->owner[phys] != NO_PHYS)
+				p->last_phys[p->owner[phys]] = NO_PHYS;
+			p->owner[phys] = l;
 			p->last_key[l] = key;
-			p->last_phys[l] = (uint32_t)next_free;
+			p->last_phys[l] = phys;
 			todo[l] = 1;
 			p->rendered++;
 		}
-		st->shadow_phys[l] = (map[l] / p->chunk_layers) << 16 | (map[l] % p->chunk_layers);
+		st->shadow_phys[l] = c << 16 | (map[l] - p->chunk_base[c]);
 	}
 	for (uint32_t l = 0; l < p->layers; l++)
 		if (old[l] != NO_PHYS)
 			p->refs[old[l]]--;
-	return 0;
+	return TL_OK;
 }
 
 void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
@@ -282,7 +329,7 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 	for (uint32_t l = 0; l < p->layers; l++) {
 		if (!todo[l])
 			continue;
-		uint32_t c = map[l] / p->chunk_layers, cl = map[l] % p->chunk_layers;
+		uint32_t c = p->layer_chunk[l], cl = map[l] - p->chunk_base[c];
 		VkImageMemoryBarrier2 b = {
 			.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2,
 			.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
@@ -298,7 +345,8 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 		VkDependencyInfo di = {.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO, .imageMemoryBarrierCount = 1,
 				       .pImageMemoryBarriers = &b};
 		vkCmdPipelineBarrier2(cmd, &di);
-		render_depth_only_pass(r, cmd, p->views[map[l]], n, n, &r->shadow_pipe, &r->shadow_mask_pipe, slot, l, 1);
+		render_depth_only_pass(r, cmd, p->views[map[l]], n, n, &r->shadow_pipe, &r->shadow_mask_pipe, slot, l,
+				       p->casters + ((size_t)slot * p->layers + l) * p->caster_bytes);
 		b.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
 		b.srcAccessMask = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 		b.dstStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;

@@ -29,6 +29,7 @@ typedef struct colour_desc {
 	const char *display;     /* NULL: the config's default display */
 	const char *view;        /* NULL: the display's default view */
 	int ignore_env;          /* do not read $OCIO (tests) */
+	int keep_ocio_glsl;      /* use OCIO's GLSL as emitted, without the curve rewrite (tests compare both) */
 } colour_desc;
 
 int colour_create(const colour_desc *desc, colour **out, char *err, size_t err_size);
@@ -36,8 +37,12 @@ void colour_destroy(colour **c);
 /* One line naming the transform, e.g. "ACES 1.0 SDR-video -> sRGB (OCIO 2.1.2 builtins)". */
 const char *colour_name(const colour *c);
 /* GLSL (Vulkan GLSL 4.60 compatible) defining `vec4 ocio_display(vec4 linear_rgba)`; no uniforms or
- * textures (creation fails with a clear message for a config that would need them). */
+ * textures (creation fails with a clear message for a config that would need them). The text is OCIO's,
+ * with its B-spline curve functions restructured into straight-line code that computes bit-identical values
+ * (colour.cpp explains why: a 20x faster display transform on a SIMD CPU driver). */
 const char *colour_glsl(const colour *c);
+/* How many curve functions were restructured (0: OCIO's text as emitted). */
+int colour_glsl_rewritten(const colour *c);
 /* Applies the transform in place to `n` RGB(A) float pixels (channels 3 or 4, alpha untouched). */
 void colour_apply(const colour *c, float *pixels, size_t n, int channels);
 
