@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shaders/common/fullscreen_vert.h"
 #include "shaders/common/scene_vert.h"
 
 void render_specialization(const render *r, int alpha_blend, render_spec *data, VkSpecializationInfo *out)
@@ -23,8 +24,9 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
 
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
 {
-	const uint32_t *vs = pd->vs ? pd->vs : scene_vert, *fs = pd->fs;
-	size_t vs_size = pd->vs ? pd->vs_size : sizeof scene_vert, fs_size = pd->fs_size;
+	const uint32_t *vs = pd->vs ? pd->vs : pd->fullscreen ? fullscreen_vert : scene_vert, *fs = pd->fs;
+	size_t vs_size = pd->vs ? pd->vs_size : pd->fullscreen ? sizeof fullscreen_vert : sizeof scene_vert;
+	size_t fs_size = pd->fs_size;
 	VkShaderModule vm = VK_NULL_HANDLE, fm = VK_NULL_HANDLE;
 	VkResult res = vkdev_shader_module(r->dev, vs, vs_size, &vm);
 	if (!res && fs)
@@ -65,9 +67,9 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 			attrs[nattr++] = all_attrs[i];
 	VkPipelineVertexInputStateCreateInfo vi = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO,
-		.vertexBindingDescriptionCount = 1,
 		.pVertexBindingDescriptions = &bind,
-		.vertexAttributeDescriptionCount = nattr,
+		.vertexBindingDescriptionCount = pd->fullscreen ? 0u : 1u,
+		.vertexAttributeDescriptionCount = pd->fullscreen ? 0u : nattr,
 		.pVertexAttributeDescriptions = attrs,
 	};
 	VkPipelineInputAssemblyStateCreateInfo ia = {
@@ -92,10 +94,19 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	};
 	VkPipelineDepthStencilStateCreateInfo ds = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
-		.depthTestEnable = VK_TRUE,
+		.depthTestEnable = pd->no_depth_test ? VK_FALSE : VK_TRUE,
 		.depthWriteEnable = pd->depth_write ? VK_TRUE : VK_FALSE,
 		.depthCompareOp = pd->depth_op,
+		.stencilTestEnable = pd->stencil >= RENDER_STENCIL_WRITE_ONE ? VK_TRUE : VK_FALSE,
 	};
+	/* Stencil: a decision pass writes 1 where its fragment shader does not discard; shading passes test it. */
+	VkStencilOpState so = {.failOp = VK_STENCIL_OP_KEEP, .passOp = VK_STENCIL_OP_KEEP, .depthFailOp = VK_STENCIL_OP_KEEP,
+			       .compareOp = VK_COMPARE_OP_EQUAL, .compareMask = 0xFF, .writeMask = 0, .reference = 1};
+	if (pd->stencil == RENDER_STENCIL_WRITE_ONE)
+		so.compareOp = VK_COMPARE_OP_ALWAYS, so.passOp = VK_STENCIL_OP_REPLACE, so.writeMask = 0xFF;
+	else if (pd->stencil == RENDER_STENCIL_EQUAL_ZERO)
+		so.reference = 0;
+	ds.front = ds.back = so;
 	/* Blending: "over" for colour; coverage alpha accumulates as a + (1 - a) * dst. */
 	VkPipelineColorBlendAttachmentState cba = {
 		.blendEnable = pd->blend ? VK_TRUE : VK_FALSE,
@@ -115,7 +126,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
 	VkPipelineDynamicStateCreateInfo dy = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-		.dynamicStateCount = pd->bias ? 2u : 3u,
+		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 3u,
 		.pDynamicStates = dyn,
 	};
 	VkFormat cfmt = VK_FORMAT_R16G16B16A16_SFLOAT;
@@ -123,7 +134,8 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.colorAttachmentCount = pd->color ? 1u : 0u,
 		.pColorAttachmentFormats = &cfmt,
-		.depthAttachmentFormat = VK_FORMAT_D32_SFLOAT,
+		.depthAttachmentFormat = pd->depth_format ? pd->depth_format : RENDER_DEPTH_FORMAT,
+		.stencilAttachmentFormat = pd->stencil ? RENDER_DEPTH_FORMAT : VK_FORMAT_UNDEFINED,
 	};
 	VkGraphicsPipelineCreateInfo gi = {
 		.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
@@ -198,4 +210,20 @@ VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, Vk
 	res = vkCreateComputePipelines(r->dev->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
 	vkDestroyShaderModule(r->dev->device, m, NULL);
 	return res;
+}
+
+int render_make_template_pipeline(render *r, const char *template_path, VkDescriptorSetLayout method_set, int stencil,
+				  int color, int fullscreen, render_pipeline *out, char *err, size_t err_size)
+{
+	uint32_t *spv = NULL;
+	size_t spv_size = 0;
+	int rc = render_compile(r, template_path, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	if (rc)
+		return rc;
+	render_pipe_desc pd = {.attributes = RENDER_ATTR_ALL, .color = color, .depth_op = VK_COMPARE_OP_EQUAL,
+			       .fs = spv, .fs_size = spv_size, .method_set = method_set, .stencil = stencil,
+			       .fullscreen = fullscreen, .no_depth_test = fullscreen};
+	VkResult res = render_make_graphics(r, &pd, out);
+	free(spv);
+	return res ? render_vk_error(err, err_size, template_path, res) : TL_OK;
 }

@@ -143,12 +143,28 @@ void render_targets_destroy(render *r);
 
 /* ---- frame/pipeline.c: pipelines ---- */
 /* A graphics pipeline of the frame pipeline; zero-initialised fields mean "off". */
+/* The scene's depth target: 32-bit float depth (the pre-pass) with 8-bit stencil (the reuse decisions of rrc
+ * and tarc mask their shading passes). Shadow layers are plain D32. */
+#define RENDER_DEPTH_FORMAT VK_FORMAT_D32_SFLOAT_S8_UINT
+
+enum {
+	RENDER_STENCIL_NONE = 0,  /* no stencil attachment */
+	RENDER_STENCIL_ATTACHED,  /* attached, not tested */
+	RENDER_STENCIL_WRITE_ONE, /* always passes, writes 1 (a decision pass marking pixels to shade) */
+	RENDER_STENCIL_EQUAL_ONE, /* passes where the stencil is 1 (shade the marked pixels) */
+	RENDER_STENCIL_EQUAL_ZERO, /* passes where the stencil is 0 (the unmarked, reused pixels) */
+};
+
 typedef struct render_pipe_desc {
 	const uint32_t *vs, *fs; /* vs NULL: common/scene.vert, the one vertex shader of all scene passes */
 	size_t vs_size, fs_size;
 	unsigned attributes;   /* bit i: vertex attribute location i (0 position, 1 normal, 2 uv, 3 tangent) */
 	int depth_write, color, bias, blend;
 	VkCompareOp depth_op;
+	int no_depth_test;     /* depth test off (full-screen passes) */
+	int stencil;           /* RENDER_STENCIL_* */
+	int fullscreen;        /* common/fullscreen.vert, no vertex input, no culling state */
+	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
 	VkDescriptorSetLayout method_set; /* optional set 1 */
 } render_pipe_desc;
@@ -171,6 +187,9 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
  * optional descriptor set 1. */
 VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
 				    render_pipeline *out);
+/* The same for a run-time template (render_compile) with stencil mode `stencil` and colour output on or off. */
+int render_make_template_pipeline(render *r, const char *template_path, VkDescriptorSetLayout method_set, int stencil,
+				  int color, int fullscreen, render_pipeline *out, char *err, size_t err_size);
 /* Compute pipeline from SPIR-V with the given layout. */
 VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, VkPipelineLayout layout, VkPipeline *out);
 void render_pipeline_destroy(render *r, render_pipeline *p);

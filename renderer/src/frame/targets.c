@@ -112,8 +112,8 @@ int render_targets_create(render *r, char *err, size_t err_size)
 		if (s->lights[i].casts_shadow)
 			r->shadow.layers += s->lights[i].kind == SCENE_LIGHT_POINT ? 6 : 1;
 	}
-	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-				    VK_IMAGE_ASPECT_DEPTH_BIT, false, "depth", &r->depth));
+	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, RENDER_DEPTH_FORMAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+				    VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, false, "depth", &r->depth));
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 				    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 				    VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT, false, "hdr", &r->hdr));

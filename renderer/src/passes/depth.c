@@ -9,14 +9,14 @@
 /* One depth-only rendering into `view` (cleared to 1): shadow layers and the depth pre-pass. Opaque
  * objects use `pipe`; alpha-masked ones `mask_pipe` (alpha test in the fragment shader); blended
  * objects write no depth and cast no shadow. */
-void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
-			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
-			    const uint8_t *casters)
+void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, VkImageLayout layout, uint32_t w,
+			    uint32_t h, const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot,
+			    uint32_t layer, const uint8_t *casters)
 {
 	VkRenderingAttachmentInfo da = {
 		.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
 		.imageView = view,
-		.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+		.imageLayout = layout,
 		.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
 		.storeOp = VK_ATTACHMENT_STORE_OP_STORE,
 		.clearValue = {.depthStencil = {1.0f, 0}},
@@ -42,13 +42,14 @@ void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, ui
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
-	vkdev_barrier_image(cmd, &r->depth, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+	vkdev_barrier_image(cmd, &r->depth, VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+			    VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	render_depth_only_pass(r, cmd, r->depth.view, w, h, &r->depth_pipe, &r->depth_mask_pipe, slot, 0, NULL);
+	render_depth_only_pass(r, cmd, r->depth.view, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, w, h, &r->depth_pipe,
+			       &r->depth_mask_pipe, slot, 0, NULL);
 	VkMemoryBarrier2 mb = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
 		.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
@@ -66,7 +67,8 @@ int render_depth_init(render *r, char *err, size_t err_size)
 {
 	int rc = 0;
 	render_pipe_desc shadow = {.vs = shadow_vert, .vs_size = sizeof shadow_vert, .attributes = RENDER_ATTR_POSITION,
-				   .depth_write = 1, .depth_op = VK_COMPARE_OP_LESS, .bias = 1};
+				   .depth_write = 1, .depth_op = VK_COMPARE_OP_LESS, .bias = 1,
+				   .depth_format = VK_FORMAT_D32_SFLOAT};
 	render_pipe_desc depth = {.attributes = RENDER_ATTR_ALL, .depth_write = 1, .depth_op = VK_COMPARE_OP_LESS};
 	CHECK_VK(render_make_graphics(r, &shadow, &r->shadow_pipe));
 	CHECK_VK(render_make_graphics(r, &depth, &r->depth_pipe));

@@ -17,9 +17,9 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot);
 /* Depth-only rendering of opaque + masked objects into `view` (cleared to 1). Shadow layers pass
  * `casters` (object_count bits: the casters reaching into the layer; drawn without culling); the depth
  * pre-pass passes NULL (every object, culled per material). */
-void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, uint32_t w, uint32_t h,
-			    const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer,
-			    const uint8_t *casters);
+void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, VkImageLayout layout, uint32_t w,
+			    uint32_t h, const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot,
+			    uint32_t layer, const uint8_t *casters);
 int render_depth_init(render *r, char *err, size_t err_size);
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot);
 
@@ -31,6 +31,24 @@ void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot);
  * surfaces keep the reference shading. */
 void render_pass_shade_with(render *r, VkCommandBuffer cmd, uint32_t slot, const render_pipeline *opaque,
 			    VkDescriptorSet method_set);
+
+/* One rendering over the scene's targets, for methods that build their frame from several passes (rrc, tarc):
+ * the HDR target cleared to the sky, loaded, or not attached; the stencil attached (cleared or loaded) or not;
+ * the opaque and masked objects drawn with `pipe` (or one full-screen triangle); optionally the BLEND objects
+ * composited on top with the reference shading (only in passes without stencil). The caller orders its own
+ * storage-image accesses between passes. */
+enum { RENDER_HDR_NONE = 0, RENDER_HDR_CLEAR, RENDER_HDR_LOAD };
+enum { RENDER_STENCIL_PASS_NONE = 0, RENDER_STENCIL_PASS_CLEAR, RENDER_STENCIL_PASS_LOAD };
+typedef struct render_scene_pass {
+	const render_pipeline *pipe;
+	VkDescriptorSet set;   /* optional set 1 */
+	int hdr;               /* RENDER_HDR_* */
+	int stencil;           /* RENDER_STENCIL_PASS_* */
+	int fullscreen;        /* one full-screen triangle instead of the objects */
+	int blend;             /* then the BLEND objects */
+	int query;             /* inside the pipeline-statistics query (the method's shading passes) */
+} render_scene_pass;
+void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const render_scene_pass *p);
 
 /* ---- display.c: the OpenColorIO display transform, HDR -> RGBA8 ---- */
 int render_display_init(render *r, char *err, size_t err_size);

@@ -345,8 +345,8 @@ void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot)
 		VkDependencyInfo di = {.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO, .imageMemoryBarrierCount = 1,
 				       .pImageMemoryBarriers = &b};
 		vkCmdPipelineBarrier2(cmd, &di);
-		render_depth_only_pass(r, cmd, p->views[map[l]], n, n, &r->shadow_pipe, &r->shadow_mask_pipe, slot, l,
-				       p->casters + ((size_t)slot * p->layers + l) * p->caster_bytes);
+		render_depth_only_pass(r, cmd, p->views[map[l]], VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, n, n, &r->shadow_pipe,
+				       &r->shadow_mask_pipe, slot, l, p->casters + ((size_t)slot * p->layers + l) * p->caster_bytes);
 		b.srcStageMask = VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
 		b.srcAccessMask = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 		b.dstStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
