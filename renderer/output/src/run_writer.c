@@ -140,7 +140,7 @@ static void stats_header(const frame_stats *st, char *h, size_t n)
 	for (uint32_t p = 0; p < st->pass_count && len < n; p++)
 		len += (size_t)snprintf(h + len, n - len, ",gpu_ms_%s", st->pass_names[p]);
 	if (len < n)
-		len += (size_t)snprintf(h + len, n - len, ",reused_samples");
+		len += (size_t)snprintf(h + len, n - len, ",reused_samples,allocated_samples,late_samples");
 	for (uint32_t e = 0; e < st->extra_count && len < n; e++)
 		len += (size_t)snprintf(h + len, n - len, ",%s", st->extra_names[e]);
 }
@@ -197,6 +197,8 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 	for (uint32_t p = 0; p < st->pass_count; p++)
 		fputc(',', f), csv_ms(f, st->gpu_ms[p]);
 	fputc(',', f), csv_int(f, st->reused_samples);
+	fputc(',', f), csv_int(f, st->allocated_samples);
+	fputc(',', f), csv_int(f, st->late_samples);
 	for (uint32_t e = 0; e < st->extra_count; e++) {
 		fputc(',', f);
 		if (isfinite(st->extra[e]))

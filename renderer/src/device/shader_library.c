@@ -45,11 +45,21 @@ static int append(buffer *b, const char *s, size_t n)
 	return 0;
 }
 
-static int expand(const char *src, const char *ocio, buffer *b, int depth, char *err, size_t err_size)
+static int expand(const char *src, const char *ocio, const char *defines, buffer *b, int depth, char *err,
+		  size_t err_size)
 {
 	for (const char *p = src; *p;) {
 		size_t n = strcspn(p, "\n");
 		int rc = 0;
+		if (!strncmp(p, "#version", 8) && depth == 0 && defines) {
+			rc = append(b, p, n) || append(b, "\n", 1) || append(b, defines, strlen(defines));
+			if (rc)
+				return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory assembling a shader");
+			p += n;
+			if (*p == '\n')
+				p++;
+			continue;
+		}
 		if (!strncmp(p, "#include \"", 10)) {
 			char name[256];
 			const char *q = strchr(p + 10, '"');
@@ -59,7 +69,7 @@ static int expand(const char *src, const char *ocio, buffer *b, int depth, char 
 			const char *text = shader_source(name);
 			if (!text || depth > 8)
 				return tl_error(err, err_size, TL_ERR_INTERNAL, "shader: unknown include '%s'", name);
-			if ((rc = expand(text, ocio, b, depth + 1, err, err_size)))
+			if ((rc = expand(text, ocio, NULL, b, depth + 1, err, err_size)))
 				return rc;
 		} else if (!strncmp(p, "#extension GL_GOOGLE_include_directive", 38)) {
 			/* resolved here */
@@ -79,12 +89,18 @@ static int expand(const char *src, const char *ocio, buffer *b, int depth, char 
 
 int shader_assemble(const char *path, const char *ocio_glsl, char **out, char *err, size_t err_size)
 {
+	return shader_assemble_defs(path, ocio_glsl, NULL, out, err, err_size);
+}
+
+int shader_assemble_defs(const char *path, const char *ocio_glsl, const char *defines, char **out, char *err,
+			 size_t err_size)
+{
 	*out = NULL;
 	const char *text = shader_source(path);
 	if (!text)
 		return tl_error(err, err_size, TL_ERR_INTERNAL, "shader: no template '%s' in the shader library", path);
 	buffer b = {0};
-	int rc = expand(text, ocio_glsl ? ocio_glsl : "", &b, 0, err, err_size);
+	int rc = expand(text, ocio_glsl ? ocio_glsl : "", defines, &b, 0, err, err_size);
 	if (rc) {
 		free(b.data);
 		return rc;

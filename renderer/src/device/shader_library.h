@@ -18,5 +18,9 @@ const char *shader_source(const char *path);
  * include-guarded), `ocio_glsl` inserted at the marker. *out is malloc'ed (caller frees).
  * TL_ERR_INTERNAL naming an unknown template or include. */
 int shader_assemble(const char *path, const char *ocio_glsl, char **out, char *err, size_t err_size);
+/* The same with `defines` (e.g. "#define TARC 1\n", may be NULL) inserted after the #version line: one
+ * template, several variants, no run-time branches between them (a SIMD CPU driver pays for every branch). */
+int shader_assemble_defs(const char *path, const char *ocio_glsl, const char *defines, char **out, char *err,
+			 size_t err_size);
 
 #endif

@@ -182,8 +182,14 @@ void render_pipeline_destroy(render *r, render_pipeline *p)
 int render_compile(const render *r, const char *template_path, shc_stage stage, uint32_t **spv, size_t *spv_size,
 		   char *err, size_t err_size)
 {
+	return render_compile_defs(r, template_path, NULL, stage, spv, spv_size, err, err_size);
+}
+
+int render_compile_defs(const render *r, const char *template_path, const char *defines, shc_stage stage,
+			uint32_t **spv, size_t *spv_size, char *err, size_t err_size)
+{
 	char *src = NULL;
-	int rc = shader_assemble(template_path, colour_glsl(r->colour), &src, err, err_size);
+	int rc = shader_assemble_defs(template_path, colour_glsl(r->colour), defines, &src, err, err_size);
 	if (rc)
 		return rc;
 	if (shc_compile(src, stage, spv, spv_size, err, err_size))
@@ -212,12 +218,13 @@ VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, Vk
 	return res;
 }
 
-int render_make_template_pipeline(render *r, const char *template_path, VkDescriptorSetLayout method_set, int stencil,
-				  int color, int fullscreen, render_pipeline *out, char *err, size_t err_size)
+int render_make_template_pipeline(render *r, const char *template_path, const char *defines,
+				  VkDescriptorSetLayout method_set, int stencil, int color, int fullscreen, render_pipeline *out,
+				  char *err, size_t err_size)
 {
 	uint32_t *spv = NULL;
 	size_t spv_size = 0;
-	int rc = render_compile(r, template_path, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	int rc = render_compile_defs(r, template_path, defines, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
 	if (rc)
 		return rc;
 	render_pipe_desc pd = {.attributes = RENDER_ATTR_ALL, .color = color, .depth_op = VK_COMPARE_OP_EQUAL,

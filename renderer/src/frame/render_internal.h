@@ -42,6 +42,8 @@ typedef struct render_method {
 const render_method *render_method_of(const method_info *info);
 extern const render_method render_method_ref;
 extern const render_method render_method_tfr;
+extern const render_method render_method_rrc;
+extern const render_method render_method_tarc;
 
 /* ---- the render object ---- */
 
@@ -187,9 +189,11 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
  * optional descriptor set 1. */
 VkResult render_make_shade_pipeline(render *r, const uint32_t *fs, size_t fs_size, VkDescriptorSetLayout method_set,
 				    render_pipeline *out);
-/* The same for a run-time template (render_compile) with stencil mode `stencil` and colour output on or off. */
-int render_make_template_pipeline(render *r, const char *template_path, VkDescriptorSetLayout method_set, int stencil,
-				  int color, int fullscreen, render_pipeline *out, char *err, size_t err_size);
+/* The same for a run-time template (render_compile_defs) with stencil mode `stencil`, colour output on or off,
+ * and full-screen (one triangle, no depth test) or scene geometry (depth EQUAL). */
+int render_make_template_pipeline(render *r, const char *template_path, const char *defines,
+				  VkDescriptorSetLayout method_set, int stencil, int color, int fullscreen, render_pipeline *out,
+				  char *err, size_t err_size);
 /* Compute pipeline from SPIR-V with the given layout. */
 VkResult render_make_compute(render *r, const uint32_t *spv, size_t spv_size, VkPipelineLayout layout, VkPipeline *out);
 void render_pipeline_destroy(render *r, render_pipeline *p);
@@ -197,6 +201,9 @@ void render_pipeline_destroy(render *r, render_pipeline *p);
  * device/shader_library.h). */
 int render_compile(const render *r, const char *template_path, shc_stage stage, uint32_t **spv, size_t *spv_size,
 		   char *err, size_t err_size);
+/* The same with `defines` inserted after #version (template variants without run-time branches). */
+int render_compile_defs(const render *r, const char *template_path, const char *defines, shc_stage stage,
+			uint32_t **spv, size_t *spv_size, char *err, size_t err_size);
 
 /* ---- frame/draw.c: drawing the scene, timestamps, the command buffer ---- */
 #define RENDER_ALPHA_BIT(m) (1u << (m))

@@ -11,16 +11,16 @@
 static const render_method *const implemented[] = {
 	&render_method_ref,
 	&render_method_tfr,
+	&render_method_rrc,
+	&render_method_tarc,
 };
 
-static const method_info planned_rrc = {.name = "rrc", .summary = "reverse reprojection cache, 16x16 tiles refreshed round-robin"};
-static const method_info planned_tarc = {.name = "tarc", .summary = "temporally adaptive reprojection caching (paper sec. 6.1)"};
 static const method_info planned_sa = {.name = "sa", .summary = "shading atlas, visible blocks shaded every frame"};
 static const method_info planned_sau = {.name = "sau", .summary = "shading atlas with uniform temporal upsampling"};
 static const method_info planned_tasa = {.name = "tasa", .summary = "temporally adaptive shading atlas (paper sec. 6.2)"};
 
 static const method_info *const all[] = {
-	&render_method_ref.info, &render_method_tfr.info, &planned_rrc, &planned_tarc, &planned_sa, &planned_sau, &planned_tasa,
+	&render_method_ref.info, &render_method_tfr.info, &render_method_rrc.info, &render_method_tarc.info, &planned_sa, &planned_sau, &planned_tasa,
 };
 
 const method_info *const *method_list(size_t *count)
@@ -182,7 +182,7 @@ int method_config_check(const method_config *c, char *err, size_t err_size)
 			return tl_error(err, err_size, TL_ERR_ARG, "%s needs --%s (e.g. %s%c8)", c->method->name, o->name,
 					c->method->name, o->variant);
 	}
-	return TL_OK;
+	return c->method->check ? c->method->check(c->values.bytes, err, err_size) : TL_OK;
 }
 
 int method_config_parse_variant(method_config *c, const char *variant, char *err, size_t err_size)

@@ -1,0 +1,119 @@
+// reproj.glsl - resources and helpers of the reverse-reprojection methods rrc and tarc
+// (renderer/src/methods/reproj_cache.c; ../shared/TAS-METHODS.md sections 1-3). Needs tas/tas.glsl before it.
+//
+// Per-pixel cache, double-buffered ("input buffers are reprojected, altered values stored in the output
+// buffers", paper sec. 6.1): colour = the value shown for the opaque surface (half float, what the HDR target
+// stores), state = (object + 1, view distance bits, age | flags, gradient bits).
+// Variants (compiled in with #define, never branched on at run time): TARC (else rrc), ORACLE (tarc's ideal
+// variant), NEAREST (nearest-pixel lookup, else bilinear with per-tap validity).
+#ifndef TASLAB_REPROJ_GLSL
+#define TASLAB_REPROJ_GLSL
+
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
+layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
+layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
+layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
+layout(set = 1, binding = 4, rgba32f) uniform image2DArray grad_img;          // G: g of steady pixels (tarc)
+layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
+layout(std430, set = 1, binding = 6) buffer Counters {
+	uint covered; // opaque/masked samples (the reproject pass runs once per visible sample)
+	uint shaded;  // samples whose shading ran this frame
+	uint fresh;   // samples without a valid cache entry (new_units)
+	uint late;    // --truth: reused samples more than T from their true shading
+	uint forced;  // tarc: reshaded because new or in their second frame (not by the gradient)
+	uint pad0, pad1, pad2;
+} counters;
+
+// state.z
+const uint AGE_MASK = 0xFFFFu;  // frames since the last shading at the current frame (saturates)
+const uint NEW_BIT = 1u << 29;  // no valid cache entry this frame
+const uint PHASE_BIT = 1u << 30; // shaded once since it became visible: shade again next frame (sec. 6 step 1)
+const uint SHADE_BIT = 1u << 31; // rrc: shade this frame (miss, first frame, or tile refresh)
+
+// Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number; aux[3] T (float bits).
+const uint FLAG_HAVE_PREV = 1u;   // the previous frame was rendered: the cache is valid
+const uint FLAG_FORCE = 2u;       // tarc --force-reshade (overhead measurement)
+uint period() { return (pc.aux[1] >> 8) & 0xFFu; }   // rrc N
+uint max_age() { return pc.aux[1] >> 16; }           // tarc K (0: none)
+
+// h(x): the half-float value the HDR target and the cache store (TAS-METHODS section 0).
+vec3 to_half(vec3 x)
+{
+	return vec3(unpackHalf2x16(packHalf2x16(x.rg)), unpackHalf2x16(packHalf2x16(vec2(x.b, 0.0))).x);
+}
+
+// Where the surface point (object, p_obj) was in the frame of `slot`, in pixels (not rounded), and its view
+// distance there. False when behind the eye or outside the frame.
+bool reproject_f(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, out float dist)
+{
+	vec4 w = object_at(slot, object).world * vec4(p_obj, 1.0);
+	vec4 c = states[slot].view_proj * w;
+	dist = distance(w.xyz, states[slot].camera_time.xyz);
+	f = vec2(0.0);
+	if (c.w <= 0.0)
+		return false;
+	f = (c.xy / c.w * 0.5 + 0.5) * vec2(size);
+	return !(any(lessThan(f, vec2(0.0))) || any(greaterThanEqual(f, vec2(size))));
+}
+
+// The cache-miss test of a cache pixel (TAS-METHODS section 1): same object, view distances within 2% (the
+// point lies between pixel centres, so depth varies across a pixel on slanted surfaces; the rule tfr uses).
+bool cached_here(uvec4 rec, uint object, float dist)
+{
+	return rec.x == object + 1u && abs(uintBitsToFloat(rec.y) - dist) <= 0.02 * dist;
+}
+
+// Cache lookup (TAS-METHODS section 1). Nearest: the pixel f falls in, one validity test. Bilinear: the four
+// taps around f - 0.5 with fractions quantised to 1/64 (a static view then gives weights exactly 0 and 1, so
+// reuse is bit-exact), each tap tested on its own (object and 2% view-distance match, `was_visible`),
+// invalid taps weighted 0 and the rest renormalised; the discrete state comes from the valid tap with the
+// largest weight (ties: the lowest tap). False: a cache miss.
+bool cache_lookup(uint prev, uint object, vec3 p_obj, out vec3 colour, out uvec4 state)
+{
+	ivec2 size = imageSize(prev_state);
+	vec2 f;
+	float dist;
+	colour = vec3(0.0);
+	state = uvec4(0u);
+	if (!reproject_f(prev, object, p_obj, size, f, dist))
+		return false;
+#ifdef NEAREST
+	ivec2 q = ivec2(f);
+	uvec4 rec = imageLoad(prev_state, q);
+	if (!cached_here(rec, object, dist))
+		return false;
+	colour = imageLoad(prev_colour, q).rgb;
+	state = rec;
+	return true;
+#else
+	vec2 g = f - 0.5;
+	vec2 x0 = floor(g);
+	vec2 fr = round((g - x0) * 64.0) / 64.0;
+	x0 += step(1.0, fr); // a fraction rounded up to 1 moves to the next tap with fraction 0
+	fr = fr - step(1.0, fr);
+	float wsum = 0.0, wbest = -1.0;
+	vec3 acc = vec3(0.0);
+	for (int k = 0; k < 4; k++) {
+		ivec2 o = ivec2(k & 1, k >> 1);
+		ivec2 q = ivec2(x0) + o;
+		float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
+		if (w <= 0.0 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
+			continue;
+		uvec4 rec = imageLoad(prev_state, q);
+		if (!cached_here(rec, object, dist))
+			continue;
+		acc += w * imageLoad(prev_colour, q).rgb;
+		wsum += w;
+		if (w > wbest) {
+			wbest = w;
+			state = rec;
+		}
+	}
+	if (wsum <= 0.0)
+		return false;
+	colour = wsum == 1.0 ? acc : acc / wsum;
+	return true;
+#endif
+}
+
+#endif

@@ -1,0 +1,262 @@
+/* reproj_cache.c — the reprojection cache of rrc and tarc (reproj_cache.h; TAS-METHODS sections 1-3, 8).
+ *
+ * Frame t, in order (state slots t and t - 1, consecutive frames; a jump or the first frame starts over):
+ *   shadow maps, depth pre-pass                     (shared passes)
+ *   reproject  scene geometry, depth EQUAL: C' and the provisional state into the next cache, C' to HDR,
+ *              G (tarc); clears the stencil
+ *   filter     tarc: G -> 8x8 max -> 9x9 max = F     (passes/tas_filter.c, shared with the TFR analysis)
+ *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
+ *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading, the next cache
+ *              (oracle: every sample, no stencil test)
+ *   truth      --truth: stencil EQUAL 0, counts reused samples more than T from the truth
+ *   blend      glTF BLEND objects with the reference shading on top (excluded from the counters)
+ *   display, readback
+ * Reused samples launch no shading: the decision is a stencil mask coherent over 16x16 tiles (rrc) or the
+ * 8x8 tiles of the filter (tarc), and lavapipe skips 4x2 pixel groups that fail the stencil test. */
+#include "reproj_cache.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_COUNT };
+
+typedef struct reproj_state {
+	reproj_variant v;
+	vkdev_image img[IMG_COUNT];
+	vkdev_buffer counters; /* 8 uints, host visible (Counters in reproj.glsl) */
+	VkDescriptorSetLayout set_layout;
+	VkDescriptorSet sets[2]; /* sets[p]: read cache p, write cache 1 - p */
+	render_pipeline reproject, mark, shade, truth;
+	tas_filter filter;
+	VkDescriptorSet filter_set;
+	uint32_t parity;         /* cache `parity` holds the previous frame */
+	int64_t last_frame;      /* -1: none */
+	bool have_prev;
+} reproj_state;
+
+static reproj_state *state_of(render *r) { return r->method_state; }
+
+static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
+{
+	char defs[128];
+	snprintf(defs, sizeof defs, "%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
+		 s->v.nearest ? "#define NEAREST 1\n" : "");
+	int rc;
+	if ((rc = render_make_template_pipeline(r, "reproj/reproject.frag.in", defs, s->set_layout, RENDER_STENCIL_ATTACHED,
+						1, 0, &s->reproject, err, err_size)) ||
+	    (rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
+						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 1, 0, &s->shade,
+						err, err_size)))
+		return rc;
+	if (!s->v.oracle && (rc = render_make_template_pipeline(r, "reproj/mark.frag.in", defs, s->set_layout,
+								RENDER_STENCIL_WRITE_ONE, 0, 1, &s->mark, err, err_size)))
+		return rc;
+	if (s->v.truth && !s->v.oracle &&
+	    (rc = render_make_template_pipeline(r, "reproj/truth.frag.in", defs, s->set_layout, RENDER_STENCIL_EQUAL_ZERO,
+						0, 0, &s->truth, err, err_size)))
+		return rc;
+	return TL_OK;
+}
+
+static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
+{
+	VkDevice d = r->dev->device;
+	VkResult res;
+	VkShaderStageFlags st = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
+	VkDescriptorSetLayoutBinding b[7];
+	for (uint32_t i = 0; i < 6; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, st, NULL};
+	b[6] = (VkDescriptorSetLayoutBinding){6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, st, NULL};
+	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+					      .bindingCount = 7, .pBindings = b};
+	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
+		return render_vk_error(err, err_size, "reprojection cache: descriptor set layout", res);
+	VkDescriptorSetLayout layouts[2] = {s->set_layout, s->set_layout};
+	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+					  .descriptorPool = r->pool, .descriptorSetCount = 2, .pSetLayouts = layouts};
+	if ((res = vkAllocateDescriptorSets(d, &ai, s->sets)))
+		return render_vk_error(err, err_size, "reprojection cache: descriptor sets", res);
+	for (int p = 0; p < 2; p++) {
+		const vkdev_image *im[6] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
+					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_G], &s->img[IMG_F]};
+		VkDescriptorImageInfo ii[6];
+		VkWriteDescriptorSet w[7];
+		for (uint32_t i = 0; i < 6; i++) {
+			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, im[i]->view, VK_IMAGE_LAYOUT_GENERAL};
+			w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
+						      .dstBinding = i, .descriptorCount = 1,
+						      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &ii[i]};
+		}
+		VkDescriptorBufferInfo bi = {s->counters.buffer, 0, VK_WHOLE_SIZE};
+		w[6] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
+					      .dstBinding = 6, .descriptorCount = 1,
+					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi};
+		vkUpdateDescriptorSets(d, 7, w, 0, NULL);
+	}
+	return TL_OK;
+}
+
+int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
+{
+	reproj_state *s = calloc(1, sizeof *s);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	r->method_state = s;
+	s->v = *v;
+	s->last_frame = -1;
+	uint32_t w = r->desc.width, h = r->desc.height, lw = (w + 7) / 8, lh = (h + 7) / 8;
+	static const char *const names[IMG_COUNT] = {"cache colour 0", "cache colour 1", "cache state 0", "cache state 1",
+						      "tarc G", "tarc L1", "tarc F"};
+	VkResult res;
+	for (int i = 0; i < IMG_COUNT; i++) {
+		int low = i == IMG_L1 || i == IMG_F, arr = i >= IMG_G;
+		VkFormat f = i <= IMG_COLOUR1 ? VK_FORMAT_R16G16B16A16_SFLOAT
+			     : i <= IMG_STATE1 ? VK_FORMAT_R32G32B32A32_UINT
+					       : VK_FORMAT_R32G32B32A32_SFLOAT;
+		/* rrc never reads G or F: one texel each keeps the descriptor set uniform */
+		uint32_t iw = arr && !v->tarc ? 1 : low ? lw : w, ih = arr && !v->tarc ? 1 : low ? lh : h;
+		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+					      VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
+			return render_vk_error(err, err_size, names[i], res);
+	}
+	if ((res = vkdev_buffer_create(r->dev, 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
+				       "cache counters", &s->counters)))
+		return render_vk_error(err, err_size, "counter buffer", res);
+	int rc = make_sets(r, s, err, err_size);
+	if (!rc && v->tarc)
+		rc = tas_filter_init(r, &s->filter, err, err_size);
+	if (!rc && v->tarc)
+		rc = tas_filter_bind(r, &s->filter, &s->img[IMG_G], &s->img[IMG_L1], &s->img[IMG_F], &s->filter_set, err,
+				     err_size);
+	if (!rc)
+		rc = make_pipelines(r, s, err, err_size);
+	if (rc)
+		return rc;
+	VkCommandBuffer cmd;
+	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
+		return render_vk_error(err, err_size, "command buffer", res);
+	for (int i = 0; i < IMG_COUNT; i++)
+		vkdev_barrier_image(cmd, &s->img[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+				    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
+		return render_vk_error(err, err_size, "cache image setup", res);
+	return TL_OK;
+}
+
+int reproj_prepare(render *r, uint32_t frame, char *err, size_t err_size)
+{
+	reproj_state *s = state_of(r);
+	s->have_prev = s->last_frame >= 0 && (int64_t)frame == s->last_frame + 1;
+	render_update_state(r, frame & 1u, (double)frame / (double)r->desc.fps);
+	return render_shadow_plan(r, frame & 1u, err, err_size);
+}
+
+/* Every pass of the frame reads what the one before wrote (storage images, attachments, the stencil). */
+static void barrier_all(VkCommandBuffer cmd)
+{
+	VkPipelineStageFlags2 st = VK_PIPELINE_STAGE_2_ALL_GRAPHICS_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+				   VK_PIPELINE_STAGE_2_TRANSFER_BIT;
+	render_barrier(cmd, st, VK_ACCESS_2_MEMORY_WRITE_BIT, st, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+}
+
+void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
+{
+	reproj_state *s = state_of(r);
+	uint32_t slot = frame & 1u, next = 1 - s->parity;
+	VkDescriptorSet set = s->sets[s->parity];
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	vkCmdFillBuffer(cmd, s->counters.buffer, 0, VK_WHOLE_SIZE, 0);
+	vkCmdClearColorImage(cmd, s->img[IMG_STATE0 + next].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	if (s->v.tarc)
+		vkCmdClearColorImage(cmd, s->img[IMG_G].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	barrier_all(cmd);
+	float T = s->v.threshold;
+	memcpy(&r->push_aux[3], &T, sizeof T);
+	r->push_aux[0] = 1 - slot;
+	r->push_aux[1] = (s->have_prev ? 1u : 0u) | (s->v.force ? 2u : 0u) | (s->v.period & 0xFFu) << 8 | s->v.max_age << 16;
+	r->push_aux[2] = frame;
+
+	render_ts(r, cmd);
+	render_pass_shadows(r, cmd, slot);
+	render_ts(r, cmd);
+	render_pass_depth(r, cmd, slot);
+	render_ts(r, cmd);
+	render_pass_scene(r, cmd, slot,
+			  &(render_scene_pass){.pipe = &s->reproject, .set = set, .hdr = RENDER_HDR_CLEAR,
+					       .stencil = RENDER_STENCIL_PASS_CLEAR});
+	barrier_all(cmd);
+	render_ts(r, cmd);
+	if (s->v.tarc && !s->v.oracle) {
+		tas_filter_record(&s->filter, cmd, s->filter_set, r->desc.width, r->desc.height, 1);
+		barrier_all(cmd);
+	}
+	render_ts(r, cmd);
+	if (!s->v.oracle) {
+		render_pass_scene(r, cmd, slot,
+				  &(render_scene_pass){.pipe = &s->mark, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD,
+						       .fullscreen = 1});
+		barrier_all(cmd);
+	}
+	render_ts(r, cmd);
+	render_pass_scene(r, cmd, slot,
+			  &(render_scene_pass){.pipe = &s->shade, .set = set, .hdr = RENDER_HDR_LOAD,
+					       .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
+	barrier_all(cmd);
+	render_ts(r, cmd);
+	if (s->truth.pipeline) {
+		render_pass_scene(r, cmd, slot,
+				  &(render_scene_pass){.pipe = &s->truth, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD});
+		barrier_all(cmd);
+	}
+	render_ts(r, cmd);
+	if (r->blend_count) {
+		memset(r->push_aux, 0, sizeof r->push_aux);
+		render_pass_scene(r, cmd, slot, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
+	}
+	memset(r->push_aux, 0, sizeof r->push_aux);
+	render_ts(r, cmd);
+	render_pass_display(r, cmd);
+	render_ts(r, cmd);
+	render_pass_readback(r, cmd);
+	render_ts(r, cmd);
+	s->parity = next;
+	s->last_frame = frame;
+}
+
+void reproj_collect(render *r, frame_stats *st)
+{
+	reproj_state *s = state_of(r);
+	const uint32_t *c = s->counters.mapped;
+	/* covered: opaque and masked samples; BLEND-only coverage is excluded from every counter (TAS-METHODS 0) */
+	st->shaded_samples = c[1];
+	st->reused_samples = (int64_t)c[0] - (int64_t)c[1];
+	st->visible_units = st->visible_samples;
+	st->shaded_units = c[1];
+	st->new_units = c[2];
+	st->late_samples = s->v.truth ? (s->v.oracle ? 0 : (int64_t)c[3]) : -1;
+	if (s->v.tarc && !s->v.oracle) {
+		st->extra_names[st->extra_count] = "forced_samples";
+		st->extra[st->extra_count++] = c[4];
+	}
+}
+
+void reproj_finish(render *r)
+{
+	reproj_state *s = state_of(r);
+	if (!s)
+		return;
+	render_pipeline *pipes[4] = {&s->reproject, &s->mark, &s->shade, &s->truth};
+	for (int i = 0; i < 4; i++)
+		render_pipeline_destroy(r, pipes[i]);
+	tas_filter_finish(r, &s->filter);
+	if (s->set_layout)
+		vkDestroyDescriptorSetLayout(r->dev->device, s->set_layout, NULL);
+	for (int i = 0; i < IMG_COUNT; i++)
+		vkdev_image_destroy(r->dev, &s->img[i]);
+	vkdev_buffer_destroy(r->dev, &s->counters);
+	free(s);
+	r->method_state = NULL;
+}

@@ -1,0 +1,26 @@
+/* reproj_cache.h (private) — the per-pixel reprojection cache shared by rrc and tarc (TAS-METHODS sections
+ * 1-3): double-buffered cache images, the reproject / mark / shade / truth passes and their counters. The
+ * method files (rrc.c, tarc.c) declare the options and choose the variant. */
+#ifndef TASLAB_REPROJ_CACHE_H
+#define TASLAB_REPROJ_CACHE_H
+
+#include "../passes/passes.h"
+
+typedef struct reproj_variant {
+	bool tarc;        /* else rrc */
+	bool oracle;      /* tarc's ideal variant */
+	bool nearest;     /* nearest-pixel lookup (else bilinear with per-tap validity) */
+	bool truth;       /* --truth: count late samples among the reused ones */
+	bool force;       /* tarc --force-reshade: decide to reshade everything (overhead measurement) */
+	uint32_t period;  /* rrc N */
+	uint32_t max_age; /* tarc K (0: none) */
+	float threshold;  /* tarc T; rrc: the T late samples are counted against with --truth */
+} reproj_variant;
+
+int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size);
+int reproj_prepare(render *r, uint32_t frame, char *err, size_t err_size);
+void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame);
+void reproj_collect(render *r, frame_stats *st);
+void reproj_finish(render *r);
+
+#endif
