@@ -250,7 +250,7 @@ static void test_diff_files(void **state)
 	assert_non_null(csv);
 	assert_int_equal(tu_count_lines(csv), 4);
 	const char *expect = "frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,"
-			     "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean\n0,0,0,0,0,0,0,0,0,0,0,0,,1,\n";
+			     "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean,flip_mean\n0,0,0,0,0,0,0,0,0,0,0,0,,1,,0\n";
 	assert_true(strncmp(csv, expect, strlen(expect)) == 0); /* identical frame 0: psnr empty (inf), no flicker */
 	free(csv);
 	/* Pooled distribution: 3 frames x 320 pixels, one pixel at d = 50, the rest at 0. */
