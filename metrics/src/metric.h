@@ -19,6 +19,16 @@
 
 #include "taslab/metrics.h"
 
+/* Hot loops get an AVX2 clone next to the baseline-ISA one, picked at load time (ifunc), on x86-64 Linux with gcc;
+ * not under ThreadSanitizer (its runtime is not ready when ifunc resolvers run). No FMA in either (ISO C mode does
+ * not contract), so both clones give the same results. Same rule as FLIP_TARGET_CLONES in flip.c. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) &&                           \
+	!defined(MTR_NO_CLONES) && !defined(__SANITIZE_THREAD__)
+#define MTR_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define MTR_TARGET_CLONES
+#endif
+
 /* ---- the shared pixel pass (pixel.c) ---- */
 enum {
 	MTR_PASS_MAXRGB = 1u,  /* d = max-RGB difference: map, sum, max and where, exceed_T counts, histogram */

@@ -52,7 +52,7 @@ static inline void vfilter(float *const *rows, float *restrict out, uint32_t n, 
 			 g4 * (r1[x] + r9[x]) + g5 * (r0[x] + r10[x]);
 }
 
-static void ssim_band(void *p, int band, uint32_t y0, uint32_t y1)
+MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t y1)
 {
 	/* Output rows [y0, y1) of the valid region (image rows y + R); input rows [y0, y1 + 2R). */
 	ssim_ctx *c = p;
