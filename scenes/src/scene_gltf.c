@@ -24,7 +24,7 @@
 /* A scene around a bare glTF file (`taslab render --scene model.gltf`): the asset on a floor, a sun, a key
  * spot and a fill light scaled to the asset's bounds at t = 0, and two camera paths framing the bounds:
  * `orbit` (moving, a 90 degree arc over 5 s) and `front` (stationary), plus the asset's own cameras. */
-int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
+int scene_from_gltf(const char *path, uint32_t texture_size, scene **out, char *err, size_t err_size)
 {
 	scene *s = calloc(1, sizeof *s);
 	tlm_mat4 *world = NULL;
@@ -41,7 +41,7 @@ int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
 	s->exposure = 1.0f;
 	s->ambient[0] = s->ambient[1] = s->ambient[2] = 0.03f;
 	s->sky[0] = 0.05f, s->sky[1] = 0.06f, s->sky[2] = 0.08f;
-	s->texture_size = 1024;
+	s->texture_size = texture_size ? texture_size : 1024;
 	s->shadow_map_size = 1024;
 	int rc = gltf_append(s, path, -1, NULL, err, err_size);
 	if (rc)

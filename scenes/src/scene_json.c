@@ -148,6 +148,13 @@ int jbool(jp *c, json_t *obj, const char *key, const char *path, bool def, bool 
 	return 0;
 }
 
+void scene_err_one_line(char *err, size_t err_size)
+{
+	for (size_t i = 0; i < err_size && err[i]; i++)
+		if ((unsigned char)err[i] < 0x20 || err[i] == 0x7f)
+			err[i] = ' ';
+}
+
 int jname(jp *c, const char *s, const char *p, char out[SCENE_NAME_MAX])
 {
 	size_t n = strlen(s);

@@ -682,6 +682,8 @@ static int parse_root(jp *c, scene *s, json_t *root)
 	s->shadow_map_size = (uint32_t)ss;
 	if ((s->texture_size & (s->texture_size - 1)) || (float)s->texture_size != ts)
 		return jfail(c, "$.texture_size", "must be a power of two");
+	if (c->texture_size)
+		s->texture_size = c->texture_size;
 	int rc;
 	if ((rc = parse_textures(c, s, root)) || (rc = parse_materials(c, s, root)) || (rc = parse_meshes(c, s, root)) ||
 	    (rc = parse_objects(c, s, root)) || (rc = parse_assets(c, s, root)) || (rc = parse_lights(c, s, root)) ||
@@ -700,12 +702,19 @@ static int parse_root(jp *c, scene *s, json_t *root)
 
 int scene_load_from_memory(const char *json, size_t len, const char *origin, scene **out, char *err, size_t err_size)
 {
-	jp c = {origin, err, err_size};
+	return scene_parse_memory(json, len, origin, 0, out, err, err_size);
+}
+
+int scene_parse_memory(const char *json, size_t len, const char *origin, uint32_t texture_size, scene **out, char *err,
+		       size_t err_size)
+{
+	jp c = {origin, err, err_size, texture_size};
 	json_error_t je;
 	*out = NULL;
 	json_t *root = json_loadb(json, len, JSON_REJECT_DUPLICATES, &je);
 	if (!root) {
 		snprintf(err, err_size, "%s:%d:%d: not valid JSON: %s", origin, je.line, je.column, je.text);
+		scene_err_one_line(err, err_size);
 		return TL_ERR_INPUT;
 	}
 	scene *s = calloc(1, sizeof *s);
@@ -720,6 +729,7 @@ int scene_load_from_memory(const char *json, size_t len, const char *origin, sce
 	if (rc == TL_ERR_NOMEM)
 		snprintf(err, err_size, "%s: out of memory while loading the scene", origin);
 	if (rc) {
+		scene_err_one_line(err, err_size);
 		scene_destroy(&s);
 		return rc;
 	}

@@ -172,6 +172,16 @@ typedef struct scene_camera_state {
 
 /* Loads a scene file. `err` receives "FILE: $.json.path: what is wrong" on failure. */
 int scene_load(const char *path, scene **out, char *err, size_t err_size);
+
+/* Options of scene_load_with; zero-initialised = scene_load. */
+typedef struct scene_load_desc {
+	/* Edge of every texture layer (a power of two, 4..4096) instead of the scene file's texture_size (a bare
+	 * glTF file's default: 1024); 0 keeps it. Texture memory grows with its square: small sizes make quick
+	 * previews and keep fuzzing inside its memory limit. */
+	uint32_t texture_size;
+} scene_load_desc;
+/* scene_load with options (desc may be NULL). TL_ERR_ARG for an invalid option. */
+int scene_load_with(const char *path, const scene_load_desc *desc, scene **out, char *err, size_t err_size);
 /* Same, from a JSON text already in memory (`origin` names it in messages; used by fuzzing). */
 int scene_load_from_memory(const char *json, size_t len, const char *origin, scene **out, char *err,
 			   size_t err_size);
