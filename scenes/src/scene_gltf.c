@@ -59,6 +59,12 @@ int scene_from_gltf(const char *path, uint32_t texture_size, scene **out, char *
 			tlm_vec3 p = tlm_v3(k & 1 ? m->bounds_max.x : m->bounds_min.x, k & 2 ? m->bounds_max.y : m->bounds_min.y,
 					    k & 4 ? m->bounds_max.z : m->bounds_min.z);
 			p = tlm_mat4_mul_point(world[i], p);
+			if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+				snprintf(err, err_size, "%s: object %s is not finite at t = 0 (transforms too large)", path,
+					 s->objects[i].name);
+				rc = TL_ERR_INPUT;
+				goto fail;
+			}
 			lo = tlm_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
 			hi = tlm_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
 		}
@@ -70,6 +76,12 @@ int scene_from_gltf(const char *path, uint32_t texture_size, scene **out, char *
 	}
 	tlm_vec3 c = tlm_v3_scale(tlm_v3_add(lo, hi), 0.5f);
 	float r = fmaxf(0.5f * tlm_v3_length(tlm_v3_sub(hi, lo)), 1e-3f);
+	/* The lights and cameras below scale with r (the key light with (3r)^2, the far plane with ~50 r). */
+	if (!isfinite(c.x + c.y + c.z) || !isfinite(100.0f * r * r)) {
+		snprintf(err, err_size, "%s: the asset is too large to frame in float (bounding radius %g)", path, (double)r);
+		rc = TL_ERR_INPUT;
+		goto fail;
+	}
 	/* floor */
 	GROW(s->meshes, s->mesh_count, 1);
 	GROW(s->materials, s->material_count, 1);

@@ -30,6 +30,14 @@ extern "C" {
 #define SCENE_MAX_SHADOW_LAYERS 48 /* directional/spot: 1 layer, point: 6 (cube faces) */
 #define SCENE_TEX_NONE (-1)
 
+/* Limits on untrusted input: files beyond them are refused with TL_ERR_INPUT and a message. */
+#define SCENE_MAX_JSON_DEPTH 64                /* nesting of [ and { in a glTF's JSON */
+#define SCENE_GLTF_MAX_JSON_BYTES (64u << 20)  /* a .gltf file, or the JSON chunk of a .glb */
+#define SCENE_GLTF_MAX_FILE_BYTES (1u << 30)   /* a .glb, and each external buffer or image file */
+#define SCENE_MAX_IMAGE_SIDE 16384             /* width and height of a glTF image, in pixels */
+#define SCENE_MAX_TEXTURES 256                 /* per colour space (sRGB, linear): Vulkan's guaranteed
+						  maxImageArrayLayers, the renderer's texture arrays */
+
 /* Vertex layout shared with the shaders (48 bytes). Tangent w = bitangent sign (glTF). */
 typedef struct scene_vertex {
 	float position[3];
