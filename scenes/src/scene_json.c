@@ -84,8 +84,9 @@ int jarr_floats(jp *c, json_t *v, const char *p, int n, float *out)
 		return jfail(c, p, "expected an array of %d numbers", n);
 	for (int i = 0; i < n; i++) {
 		json_t *e = json_array_get(v, (size_t)i);
-		if (!json_is_number(e) || !isfinite(json_number_value(e)))
-			return jfail(c, p, "element %d is not a finite number", i);
+		/* finite as a float too: 1e39 is a valid JSON number but infinity after the conversion */
+		if (!json_is_number(e) || !isfinite((float)json_number_value(e)))
+			return jfail(c, p, "element %d is not a finite number (in float range, |x| < 3.4e38)", i);
 		out[i] = (float)json_number_value(e);
 	}
 	return 0;
