@@ -87,26 +87,35 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 typedef struct pair_buf {
 	float *a, *b;
 	uint32_t w, h;
+	uint32_t wb, hb; /* size of b (equal to w, h unless the pair is refused) */
 	int rc;
 	char err[1024];
 } pair_buf;
 
-static int load_frame(const mtr_diff_desc *d, const char *path, float **rgb, uint32_t *w, uint32_t *h, char *err,
-		      size_t err_size)
+/* Decodes one frame into display floats. `reuse` (may be NULL) is a buffer of `reuse_n` floats from an earlier frame:
+ * taken when large enough (fresh 25 MB buffers per 1080p frame cost page faults), freed otherwise. */
+static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, size_t reuse_n, float **rgb, uint32_t *w,
+		      uint32_t *h, char *err, size_t err_size)
 {
 	*rgb = NULL;
 	if (d->format == MTR_FORMAT_PNG) {
 		uint8_t *px = NULL;
-		if (imageio_read_rgb8(path, w, h, &px, err, err_size))
+		if (imageio_read_rgb8(path, w, h, &px, err, err_size)) {
+			free(reuse);
 			return -1;
+		}
 		size_t n = (size_t)*w * *h * 3;
-		*rgb = malloc(n * sizeof **rgb);
+		if (reuse && reuse_n >= n)
+			*rgb = reuse;
+		else
+			free(reuse), *rgb = malloc(n * sizeof **rgb);
 		if (*rgb)
 			for (size_t i = 0; i < n; i++)
 				(*rgb)[i] = px[i];
 		free(px);
 	} else {
 		float *px = NULL;
+		free(reuse);
 		if (imageio_read_rgba_float(path, w, h, &px, 1, err, err_size))
 			return -1;
 		size_t n = (size_t)*w * *h;
@@ -132,12 +141,15 @@ typedef struct loader {
 	const sequence *ra, *rb;
 	size_t index;
 	pair_buf *out;
+	float *reuse[2]; /* buffers of an earlier pair (owned by the loader from here on), or NULL */
+	size_t reuse_n[2]; /* their sizes in floats */
 } loader;
 
 typedef struct frame_job {
 	const mtr_diff_desc *d;
 	char path[8192];
-	float *rgb;
+	float *reuse, *rgb;
+	size_t reuse_n;
 	uint32_t w, h;
 	int rc;
 	char err[1024];
@@ -146,7 +158,7 @@ typedef struct frame_job {
 static void *frame_main(void *p)
 {
 	frame_job *j = p;
-	j->rc = load_frame(j->d, j->path, &j->rgb, &j->w, &j->h, j->err, sizeof j->err);
+	j->rc = load_frame(j->d, j->path, j->reuse, j->reuse_n, &j->rgb, &j->w, &j->h, j->err, sizeof j->err);
 	return NULL;
 }
 
@@ -156,11 +168,14 @@ static void load_pair(loader *l)
 	pair_buf *o = l->out;
 	frame_job *j = calloc(2, sizeof *j);
 	if (!j) {
+		free(l->reuse[0]);
+		free(l->reuse[1]);
 		o->rc = -1;
 		snprintf(o->err, sizeof o->err, "out of memory");
 		return;
 	}
 	j[0].d = j[1].d = l->d;
+	j[0].reuse = l->reuse[0], j[1].reuse = l->reuse[1], j[0].reuse_n = l->reuse_n[0], j[1].reuse_n = l->reuse_n[1];
 	snprintf(j[0].path, sizeof j[0].path, "%s/%s", l->ra->dir, l->ra->names[l->index]);
 	snprintf(j[1].path, sizeof j[1].path, "%s/%s", l->rb->dir, l->rb->names[l->index]);
 	pthread_t th;
@@ -174,6 +189,8 @@ static void load_pair(loader *l)
 	o->b = j[1].rgb;
 	o->w = j[0].w;
 	o->h = j[0].h;
+	o->wb = j[1].w;
+	o->hb = j[1].h;
 	o->rc = j[0].rc || j[1].rc;
 	if (o->rc)
 		snprintf(o->err, sizeof o->err, "%s", j[0].rc ? j[0].err : j[1].err);
@@ -256,6 +273,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	mtr_frame_stats *stats = NULL;
 	float *map = NULL, *flip_map = NULL;
 	pair_buf cur = {0}, prev = {0}, next = {0};
+	float *spare[2] = {NULL, NULL}; /* the buffers of the pair before prev, for the next decode */
+	size_t spare_n[2] = {0, 0};
 	FILE *csv = NULL;
 	tl_atomic csv_file = {0};
 	mtr_comparer *cmp = NULL;
@@ -316,7 +335,7 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 			fprintf(csv, ",%s", mtr_column_name(c));
 	fputc('\n', csv);
 	double t0 = tl_clock_s(), compute = 0;
-	loader l = {d, &ra, &rb, 0, &cur};
+	loader l = {d, &ra, &rb, 0, &cur, {NULL, NULL}, {0, 0}};
 	load_pair(&l);
 	for (size_t i = 0; i < ra.n; i++) {
 		if (cur.rc) {
@@ -326,7 +345,11 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		/* Overlap: decode pair i+1 on helper threads while pair i is measured. */
 		pthread_t th;
 		int threaded = 0;
-		loader ln = {d, &ra, &rb, i + 1, &next};
+		loader ln = {d, &ra, &rb, i + 1, &next, {NULL, NULL}, {spare_n[0], spare_n[1]}};
+		if (i + 1 < ra.n) { /* the loader owns them from here */
+			ln.reuse[0] = spare[0], ln.reuse[1] = spare[1];
+			spare[0] = spare[1] = NULL;
+		}
 		memset(&next, 0, sizeof next);
 		if (i + 1 < ra.n)
 			threaded = pthread_create(&th, NULL, load_main, &ln) == 0;
@@ -365,8 +388,12 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 			goto done;
 		}
 		csv_row(csv, atol(ra.names[i]), &stats[i]);
-		free(prev.a);
-		free(prev.b);
+		free(spare[0]);
+		free(spare[1]);
+		spare[0] = prev.a;
+		spare[1] = prev.b;
+		spare_n[0] = (size_t)prev.w * prev.h * 3;
+		spare_n[1] = (size_t)prev.wb * prev.hb * 3;
 		prev = cur;
 		cur = next;
 		memset(&next, 0, sizeof next);
@@ -429,7 +456,7 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	rc = 0;
 done:
 	tl_atomic_abort(&csv_file);
-	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b);
+	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b), free(spare[0]), free(spare[1]);
 	free(map);
 	free(flip_map);
 	free(stats);

@@ -8,9 +8,11 @@
  * Speed: one sweep down each row band. Every input row is filtered horizontally once, for all 15 quantities at once
  * (a, b, a^2, b^2, ab for the three channels), into a ring of the last 11 rows; each output row is then the
  * vertical filter of the ring followed by eq. 13. Both filters fold the symmetric window (6 multiplies for 11
- * taps) in branch-free loops over x that gcc vectorises. Values are centred (v - 128) before the products: the
- * variances E[a^2] - E[a]^2 are then differences of numbers ~4x smaller, which keeps float rounding far below the
- * 1e-5 tolerance; the means get the 128 back for the luminance term.
+ * taps) in branch-free loops over x that gcc vectorises; row sums of eq. 13 in 8 independent partial sums, then
+ * double. Values are centred (v - 128) before the products, so the variances E[a^2] - E[a]^2 are differences of
+ * smaller numbers; the means get the 128 back for the luminance term. On a rendered 1080p pair the result is within
+ * 1e-7 of a double-precision evaluation (the implementation before this one: 5.8e-5, over the 1e-5 tolerance;
+ * tests/test_metrics.c test_ssim_frame).
  */
 #include <math.h>
 #include <stdlib.h>
