@@ -3,6 +3,10 @@
  *  - percentiles against a full sort (numpy's default "linear" definition);
  *  - SSIM against scikit-image (tests/reference/ssim_reference.json, produced by ssim_reference.py), 1e-5;
  *  - Phi^-1 against R's qnorm (qnorm(0.75) = 0.6744897501960817), Wilson interval against its closed form;
+ *  - FLIP against NVIDIA's FLIP v1.6 tool (../shared/reference/flip, README.md there): mean within 1e-4 of its
+ *    double-precision mean, weighted median / quartiles within 1e-3, through the library and through `diff`;
+ *    identical images give 0, a changed pixel is found at its place, 1x1 and odd sizes, bad input;
+ *  - the metric registry: --metrics selection keeps the column layout, unknown metrics and options are refused;
  *  - bad input: sizes, frame counts, unreadable files, NaN in EXR. */
 #include <jansson.h>
 #include <math.h>
@@ -13,6 +17,7 @@
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
+#include "taslab/metrics_flip.h"
 #include "taslab/metrics_runs.h"
 #include "test_util.h"
 
@@ -170,6 +175,67 @@ static void test_ssim_vs_skimage(void **state)
 	json_decref(ref);
 }
 
+static float *load_png_float(const char *path, uint32_t *w, uint32_t *h);
+
+/* SSIM in double precision, the same definition (separable 11-tap Gaussian, valid windows), as an oracle for images
+ * too large for the scikit-image cases. */
+static double ssim_double(const float *A, const float *B, uint32_t w, uint32_t h)
+{
+	double g[11], gs = 0;
+	for (int k = -5; k <= 5; k++)
+		gs += g[k + 5] = exp(-(double)(k * k) / (2 * 1.5 * 1.5));
+	for (int k = 0; k < 11; k++)
+		g[k] /= gs;
+	const uint32_t ow = w - 10, oh = h - 10;
+	double *t = malloc(sizeof(double) * 5 * (size_t)h * ow), total = 0;
+	for (int c = 0; c < 3; c++) {
+		for (uint32_t y = 0; y < h; y++)
+			for (uint32_t x = 0; x < ow; x++) {
+				double s[5] = {0};
+				for (int k = 0; k < 11; k++) {
+					double a = A[((size_t)y * w + x + k) * 3 + c], b = B[((size_t)y * w + x + k) * 3 + c];
+					s[0] += g[k] * a, s[1] += g[k] * b, s[2] += g[k] * a * a, s[3] += g[k] * b * b, s[4] += g[k] * a * b;
+				}
+				for (int q = 0; q < 5; q++)
+					t[((size_t)q * h + y) * ow + x] = s[q];
+			}
+		for (uint32_t y = 0; y < oh; y++)
+			for (uint32_t x = 0; x < ow; x++) {
+				double s[5] = {0};
+				for (int k = 0; k < 11; k++)
+					for (int q = 0; q < 5; q++)
+						s[q] += g[k] * t[((size_t)q * h + y + k) * ow + x];
+				double ma = s[0], mb = s[1], va = s[2] - ma * ma, vb = s[3] - mb * mb, cv = s[4] - ma * mb;
+				const double C1 = 6.5025, C2 = 58.5225;
+				total += ((2 * ma * mb + C1) * (2 * cv + C2)) / ((ma * ma + mb * mb + C1) * (va + vb + C2));
+			}
+	}
+	free(t);
+	return total / (3.0 * ow * oh);
+}
+
+/* A crop of a rendered frame pair (tests/reference/ssim_frame_{ref,test}.png: the calm scene, shaded vs trivial
+ * shading, 160x90): bright flat regions make E[a^2] - E[a]^2 lose most of its digits in float. SSIM must be within
+ * 1e-5 (the scikit-image tolerance) of the double-precision result; the implementation before the plug-in registry
+ * was 1.2e-4 off here (and 5.8e-5 on the whole 1080p frame), the current one is 2e-6 off. */
+static void test_ssim_frame(void **state)
+{
+	(void)state;
+	uint32_t w, h, w2, h2;
+	float *a = load_png_float(TASLAB_SOURCE_DIR "/tests/reference/ssim_frame_ref.png", &w, &h);
+	float *b = load_png_float(TASLAB_SOURCE_DIR "/tests/reference/ssim_frame_test.png", &w2, &h2);
+	assert_true(w == 160 && h == 90 && w2 == w && h2 == h);
+	mtr_image A = {w, h, a}, B = {w, h, b};
+	double expect = ssim_double(a, b, w, h);
+	for (int threads = 1; threads <= 2; threads++) {
+		double got = mtr_ssim(&A, &B, threads);
+		if (fabs(got - expect) > 1e-5)
+			fail_msg("%d threads: SSIM %.9f, double precision %.9f (diff %.1e)", threads, got, expect, got - expect);
+	}
+	free(a);
+	free(b);
+}
+
 static void test_jnd(void **state)
 {
 	(void)state;
@@ -250,7 +316,7 @@ static void test_diff_files(void **state)
 	assert_non_null(csv);
 	assert_int_equal(tu_count_lines(csv), 4);
 	const char *expect = "frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,"
-			     "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean\n0,0,0,0,0,0,0,0,0,0,0,0,,1,\n";
+			     "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean,flip_mean\n0,0,0,0,0,0,0,0,0,0,0,0,,1,,0\n";
 	assert_true(strncmp(csv, expect, strlen(expect)) == 0); /* identical frame 0: psnr empty (inf), no flicker */
 	free(csv);
 	/* Pooled distribution: 3 frames x 320 pixels, one pixel at d = 50, the rest at 0. */
@@ -290,6 +356,387 @@ static void test_diff_files(void **state)
 	float *px;
 	assert_int_not_equal(imageio_read_rgba_float(p, &w, &h, &px, 1, err, sizeof err), 0);
 	assert_non_null(strstr(err, "NaN"));
+}
+
+/* ------------------------------------------------------------------ FLIP */
+
+typedef struct flip_case {
+	char name[128], ref[256], test[256];
+	unsigned w, h;
+	double mean, mean_f64, median, q1, q3, min, max, ppd;
+} flip_case;
+
+/* Reads ../shared/reference/flip/expected.csv (NVIDIA FLIP v1.6 values, README.md beside it); 0 when absent. */
+static size_t flip_cases(flip_case *out, size_t max)
+{
+	FILE *fp = fopen(TASLAB_SHARED_DIR "/reference/flip/expected.csv", "r");
+	if (!fp)
+		return 0;
+	char line[2048];
+	size_t n = 0;
+	if (!fgets(line, sizeof line, fp)) {
+		fclose(fp);
+		return 0;
+	}
+	while (n < max && fgets(line, sizeof line, fp)) {
+		flip_case *e = &out[n];
+		memset(e, 0, sizeof *e);
+		for (char *c = line; *c; c++)
+			if (*c == ',')
+				*c = ' ';
+		if (sscanf(line, "%127s %u %u %lf %lf %lf %lf %lf %lf %lf %lf %255s %255s", e->name, &e->w, &e->h, &e->mean,
+			   &e->mean_f64, &e->median, &e->q1, &e->q3, &e->min, &e->max, &e->ppd, e->ref, e->test) == 13)
+			n++;
+	}
+	fclose(fp);
+	return n;
+}
+
+static float *load_png_float(const char *path, uint32_t *w, uint32_t *h)
+{
+	uint8_t *px = NULL;
+	char err[512];
+	if (imageio_read_rgb8(path, w, h, &px, err, sizeof err))
+		fail_msg("%s", err);
+	float *f = malloc((size_t)*w * *h * 3 * sizeof *f);
+	for (size_t i = 0; i < (size_t)*w * *h * 3; i++)
+		f[i] = px[i];
+	free(px);
+	return f;
+}
+
+static void test_flip_reference(void **state)
+{
+	(void)state;
+	flip_case cs[16];
+	size_t n = flip_cases(cs, 16);
+	if (!n) {
+		print_message("skipped: no FLIP reference values at %s/reference/flip\n", TASLAB_SHARED_DIR);
+		skip();
+	}
+	assert_true(n >= 5);
+	mtr_flip *f = NULL;
+	char err[256];
+	assert_int_equal(mtr_flip_create(MTR_FLIP_PPD_DEFAULT, &f, err, sizeof err), 0);
+	for (size_t i = 0; i < n; i++) {
+		const flip_case *e = &cs[i];
+		char pa[1024], pb[1024];
+		uint32_t w, h, w2, h2;
+		snprintf(pa, sizeof pa, "%s/reference/flip/%s", TASLAB_SHARED_DIR, e->ref);
+		snprintf(pb, sizeof pb, "%s/reference/flip/%s", TASLAB_SHARED_DIR, e->test);
+		float *a = load_png_float(pa, &w, &h), *b = load_png_float(pb, &w2, &h2);
+		assert_true(w == e->w && h == e->h && w2 == w && h2 == h);
+		assert_true(fabs(e->ppd - MTR_FLIP_PPD_DEFAULT) < 1e-5); /* the csv prints it rounded */
+		float *map = malloc((size_t)w * h * sizeof *map);
+		for (int threads = 1; threads <= 2; threads++) {
+			double mean = -1;
+			assert_int_equal(mtr_flip_compute(f, w, h, a, b, map, threads, &mean, err, sizeof err), 0);
+			mtr_flip_pool p;
+			assert_int_equal(mtr_flip_pool_stats(map, (size_t)w * h, &p), 0);
+			if (fabs(mean - e->mean_f64) > 1e-4 || fabs(p.weighted_median - e->median) > 1e-3 ||
+			    fabs(p.q1_weighted - e->q1) > 1e-3 || fabs(p.q3_weighted - e->q3) > 1e-3 ||
+			    fabs(p.min - e->min) > 1e-3 || fabs(p.max - e->max) > 1e-3)
+				fail_msg("%s (%d threads): mean %.9f (ref %.9f), median %.6f (%.6f), q1 %.6f (%.6f), q3 %.6f (%.6f), "
+					 "min %.6f (%.6f), max %.6f (%.6f)",
+					 e->name, threads, mean, e->mean_f64, p.weighted_median, e->median, p.q1_weighted, e->q1,
+					 p.q3_weighted, e->q3, p.min, e->min, p.max, e->max);
+			assert_float_equal(p.mean, mean, 1e-9);
+			if (e->mean_f64 == 0)
+				assert_true(mean == 0 && p.max == 0);
+		}
+		/* The same through the comparer: flip_mean exact, the histogram-pooled quartiles within 1e-3. */
+		mtr_comparer *c = NULL;
+		mtr_compare_desc d = {.metrics = "flip", .threads = 2};
+		assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), 0);
+		mtr_image A = {w, h, a}, B = {w, h, b};
+		mtr_frame_stats s, pooled;
+		if (mtr_comparer_frame(c, &A, &B, NULL, NULL, NULL, NULL, &s, err, sizeof err))
+			fail_msg("%s", err);
+		mtr_comparer_pool(c, &s, 1, &pooled);
+		if (fabs(pooled.flip_mean - e->mean_f64) > 1e-4 || fabs(pooled.flip_weighted_median - e->median) > 1e-3 ||
+		    fabs(pooled.flip_q1_weighted - e->q1) > 1e-3 || fabs(pooled.flip_q3_weighted - e->q3) > 1e-3 ||
+		    fabs(pooled.flip_min - e->min) > 1e-3 || fabs(pooled.flip_max - e->max) > 1e-3)
+			fail_msg("%s pooled: mean %.9f (%.9f) median %.6f (%.6f) q1 %.6f (%.6f) q3 %.6f (%.6f)", e->name,
+				 pooled.flip_mean, e->mean_f64, pooled.flip_weighted_median, e->median, pooled.flip_q1_weighted,
+				 e->q1, pooled.flip_q3_weighted, e->q3);
+		assert_true(isnan(pooled.psnr) && isnan(pooled.ssim) && isnan(pooled.mean)); /* not selected */
+		mtr_comparer_destroy(&c);
+		assert_null(c);
+		free(map);
+		free(a);
+		free(b);
+	}
+	mtr_flip_destroy(&f);
+	assert_null(f);
+}
+
+/* Reference images as a run: `diff --metrics flip` writes flip_mean and the pooled statistics into summary.json. */
+static void test_flip_diff(void **state)
+{
+	(void)state;
+	flip_case cs[16];
+	size_t n = flip_cases(cs, 16), k = 0;
+	while (k < n && strcmp(cs[k].name, "noise_320x180"))
+		k++;
+	if (k == n) {
+		print_message("skipped: no FLIP reference case noise_320x180 at %s/reference/flip\n", TASLAB_SHARED_DIR);
+		skip();
+	}
+	const char *base = tu_tmpdir("metrics_flip_diff");
+	char cmd[8192], out[4096], err[1024], p[4096];
+	snprintf(cmd, sizeof cmd, "mkdir -p %s/a %s/b && cp %s/reference/flip/%s %s/a/000000.png && "
+		 "cp %s/reference/flip/%s %s/b/000000.png", base, base, TASLAB_SHARED_DIR, cs[k].ref, base,
+		 TASLAB_SHARED_DIR, cs[k].test, base);
+	assert_int_equal(system(cmd), 0);
+	char a[4096], b[4096];
+	snprintf(a, sizeof a, "%s/a", base);
+	snprintf(b, sizeof b, "%s/b", base);
+	snprintf(out, sizeof out, "%s/out", base);
+	mtr_diff_desc d = {.ref = a, .test = b, .out = out, .threads = 2, .metrics = "maxrgb,flip", .heatmaps = true};
+	mtr_diff_result r;
+	if (mtr_diff_run(&d, &r, err, sizeof err))
+		fail_msg("%s", err);
+	snprintf(p, sizeof p, "%s/summary.json", out);
+	json_error_t je;
+	json_t *js = json_load_file(p, 0, &je);
+	assert_non_null(js);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_mean")), cs[k].mean_f64, 1e-4);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_weighted_median")), cs[k].median, 1e-3);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_q1_weighted")), cs[k].q1, 1e-3);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_q3_weighted")), cs[k].q3, 1e-3);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_min")), cs[k].min, 1e-3);
+	assert_float_equal(json_real_value(json_object_get(js, "flip_max")), cs[k].max, 1e-3);
+	assert_true(json_is_null(json_object_get(js, "psnr")) && json_is_null(json_object_get(js, "ssim")));
+	assert_true(json_is_real(json_object_get(js, "maxrgb_mean")));
+	json_decref(js);
+	snprintf(p, sizeof p, "%s/heatmaps/flip/000000.png", out);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/heatmaps/000000.png", out);
+	assert_true(tu_file_exists(p));
+	/* frames.csv: every column of DESIGN section 6, the unselected ones empty. */
+	snprintf(p, sizeof p, "%s/frames.csv", out);
+	char *csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	const char *row = strchr(csv, '\n') + 1;
+	int commas = 0;
+	for (const char *c = row; *c && *c != '\n'; c++)
+		commas += *c == ',';
+	assert_int_equal(commas, 15);
+	assert_non_null(strstr(row, ",,,,")); /* psnr, ssim, flicker_mean empty */
+	free(csv);
+}
+
+static void test_flip_identical_and_pixel(void **state)
+{
+	(void)state;
+	mtr_flip *f = NULL;
+	char err[256];
+	assert_int_equal(mtr_flip_create(MTR_FLIP_PPD_DEFAULT, &f, err, sizeof err), 0);
+	/* Identical non-integral images (the EOTF formula path): exactly 0 everywhere. */
+	const uint32_t w = 97, h = 53;
+	float *a = malloc(sizeof(float) * 3 * w * h), *map = malloc(sizeof(float) * w * h);
+	unsigned seed = 3;
+	for (size_t i = 0; i < 3 * (size_t)w * h; i++) {
+		seed = seed * 1103515245u + 12345u;
+		a[i] = (float)((seed >> 8) % 25500) / 100.0f;
+	}
+	double mean = -1;
+	assert_int_equal(mtr_flip_compute(f, w, h, a, a, map, 2, &mean, err, sizeof err), 0);
+	assert_true(mean == 0.0);
+	for (size_t i = 0; i < (size_t)w * h; i++)
+		assert_true(map[i] == 0.0f);
+	free(a);
+	free(map);
+	/* One changed pixel (128 -> 168 grey at (37, 22)) on 64x64: the maximum is within 2 pixels of it, the error is
+	 * 0 beyond the 21x21 footprint of the filters (radius 10 at 67 ppd) and nonzero inside. */
+	const uint32_t W = 64, H = 64, px = 37, py = 22;
+	float *ra = malloc(sizeof(float) * 3 * W * H), *rb = malloc(sizeof(float) * 3 * W * H);
+	map = malloc(sizeof(float) * W * H);
+	for (size_t i = 0; i < 3 * (size_t)W * H; i++)
+		ra[i] = rb[i] = 128.0f;
+	for (int c = 0; c < 3; c++)
+		rb[3 * ((size_t)py * W + px) + c] = 168.0f;
+	assert_int_equal(mtr_flip_compute(f, W, H, ra, rb, map, 0, &mean, err, sizeof err), 0);
+	assert_true(mean > 0);
+	uint32_t mx = 0, my = 0;
+	float best = -1;
+	int inside = 0;
+	for (uint32_t y = 0; y < H; y++)
+		for (uint32_t x = 0; x < W; x++) {
+			float v = map[(size_t)y * W + x];
+			if (v > best)
+				best = v, mx = x, my = y;
+			if (abs((int)x - (int)px) > 10 || abs((int)y - (int)py) > 10)
+				assert_true(v == 0.0f);
+			else
+				inside += v > 0.0f;
+		}
+	assert_true(abs((int)mx - (int)px) <= 2 && abs((int)my - (int)py) <= 2);
+	assert_true(inside > 0);
+	free(ra);
+	free(rb);
+	free(map);
+	mtr_flip_destroy(&f);
+}
+
+static void test_flip_sizes_and_errors(void **state)
+{
+	(void)state;
+	mtr_flip *f = NULL;
+	char err[256];
+	assert_int_equal(mtr_flip_create(MTR_FLIP_PPD_DEFAULT, &f, err, sizeof err), 0);
+	/* 1x1, thin and odd sizes (smaller than the kernels, strip and band boundaries): in [0,1], NULL map and 1 vs 4
+	 * threads agree exactly. */
+	const uint32_t sizes[][2] = {{1, 1}, {3, 2}, {2, 3}, {1, 40}, {40, 1}, {17, 5}, {700, 37}};
+	unsigned seed = 11;
+	for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+		uint32_t w = sizes[k][0], h = sizes[k][1];
+		float *a = malloc(sizeof(float) * 3 * w * h), *b = malloc(sizeof(float) * 3 * w * h);
+		float *map = malloc(sizeof(float) * w * h);
+		for (size_t i = 0; i < 3 * (size_t)w * h; i++) {
+			seed = seed * 1103515245u + 12345u;
+			a[i] = (float)((seed >> 16) % 256);
+			seed = seed * 1103515245u + 12345u;
+			b[i] = (float)((seed >> 16) % 256);
+		}
+		double m1 = -1, m2 = -2, s = 0;
+		assert_int_equal(mtr_flip_compute(f, w, h, a, b, map, 1, &m1, err, sizeof err), 0);
+		assert_int_equal(mtr_flip_compute(f, w, h, a, b, NULL, 4, &m2, err, sizeof err), 0);
+		for (size_t i = 0; i < (size_t)w * h; i++) {
+			assert_true(map[i] >= 0.0f && map[i] <= 1.0f);
+			s += map[i];
+		}
+		assert_true(m1 > 0 && m1 == m2);
+		assert_float_equal(s / ((double)w * h), m1, 1e-12);
+		free(a);
+		free(b);
+		free(map);
+	}
+	/* Bad input: one-line messages, tl_err codes. */
+	float px[3] = {1, 2, 3};
+	double mean;
+	err[0] = 0;
+	assert_int_equal(mtr_flip_compute(f, 0, 5, px, px, NULL, 1, &mean, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "empty"));
+	assert_int_equal(mtr_flip_compute(f, 1, 1, NULL, px, NULL, 1, &mean, err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(mtr_flip_compute(NULL, 1, 1, px, px, NULL, 1, &mean, err, sizeof err), TL_ERR_ARG);
+	mtr_flip *g = (mtr_flip *)1;
+	assert_int_equal(mtr_flip_create(0.0, &g, err, sizeof err), TL_ERR_ARG);
+	assert_null(g);
+	assert_non_null(strstr(err, "pixels per degree"));
+	assert_int_equal(mtr_flip_create(NAN, &g, NULL, 0), TL_ERR_ARG);
+	mtr_flip_pool p;
+	assert_int_equal(mtr_flip_pool_stats(px, 0, &p), TL_ERR_ARG);
+	mtr_flip_destroy(&f);
+	mtr_flip_destroy(&f); /* NULL is fine */
+	/* Sizes through the comparer: a size mismatch and a frame of another size than the previous ones. */
+	mtr_comparer *c = NULL;
+	mtr_compare_desc d = {.metrics = "flip,maxrgb"};
+	assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), 0);
+	float big[3 * 6] = {0}, small[3 * 4] = {0};
+	mtr_image A = {3, 2, big}, B = {2, 2, small};
+	mtr_frame_stats s;
+	assert_int_equal(mtr_comparer_frame(c, &A, &B, NULL, NULL, NULL, NULL, &s, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "sizes differ"));
+	assert_int_equal(mtr_comparer_frame(c, &B, &B, NULL, NULL, NULL, NULL, &s, err, sizeof err), 0);
+	assert_true(s.flip_mean == 0 && s.mean == 0 && isnan(s.ssim) && isnan(s.psnr));
+	assert_int_equal(mtr_comparer_frame(c, &A, &A, NULL, NULL, NULL, NULL, &s, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "previous frames"));
+	mtr_comparer_destroy(&c);
+}
+
+/* ------------------------------------------------------------------ the registry */
+
+static void test_registry(void **state)
+{
+	(void)state;
+	char list[256], err[256];
+	assert_string_equal(mtr_metric_list(list, sizeof list), "maxrgb,psnr,ssim,flicker,flip");
+	assert_int_equal(mtr_metric_count(), 5);
+	assert_int_equal(mtr_metric_find("flip"), 4);
+	assert_int_equal(mtr_metric_find("vmaf"), -1);
+	uint32_t m;
+	assert_int_equal(mtr_metric_parse("maxrgb,flip", &m, err, sizeof err), 0);
+	assert_int_equal(m, 1u | 16u);
+	assert_int_equal(mtr_metric_parse(NULL, &m, err, sizeof err), 0);
+	assert_int_equal(m, 31u);
+	assert_int_equal(mtr_metric_parse("all", &m, err, sizeof err), 0);
+	assert_int_equal(m, 31u);
+	assert_int_equal(mtr_metric_parse("maxrgb,vmaf", &m, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "'vmaf'"));
+	assert_non_null(strstr(err, "maxrgb,psnr,ssim,flicker,flip"));
+	assert_int_equal(mtr_metric_parse("maxrgb,", &m, err, sizeof err), TL_ERR_ARG); /* empty item */
+	/* The column layout is DESIGN section 6's, whatever is selected. */
+	const char *frames_cols = "maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,"
+				  "exceed_16,exceed_32,exceed_64,psnr,ssim,flicker_mean,flip_mean";
+	char got[1024] = "";
+	for (int c = 0; mtr_column_name(c); c++)
+		if (mtr_column_where(c) & 1u)
+			snprintf(got + strlen(got), sizeof got - strlen(got), "%s%s", got[0] ? "," : "", mtr_column_name(c));
+	assert_string_equal(got, frames_cols);
+	/* Options: known and in range, or refused with a message. */
+	mtr_comparer *c = NULL;
+	mtr_option_value bad[] = {{"ppd", 0.0}}, unknown[] = {{"gamma", 2.2}}, good[] = {{"ppd", 30.0}};
+	mtr_compare_desc d = {.metrics = "flip", .options = bad, .option_count = 1};
+	assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "--ppd"));
+	d.options = unknown;
+	assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "gamma"));
+	d.metrics = "ssim,nope";
+	d.options = good;
+	assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), TL_ERR_ARG);
+	assert_null(c);
+	/* A lower ppd (viewer closer) changes FLIP: the same pair differs at 30 and 67 ppd. */
+	d.metrics = "flip";
+	assert_int_equal(mtr_comparer_create(&d, &c, err, sizeof err), 0);
+	float a[3 * 16 * 16], b[3 * 16 * 16];
+	for (int i = 0; i < 3 * 256; i++)
+		a[i] = (float)(i % 200), b[i] = (float)((i * 3) % 200);
+	mtr_image A = {16, 16, a}, B = {16, 16, b};
+	mtr_frame_stats s30, s67;
+	assert_int_equal(mtr_comparer_frame(c, &A, &B, NULL, NULL, NULL, NULL, &s30, err, sizeof err), 0);
+	mtr_comparer_destroy(&c);
+	assert_int_equal(mtr_frame_compare(&A, &B, NULL, NULL, NULL, 1, &s67, err, sizeof err), 0);
+	assert_true(s30.flip_mean > 0 && s67.flip_mean > 0 && fabs(s30.flip_mean - s67.flip_mean) > 1e-4);
+	assert_int_equal(s67.metrics, 31u);
+	assert_int_equal(s30.metrics, 16u);
+}
+
+/* Percentiles from the pass's histogram (integral d) equal the quickselect ones on the same map; fractional inputs
+ * take the quickselect path and agree with a full sort. */
+static void test_percentile_paths(void **state)
+{
+	(void)state;
+	const uint32_t w = 123, h = 45;
+	size_t n = (size_t)w * h;
+	float *a = malloc(n * 3 * sizeof *a), *b = malloc(n * 3 * sizeof *b), *map = malloc(n * sizeof *map);
+	for (int frac = 0; frac <= 1; frac++) {
+		fill(a, w, h, 5);
+		fill(b, w, h, 9);
+		if (frac)
+			for (size_t i = 0; i < n * 3; i++)
+				a[i] = a[i] * 0.97f + 0.25f;
+		mtr_image A = {w, h, a}, B = {w, h, b};
+		mtr_frame_stats s;
+		char err[256];
+		assert_int_equal(mtr_frame_compare(&A, &B, NULL, NULL, map, 2, &s, err, sizeof err), 0);
+		float *sorted = malloc(n * sizeof *sorted);
+		memcpy(sorted, map, n * sizeof *map);
+		qsort(sorted, n, sizeof *sorted, cmp_f);
+		const double pct[3] = {50, 95, 99}, got[3] = {s.p50, s.p95, s.p99};
+		for (int k = 0; k < 3; k++) {
+			double hh = (double)(n - 1) * pct[k] / 100.0, lo = floor(hh);
+			float flo = sorted[(size_t)lo], fhi = sorted[(size_t)lo + 1];
+			double ref = flo + (hh - lo) * (fhi - flo);
+			if (fabs(got[k] - ref) > 1e-9)
+				fail_msg("%s inputs: p%g %.9f, sort %.9f", frac ? "fractional" : "integral", pct[k], got[k], ref);
+		}
+		free(sorted);
+	}
+	free(a);
+	free(b);
+	free(map);
 }
 
 static void make_run(const char *dir, const char *method, double T, const char *csv)
@@ -366,6 +813,10 @@ int main(void)
 		cmocka_unit_test(test_percentile_vs_sort), cmocka_unit_test(test_ssim_vs_skimage),
 		cmocka_unit_test(test_jnd),            cmocka_unit_test(test_colormap),
 		cmocka_unit_test(test_diff_files),       cmocka_unit_test(test_runs_summary),
+		cmocka_unit_test(test_flip_reference),   cmocka_unit_test(test_flip_diff),
+		cmocka_unit_test(test_flip_identical_and_pixel), cmocka_unit_test(test_flip_sizes_and_errors),
+		cmocka_unit_test(test_registry),         cmocka_unit_test(test_percentile_paths),
+		cmocka_unit_test(test_ssim_frame),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

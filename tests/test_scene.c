@@ -1,7 +1,9 @@
 /* test_scene.c — scene files: the built-in scene loads; bad files give one-line errors naming the
- * file and the JSON path; evaluation is a pure function of time. */
+ * file and the JSON path (also for degenerate values and hostile glTF assets, issue 12); evaluation is a
+ * pure function of time. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "taslab/scene.h"
@@ -126,11 +128,132 @@ static void test_errors(void **state)
 	expect_error(buf, "$.meshes.b", "teapot");
 }
 
+/* A small scene with one material (fields `mat`), one object (extra fields `obj`), lights `lights` and extra
+ * top-level keys `root`; it loads when all four are empty. */
+static const char *HOSTILE =
+	"{\"taslab_scene\": 1, \"name\": \"h\", \"materials\": {\"m\": {%s}}, \"meshes\": {\"b\": {\"type\": \"box\"}},"
+	" \"objects\": [{\"name\": \"o\", \"mesh\": \"b\", \"material\": \"m\"%s}], \"lights\": [%s],"
+	" \"cameras\": [{\"name\": \"c\", \"motion\": \"stationary\", \"keys\": [{\"t\": 0, \"position\": [0, 0, 5],"
+	" \"target\": [0, 0, 0]}]}]%s}";
+
+static char *hostile_scene(const char *mat, const char *obj, const char *lights, const char *root)
+{
+	size_t n = strlen(HOSTILE) + strlen(mat) + strlen(obj) + strlen(lights) + strlen(root) + 1;
+	char *buf = malloc(n);
+	snprintf(buf, n, HOSTILE, mat, obj, lights, root);
+	return buf;
+}
+
+static void expect_hostile(const char *mat, const char *obj, const char *lights, const char *root, const char *path,
+			   const char *needle)
+{
+	char *buf = hostile_scene(mat, obj, lights, root);
+	expect_error(buf, path, needle);
+	free(buf);
+}
+
+/* Degenerate values in scene files (issue 12): every number parsed into a float is finite after the
+ * conversion (1e39 is valid JSON but infinity as a float); no zero rotation quaternions or rotation axes
+ * (they were silently replaced by the identity and +Y). */
+static void test_degenerate_values(void **state)
+{
+	(void)state;
+	char *ok = hostile_scene("", "", "", "");
+	scene *s = NULL;
+	char err[512];
+	if (scene_load_from_memory(ok, strlen(ok), "ok.json", &s, err, sizeof err))
+		fail_msg("%s", err);
+	scene_destroy(&s);
+	free(ok);
+	expect_hostile("\"emissive\": [1e39, 0, 0]", "", "", "", "$.materials.m.emissive", "finite");
+	expect_hostile("\"base_color\": [1, 1, -1e39, 1]", "", "", "", "$.materials.m.base_color", "finite");
+	expect_hostile("", ", \"scale\": 1e39", "", "", "$.objects[0].scale", "finite");
+	expect_hostile("", ", \"translation\": [0, 1e39, 0]", "", "", "$.objects[0].translation", "finite");
+	expect_hostile("", ", \"rotation\": [0, 0, 0, 0]", "", "", "$.objects[0].rotation", "quaternion");
+	expect_hostile("", ", \"animation\": [{\"type\": \"spin\", \"axis\": [0, 0, 0]}]", "", "",
+		       "$.objects[0].animation[0].axis", "zero vector");
+	expect_hostile("", ", \"animation\": [{\"type\": \"keyframes\", \"times\": [0, 1], \"rotation\": [[0, 0, 0, 1],"
+			   " [0, 0, 0, 0]]}]",
+		       "", "", "$.objects[0].animation[0].rotation", "zero quaternion");
+	expect_hostile("", "", "{\"name\": \"l\", \"type\": \"point\", \"animation\": [{\"type\": \"orbit\", \"axis\": [0, 0, 0]}]}",
+		       "", "$.lights[0].animation[0].axis", "zero vector");
+	expect_hostile("", "", "{\"name\": \"l\", \"type\": \"point\", \"intensity_keys\": {\"times\": [0], \"values\": [1e39]}}",
+		       "", "$.lights[0].intensity_keys[0]", "finite");
+	/* 257 colour textures: beyond the renderer's 256 texture layers per colour space */
+	size_t n = 64 + 40 * (SCENE_MAX_TEXTURES + 1), at = 0;
+	char *root = malloc(n);
+	at += (size_t)snprintf(root, n, ", \"texture_size\": 4, \"textures\": {");
+	for (int i = 0; i <= SCENE_MAX_TEXTURES; i++)
+		at += (size_t)snprintf(root + at, n - at, "%s\"t%d\": {\"pattern\": \"flat\"}", i ? ", " : "", i);
+	snprintf(root + at, n - at, "}");
+	expect_hostile("", "", "", root, "$.textures.t256", "more than 256 colour textures");
+	free(root);
+}
+
+/* A hostile glTF reached through "assets" is refused with the scene file's JSON path and the glTF's reason;
+ * messages stay one line even when a file name holds a newline. */
+static void test_hostile_assets(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("scene_hostile");
+	char path[4096], err[1024];
+	/* 6148914691236517206 positions * 12 bytes wraps to 8 bytes: before issue 12, a heap overflow */
+	snprintf(path, sizeof path, "%s/wrap.gltf", dir);
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	fputs("{\"asset\": {\"version\": \"2.0\"}, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [{\"mesh\": 0}],"
+	      " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],"
+	      " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 6148914691236517206, \"type\": \"VEC3\"}],"
+	      " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"buffers\": [{\"byteLength\": 36, \"uri\":"
+	      " \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}", f);
+	fclose(f);
+	static const char *const scenes[][3] = {
+		{"wrap.json", "wrap.gltf", "elements"},
+		{"newline.json", "new\\nline.gltf", "new line.gltf"},
+	};
+	for (size_t i = 0; i < 2; i++) {
+		snprintf(path, sizeof path, "%s/%s", dir, scenes[i][0]);
+		f = fopen(path, "w");
+		assert_non_null(f);
+		fprintf(f, "{\"taslab_scene\": 1, \"name\": \"a\", \"assets\": [{\"name\": \"x\", \"gltf\": \"%s\"}],"
+			   " \"cameras\": [{\"name\": \"c\", \"motion\": \"stationary\", \"keys\": [{\"t\": 0,"
+			   " \"position\": [0, 0, 5], \"target\": [0, 0, 0]}]}]}", scenes[i][1]);
+		fclose(f);
+		scene *s = NULL;
+		int rc = scene_load(path, &s, err, sizeof err);
+		if (rc != TL_ERR_INPUT || s || !strstr(err, "$.assets[0].gltf") || !strstr(err, scenes[i][2]) ||
+		    strchr(err, '\n'))
+			fail_msg("%s: rc %d, message '%s'", scenes[i][0], rc, err);
+	}
+}
+
+/* scene_load_with: the texture size knob replaces the file's (textures are made at that size). */
+static void test_load_with_texture_size(void **state)
+{
+	(void)state;
+	scene *s = NULL;
+	char err[512];
+	const char *path = TASLAB_SOURCE_DIR "/scenes/turntable.json";
+	if (scene_load_with(path, &(scene_load_desc){.texture_size = 8}, &s, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(s->texture_size, 8);
+	assert_true(s->texture_count > 0);
+	scene_destroy(&s);
+	assert_int_equal(scene_load_with(path, &(scene_load_desc){.texture_size = 12}, &s, err, sizeof err), TL_ERR_ARG);
+	assert_null(s);
+	if (scene_load_with(path, NULL, &s, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(s->texture_size, 512); /* the file's */
+	scene_destroy(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_builtin_loads), cmocka_unit_test(test_eval_is_pure),
 		cmocka_unit_test(test_camera_path),   cmocka_unit_test(test_errors),
+		cmocka_unit_test(test_degenerate_values), cmocka_unit_test(test_hostile_assets),
+		cmocka_unit_test(test_load_with_texture_size),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -9,47 +9,72 @@
 #include "taslab/colour.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
+#include "taslab/metrics_flip.h"
 #include "taslab/metrics_runs.h"
 
 /* ---- diff ---- */
 
+/* metrics_diff_opts (commands.h) plus the metric selection and options. Kept here until commands.h carries the
+ * two fields (the parser tests reach the base struct at offset 0 as before). */
+typedef struct diff_cli_opts {
+	metrics_diff_opts base;
+	const char *metrics;
+	double ppd;
+} diff_cli_opts;
+
+#define DIFF_OFF(f) (offsetof(diff_cli_opts, base) + offsetof(metrics_diff_opts, f))
+
 static const cli_opt diff_options[] = {
 	{.name = "ref", .arg = "A",
 	 .help = "reference frames: a run folder or a folder of images",
-	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, ref)},
+	 .type = CLI_STRING, .offset = DIFF_OFF(ref)},
 	{.name = "test", .arg = "B",
 	 .help = "test frames (same frame names and sizes)",
-	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, test)},
+	 .type = CLI_STRING, .offset = DIFF_OFF(test)},
 	{.name = "out", .arg = "DIR",
 	 .help = "output folder",
-	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, out)},
+	 .type = CLI_STRING, .offset = DIFF_OFF(out)},
 	{.name = "format", .arg = "png|exr",
 	 .help = "compare the display PNGs (default) or the EXRs through the display transform",
-	 .type = CLI_STRING, .offset = offsetof(metrics_diff_opts, format)},
+	 .type = CLI_STRING, .offset = DIFF_OFF(format)},
 	{.name = "heatmaps", .arg = NULL,
-	 .help = "DIR/heatmaps/NNNNNN.png: max-RGB difference maps with a legend",
-	 .type = CLI_FLAG, .offset = offsetof(metrics_diff_opts, heatmaps)},
+	 .help = "DIR/heatmaps/NNNNNN.png: max-RGB difference maps with a legend; with flip also heatmaps/flip/",
+	 .type = CLI_FLAG, .offset = DIFF_OFF(heatmaps)},
 	{.name = "heatmap-max", .arg = "V",
 	 .help = "colour scale maximum in code values (default 64)",
-	 .type = CLI_DOUBLE, .offset = offsetof(metrics_diff_opts, heatmap_max), .lo = 1e-6, .hi = 1e6},
+	 .type = CLI_DOUBLE, .offset = DIFF_OFF(heatmap_max), .lo = 1e-6, .hi = 1e6},
 	{.name = "plots", .arg = NULL,
 	 .help = "DIR/plots/frames.png, exceed.png, distribution.png (gnuplot)",
-	 .type = CLI_FLAG, .offset = offsetof(metrics_diff_opts, plots)},
+	 .type = CLI_FLAG, .offset = DIFF_OFF(plots)},
 	{.name = "threads", .arg = "N",
 	 .help = "worker threads (default: all cores)",
-	 .type = CLI_UINT, .offset = offsetof(metrics_diff_opts, threads), .lo = 1, .hi = 64},
+	 .type = CLI_UINT, .offset = DIFF_OFF(threads), .lo = 1, .hi = 64},
+	{.name = "metrics", .arg = "LIST",
+	 .help = "metrics to compute, comma-separated: maxrgb,psnr,ssim,flicker,flip or all (default); the "
+		 "others' columns stay, empty / null",
+	 .type = CLI_STRING, .offset = offsetof(diff_cli_opts, metrics)},
+	{.name = "ppd", .arg = "F",
+	 .help = "FLIP: pixels per degree (default 67.0206: 0.7 m from a 0.7 m wide 3840-pixel monitor)",
+	 .type = CLI_DOUBLE, .offset = offsetof(diff_cli_opts, ppd), .lo = 1e-3, .hi = 1000},
 	{0},
 };
 
 static void diff_defaults(void *opts, cli_setup_opts *setup)
 {
 	(void)setup;
-	((metrics_diff_opts *)opts)->format = "png";
+	diff_cli_opts *o = opts;
+	o->base.format = "png";
+	o->metrics = "all";
+	o->ppd = MTR_FLIP_PPD_DEFAULT;
 }
 
 static int diff_validate(void *opts, cli_ctx *ctx)
 {
-	metrics_diff_opts *o = opts;
+	diff_cli_opts *x = opts;
+	metrics_diff_opts *o = &x->base;
+	uint32_t mask;
+	if (mtr_metric_parse(x->metrics, &mask, ctx->err, sizeof ctx->err))
+		return TL_ERR_ARG; /* "--metrics: unknown metric 'X' (known: maxrgb,psnr,ssim,flicker,flip, or all)" */
 	if (!o->ref || !o->test || !o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 				"--ref, --test and --out are required (see 'taslab metrics diff --help')");
@@ -60,32 +85,37 @@ static int diff_validate(void *opts, cli_ctx *ctx)
 
 static int diff_main(void *opts, cli_ctx *ctx)
 {
-	metrics_diff_opts *o = opts;
+	diff_cli_opts *x = opts;
+	metrics_diff_opts *o = &x->base;
+	const mtr_option_value options[] = {{"ppd", x->ppd}};
 	mtr_diff_desc d = {.ref = o->ref, .test = o->test, .out = o->out, .heatmaps = o->heatmaps, .plots = o->plots,
 			   .heatmap_max = o->heatmap_max, .threads = (int)o->threads,
-			   .format = !strcmp(o->format, "exr") ? MTR_FORMAT_EXR : MTR_FORMAT_PNG, .colour = ctx->setup.colour};
+			   .format = !strcmp(o->format, "exr") ? MTR_FORMAT_EXR : MTR_FORMAT_PNG, .colour = ctx->setup.colour,
+			   .metrics = x->metrics, .options = options, .option_count = 1};
 	mtr_diff_result r;
 	int rc = mtr_diff_run(&d, &r, ctx->err, sizeof ctx->err);
 	if (rc)
 		return rc;
 	fprintf(stderr,
 		"taslab: %zu frame pairs in %.2f s (%.1f pairs/s): max-RGB mean %.3f, p99 %.3f, max %.0f; exceed_8 %.5f; "
-		"PSNR %.2f dB, SSIM %.5f -> %s/frames.csv, summary.json\n",
+		"PSNR %.2f dB, SSIM %.5f, FLIP %.5f -> %s/frames.csv, summary.json\n",
 		r.frames, r.seconds, r.frames / r.seconds, r.pooled.mean, r.pooled.p99, r.pooled.max, r.pooled.exceed[2],
-		r.pooled.psnr, r.pooled.ssim, o->out);
+		r.pooled.psnr, r.pooled.ssim, r.pooled.flip_mean, o->out);
 	return TL_OK;
 }
 
 static const cli_command metrics_diff = {
 	.name = "metrics diff",
-	.summary = "compare two frame sequences: max-RGB, exceedance, PSNR, SSIM, flicker",
+	.summary = "compare two frame sequences: max-RGB, exceedance, PSNR, SSIM, flicker, FLIP",
 	.synopsis = "taslab metrics diff --ref A --test B --out DIR [options]",
 	.description = "Compares two frame sequences (run folders or folders of images, same frame names and sizes) and\n"
 		       "writes DIR/frames.csv (frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,\n"
-		       "exceed_2..exceed_64,psnr,ssim,flicker_mean), DIR/summary.json (the same, pooled over frames) and\n"
-		       "DIR/distribution.csv (the pooled distribution of d in 1-code-value bins).",
+		       "exceed_2..exceed_64,psnr,ssim,flicker_mean,flip_mean), DIR/summary.json (the same, pooled over\n"
+		       "frames, plus FLIP's weighted median and quartiles, min and max over all pixels) and\n"
+		       "DIR/distribution.csv (the pooled distribution of d in 1-code-value bins). --metrics picks the\n"
+		       "metrics (one plug-in each); the column layout never changes.",
 	.options = diff_options,
-	.opts_size = sizeof(metrics_diff_opts),
+	.opts_size = sizeof(diff_cli_opts),
 	.defaults = diff_defaults,
 	.validate = diff_validate,
 	.needs = CLI_NEED_COLOUR, /* --format exr compares through the display transform */
@@ -225,7 +255,7 @@ static const cli_command *const metrics_subs[] = {&metrics_diff, &metrics_runs, 
 
 const cli_command cli_cmd_metrics = {
 	.name = "metrics",
-	.summary = "compare frame sequences (max-RGB, PSNR, SSIM, flicker), run statistics, JND maths",
+	.summary = "compare frame sequences (max-RGB, PSNR, SSIM, flicker, FLIP), run statistics, JND maths",
 	.synopsis = "taslab metrics diff|runs|jnd [options]",
 	.subcommands = metrics_subs,
 };

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "taslab/imageio.h"
+#include "taslab/metrics_flip.h"
 #include "taslab/tl_clock.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
@@ -86,26 +87,35 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 typedef struct pair_buf {
 	float *a, *b;
 	uint32_t w, h;
+	uint32_t wb, hb; /* size of b (equal to w, h unless the pair is refused) */
 	int rc;
 	char err[1024];
 } pair_buf;
 
-static int load_frame(const mtr_diff_desc *d, const char *path, float **rgb, uint32_t *w, uint32_t *h, char *err,
-		      size_t err_size)
+/* Decodes one frame into display floats. `reuse` (may be NULL) is a buffer of `reuse_n` floats from an earlier frame:
+ * taken when large enough (fresh 25 MB buffers per 1080p frame cost page faults), freed otherwise. */
+static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, size_t reuse_n, float **rgb, uint32_t *w,
+		      uint32_t *h, char *err, size_t err_size)
 {
 	*rgb = NULL;
 	if (d->format == MTR_FORMAT_PNG) {
 		uint8_t *px = NULL;
-		if (imageio_read_rgb8(path, w, h, &px, err, err_size))
+		if (imageio_read_rgb8(path, w, h, &px, err, err_size)) {
+			free(reuse);
 			return -1;
+		}
 		size_t n = (size_t)*w * *h * 3;
-		*rgb = malloc(n * sizeof **rgb);
+		if (reuse && reuse_n >= n)
+			*rgb = reuse;
+		else
+			free(reuse), *rgb = malloc(n * sizeof **rgb);
 		if (*rgb)
 			for (size_t i = 0; i < n; i++)
 				(*rgb)[i] = px[i];
 		free(px);
 	} else {
 		float *px = NULL;
+		free(reuse);
 		if (imageio_read_rgba_float(path, w, h, &px, 1, err, err_size))
 			return -1;
 		size_t n = (size_t)*w * *h;
@@ -131,22 +141,65 @@ typedef struct loader {
 	const sequence *ra, *rb;
 	size_t index;
 	pair_buf *out;
+	float *reuse[2]; /* buffers of an earlier pair (owned by the loader from here on), or NULL */
+	size_t reuse_n[2]; /* their sizes in floats */
 } loader;
 
+typedef struct frame_job {
+	const mtr_diff_desc *d;
+	char path[8192];
+	float *reuse, *rgb;
+	size_t reuse_n;
+	uint32_t w, h;
+	int rc;
+	char err[1024];
+} frame_job;
+
+static void *frame_main(void *p)
+{
+	frame_job *j = p;
+	j->rc = load_frame(j->d, j->path, j->reuse, j->reuse_n, &j->rgb, &j->w, &j->h, j->err, sizeof j->err);
+	return NULL;
+}
+
+/* Decodes the pair's two frames in parallel (PNG decoding is most of the end-to-end time). */
 static void load_pair(loader *l)
 {
-	char pa[8192], pb[8192];
 	pair_buf *o = l->out;
-	uint32_t wb, hb;
-	snprintf(pa, sizeof pa, "%s/%s", l->ra->dir, l->ra->names[l->index]);
-	snprintf(pb, sizeof pb, "%s/%s", l->rb->dir, l->rb->names[l->index]);
-	o->rc = load_frame(l->d, pa, &o->a, &o->w, &o->h, o->err, sizeof o->err) ||
-		load_frame(l->d, pb, &o->b, &wb, &hb, o->err, sizeof o->err);
-	if (!o->rc && (wb != o->w || hb != o->h)) {
-		snprintf(o->err, sizeof o->err, "%s is %ux%u but %s is %ux%u: compare frames of the same size", pa, o->w, o->h,
-			 pb, wb, hb);
+	frame_job *j = calloc(2, sizeof *j);
+	if (!j) {
+		free(l->reuse[0]);
+		free(l->reuse[1]);
+		o->rc = -1;
+		snprintf(o->err, sizeof o->err, "out of memory");
+		return;
+	}
+	j[0].d = j[1].d = l->d;
+	j[0].reuse = l->reuse[0], j[1].reuse = l->reuse[1], j[0].reuse_n = l->reuse_n[0], j[1].reuse_n = l->reuse_n[1];
+	snprintf(j[0].path, sizeof j[0].path, "%s/%s", l->ra->dir, l->ra->names[l->index]);
+	snprintf(j[1].path, sizeof j[1].path, "%s/%s", l->rb->dir, l->rb->names[l->index]);
+	pthread_t th;
+	int threaded = pthread_create(&th, NULL, frame_main, &j[1]) == 0;
+	frame_main(&j[0]);
+	if (threaded)
+		pthread_join(th, NULL);
+	else
+		frame_main(&j[1]);
+	o->a = j[0].rgb;
+	o->b = j[1].rgb;
+	o->w = j[0].w;
+	o->h = j[0].h;
+	o->wb = j[1].w;
+	o->hb = j[1].h;
+	o->rc = j[0].rc || j[1].rc;
+	if (o->rc)
+		snprintf(o->err, sizeof o->err, "%s", j[0].rc ? j[0].err : j[1].err);
+	else if (j[1].w != o->w || j[1].h != o->h) {
+		snprintf(o->err, sizeof o->err, "%s is %ux%u but %s is %ux%u: compare frames of the same size", j[0].path,
+			 o->w, o->h, j[1].path, j[1].w, j[1].h);
 		o->rc = -1;
 	}
+	free(j);
 }
 
 static void *load_main(void *p)
@@ -162,6 +215,8 @@ static void csv_num(FILE *f, double v)
 }
 
 static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+static uint64_t cur_size(const pair_buf *p) { return (uint64_t)p->w * p->h; }
 
 
 static int write_plots(const char *out, char *err, size_t err_size)
@@ -198,18 +253,31 @@ static int write_plots(const char *out, char *err, size_t err_size)
 	return mtr_plot_end(&plot, err, err_size);
 }
 
+/* One frames.csv row: the frame number, then every column of DESIGN section 6 (empty where not computed). */
+static void csv_row(FILE *f, long frame, const mtr_frame_stats *s)
+{
+	fprintf(f, "%ld", frame);
+	for (int c = 0; mtr_column_name(c); c++)
+		if (mtr_column_where(c) & 1u) {
+			fputc(',', f);
+			csv_num(f, mtr_column_value(c, s));
+		}
+	fputc('\n', f);
+}
+
 int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)
 {
 	const char *ext = d->format == MTR_FORMAT_PNG ? ".png" : ".exr";
 	sequence ra, rb;
 	int rc = -1;
 	mtr_frame_stats *stats = NULL;
-	float *map = NULL;
+	float *map = NULL, *flip_map = NULL;
 	pair_buf cur = {0}, prev = {0}, next = {0};
-	uint64_t hist[256] = {0}; /* pooled distribution of d, 1 code value per bin (last bin: 255) */
-	uint64_t hist_total = 0;
+	float *spare[2] = {NULL, NULL}; /* the buffers of the pair before prev, for the next decode */
+	size_t spare_n[2] = {0, 0};
 	FILE *csv = NULL;
 	tl_atomic csv_file = {0};
+	mtr_comparer *cmp = NULL;
 	char path[4096];
 	memset(res, 0, sizeof *res);
 	memset(&rb, 0, sizeof rb);
@@ -217,8 +285,17 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		snprintf(err, err_size, "EXR comparison needs a display transform");
 		return -1;
 	}
-	if (sequence_open(d->ref, ext, &ra, err, err_size))
-		return -1;
+	mtr_compare_desc cd = {.metrics = d->metrics, .options = d->options, .option_count = d->option_count,
+			       .threads = d->threads};
+	if ((rc = mtr_comparer_create(&cd, &cmp, err, err_size)))
+		return rc;
+	const int flip_index = mtr_metric_find("flip");
+	const bool want_flip = flip_index >= 0 && ((mtr_comparer_selected(cmp) >> flip_index) & 1u);
+	if ((rc = sequence_open(d->ref, ext, &ra, err, err_size))) {
+		mtr_comparer_destroy(&cmp);
+		return rc;
+	}
+	rc = TL_ERR_INPUT;
 	if (sequence_open(d->test, ext, &rb, err, err_size))
 		goto done;
 	if (ra.n != rb.n) {
@@ -231,7 +308,7 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 			snprintf(err, err_size, "frame files differ: %s/%s vs %s/%s", ra.dir, ra.names[i], rb.dir, rb.names[i]);
 			goto done;
 		}
-	snprintf(path, sizeof path, "%s/%s", d->out, d->heatmaps ? "heatmaps" : "");
+	snprintf(path, sizeof path, "%s/%s", d->out, d->heatmaps ? (want_flip ? "heatmaps/flip" : "heatmaps") : "");
 	if ((rc = tl_mkdirs(path, err, err_size)))
 		goto done;
 	if (d->plots) {
@@ -252,24 +329,33 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		goto done;
 	rc = TL_ERR_INPUT;
 	csv = csv_file.f;
-	fprintf(csv, "frame,maxrgb_mean,maxrgb_p50,maxrgb_p95,maxrgb_p99,maxrgb_max,exceed_2,exceed_4,exceed_8,exceed_16,"
-		     "exceed_32,exceed_64,psnr,ssim,flicker_mean\n");
+	fputs("frame", csv);
+	for (int c = 0; mtr_column_name(c); c++)
+		if (mtr_column_where(c) & 1u)
+			fprintf(csv, ",%s", mtr_column_name(c));
+	fputc('\n', csv);
 	double t0 = tl_clock_s(), compute = 0;
-	loader l = {d, &ra, &rb, 0, &cur};
+	loader l = {d, &ra, &rb, 0, &cur, {NULL, NULL}, {0, 0}};
 	load_pair(&l);
 	for (size_t i = 0; i < ra.n; i++) {
 		if (cur.rc) {
 			snprintf(err, err_size, "%s", cur.err);
 			goto done;
 		}
-		/* Overlap: decode pair i+1 on a helper thread while pair i is measured. */
+		/* Overlap: decode pair i+1 on helper threads while pair i is measured. */
 		pthread_t th;
 		int threaded = 0;
-		loader ln = {d, &ra, &rb, i + 1, &next};
+		loader ln = {d, &ra, &rb, i + 1, &next, {NULL, NULL}, {spare_n[0], spare_n[1]}};
+		if (i + 1 < ra.n) { /* the loader owns them from here */
+			ln.reuse[0] = spare[0], ln.reuse[1] = spare[1];
+			spare[0] = spare[1] = NULL;
+		}
 		memset(&next, 0, sizeof next);
 		if (i + 1 < ra.n)
 			threaded = pthread_create(&th, NULL, load_main, &ln) == 0;
-		if (!map && !(map = malloc((size_t)cur.w * cur.h * sizeof *map))) {
+		size_t npx = (size_t)cur.w * cur.h;
+		if (d->heatmaps && ((!map && !(map = malloc(npx * sizeof *map))) ||
+				    (want_flip && !flip_map && !(flip_map = malloc(npx * sizeof *flip_map))))) {
 			snprintf(err, err_size, "out of memory");
 			if (threaded)
 				pthread_join(th, NULL);
@@ -279,42 +365,35 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		mtr_image ap = {prev.w, prev.h, prev.a}, bp = {prev.w, prev.h, prev.b};
 		int have_prev = prev.a && prev.w == cur.w && prev.h == cur.h;
 		double tc = tl_clock_s();
-		int crc = mtr_frame_compare(&a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, d->threads, &stats[i],
-					    err, err_size);
+		int crc = mtr_comparer_frame(cmp, &a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, flip_map,
+					     &stats[i], err, err_size);
 		compute += tl_clock_s() - tc;
-		if (!crc)
-			for (size_t px = 0; px < (size_t)cur.w * cur.h; px++) {
-				int bin = (int)map[px];
-				hist[bin > 255 ? 255 : bin]++;
-			}
-		hist_total += (uint64_t)cur.w * cur.h;
+		if (crc && i > 0 && (cur.w != prev.w || cur.h != prev.h))
+			snprintf(err, err_size, "frame %s has another size than the previous frames", ra.names[i]);
+		const int stem = (int)strlen(ra.names[i]) - 4;
 		if (!crc && d->heatmaps) {
-			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", d->out, (int)strlen(ra.names[i]) - 4, ra.names[i]);
+			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", d->out, stem, ra.names[i]);
 			crc = mtr_heatmap_write(path, map, cur.w, cur.h, d->heatmap_max > 0 ? d->heatmap_max : 64, err, err_size);
+		}
+		if (!crc && d->heatmaps && want_flip) {
+			snprintf(path, sizeof path, "%s/heatmaps/flip/%.*s.png", d->out, stem, ra.names[i]);
+			crc = mtr_heatmap_write(path, flip_map, cur.w, cur.h, 1.0, err, err_size);
 		}
 		if (threaded)
 			pthread_join(th, NULL);
 		else if (i + 1 < ra.n)
 			load_pair(&ln);
-		if (crc)
-			goto done;
-		if (cur.w != (prev.w ? prev.w : cur.w) || cur.h != (prev.h ? prev.h : cur.h)) {
-			snprintf(err, err_size, "frame %s has another size than the previous frames", ra.names[i]);
+		if (crc) {
+			rc = crc;
 			goto done;
 		}
-		const mtr_frame_stats *s = &stats[i];
-		fprintf(csv, "%ld,", atol(ra.names[i]));
-		double v[5] = {s->mean, s->p50, s->p95, s->p99, s->max};
-		for (int k = 0; k < 5; k++)
-			csv_num(csv, v[k]), fputc(',', csv);
-		for (int k = 0; k < MTR_THRESHOLD_COUNT; k++)
-			csv_num(csv, s->exceed[k]), fputc(',', csv);
-		csv_num(csv, s->psnr), fputc(',', csv);
-		csv_num(csv, s->ssim), fputc(',', csv);
-		csv_num(csv, s->flicker_mean);
-		fputc('\n', csv);
-		free(prev.a);
-		free(prev.b);
+		csv_row(csv, atol(ra.names[i]), &stats[i]);
+		free(spare[0]);
+		free(spare[1]);
+		spare[0] = prev.a;
+		spare[1] = prev.b;
+		spare_n[0] = (size_t)prev.w * prev.h * 3;
+		spare_n[1] = (size_t)prev.wb * prev.hb * 3;
 		prev = cur;
 		cur = next;
 		memset(&next, 0, sizeof next);
@@ -323,54 +402,65 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	if ((rc = tl_atomic_commit(&csv_file, err, err_size)))
 		goto done;
 	res->frames = ra.n;
-	mtr_pool(stats, ra.n, &res->pooled);
+	mtr_comparer_pool(cmp, stats, ra.n, &res->pooled);
 	res->seconds = tl_clock_s() - t0;
 	res->compute_seconds = compute;
 	const mtr_frame_stats *p = &res->pooled;
-	json_t *ex = json_object();
-	json_t *j = json_pack("{s:s, s:s, s:s, s:I, s:o, s:o, s:o, s:o, s:o}", "ref", d->ref, "test", d->test, "format",
-			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)ra.n, "maxrgb_mean",
-			      num_or_null(p->mean), "maxrgb_p50", num_or_null(p->p50), "maxrgb_p95", num_or_null(p->p95),
-			      "maxrgb_p99", num_or_null(p->p99), "maxrgb_max", num_or_null(p->max));
-	for (int k = 0; k < MTR_THRESHOLD_COUNT; k++) {
-		char key[32];
-		snprintf(key, sizeof key, "exceed_%g", mtr_thresholds[k]);
-		json_object_set_new(j, key, num_or_null(p->exceed[k]));
+	json_t *j = json_pack("{s:s, s:s, s:s, s:I}", "ref", d->ref, "test", d->test, "format",
+			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)ra.n);
+	json_t *sel = json_array();
+	for (int m = 0; mtr_metric_name(m); m++)
+		if ((mtr_comparer_selected(cmp) >> m) & 1u)
+			json_array_append_new(sel, json_string(mtr_metric_name(m)));
+	json_object_set_new(j, "metrics", sel);
+	for (int c = 0; mtr_column_name(c); c++)
+		if (mtr_column_where(c) & 2u)
+			json_object_set_new(j, mtr_column_name(c), num_or_null(mtr_column_value(c, p)));
+	if (want_flip) {
+		double ppd = MTR_FLIP_PPD_DEFAULT;
+		for (size_t k = 0; k < d->option_count; k++)
+			if (!strcmp(d->options[k].name, "ppd"))
+				ppd = d->options[k].value;
+		json_object_set_new(j, "flip_ppd", json_real(ppd));
 	}
-	json_decref(ex);
-	json_object_set_new(j, "psnr", num_or_null(p->psnr));
-	json_object_set_new(j, "ssim", num_or_null(p->ssim));
-	json_object_set_new(j, "flicker_mean", num_or_null(p->flicker_mean));
-	json_object_set_new(j, "pooling", json_string("mean over frames; maxrgb_max: max; psnr: from the mean MSE; "
-						      "flicker_mean: over frames 2..n"));
+	json_object_set_new(j, "pooling",
+			    json_string("mean over frames; maxrgb_max: max; psnr: from the mean MSE; flicker_mean: over "
+					"frames 2..n; flip_*: over all pixels of all frames (weighted quartiles from a "
+					"histogram, within 2.5e-4 x the value); metrics not selected: null"));
 	/* distribution.csv first: summary.json, written last, means the folder is complete. */
-	tl_atomic hf;
-	snprintf(path, sizeof path, "%s/distribution.csv", d->out);
-	if ((rc = tl_atomic_open(&hf, path, err, err_size))) {
-		json_decref(j);
-		goto done;
-	}
-	fprintf(hf.f, "d_from,d_to,count,fraction\n");
-	for (int b = 0; b < 256; b++)
-		fprintf(hf.f, "%d,%d,%llu,%.9g\n", b, b + 1, (unsigned long long)hist[b],
-			hist_total ? (double)hist[b] / (double)hist_total : 0.0);
-	if ((rc = tl_atomic_commit(&hf, err, err_size))) {
-		json_decref(j);
-		goto done;
+	const uint64_t *hist = mtr_comparer_histogram(cmp);
+	if (hist) {
+		uint64_t hist_total = (uint64_t)ra.n * cur_size(&prev);
+		tl_atomic hf;
+		snprintf(path, sizeof path, "%s/distribution.csv", d->out);
+		if ((rc = tl_atomic_open(&hf, path, err, err_size))) {
+			json_decref(j);
+			goto done;
+		}
+		fprintf(hf.f, "d_from,d_to,count,fraction\n");
+		for (int b = 0; b < 256; b++)
+			fprintf(hf.f, "%d,%d,%llu,%.9g\n", b, b + 1, (unsigned long long)hist[b],
+				hist_total ? (double)hist[b] / (double)hist_total : 0.0);
+		if ((rc = tl_atomic_commit(&hf, err, err_size))) {
+			json_decref(j);
+			goto done;
+		}
 	}
 	snprintf(path, sizeof path, "%s/summary.json", d->out);
 	rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
 	if (rc)
 		goto done;
-	if (d->plots && write_plots(d->out, err, err_size))
+	if (d->plots && hist && write_plots(d->out, err, err_size))
 		fprintf(stderr, "taslab metrics: note: %s\n", err);
 	rc = 0;
 done:
 	tl_atomic_abort(&csv_file);
-	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b);
+	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b), free(spare[0]), free(spare[1]);
 	free(map);
+	free(flip_map);
 	free(stats);
+	mtr_comparer_destroy(&cmp);
 	sequence_free(&ra);
 	sequence_free(&rb);
 	return rc;

@@ -59,6 +59,18 @@ int anim_track_validate(const anim_track *track, char *why, size_t why_size)
 			return -1;
 		}
 	}
+	/* Rotation keys are unit quaternions (glTF 2.0 §3.11); a zero one has no direction to normalise to
+	 * (CUBICSPLINE tangents, the first and third of each triple, may be zero). */
+	if (track->path == ANIM_PATH_ROTATION) {
+		const int cubic = track->interp == ANIM_INTERP_CUBICSPLINE;
+		for (size_t i = 0; i < track->key_count; i++) {
+			const float *q = track->values + (cubic ? i * 3 + 1 : i) * 4;
+			if (!(sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) >= 1e-6f)) {
+				snprintf(why, why_size, "rotation key %zu is a zero quaternion (rotations are unit quaternions)", i);
+				return -1;
+			}
+		}
+	}
 	return 0;
 }
 

@@ -19,19 +19,33 @@ int scene_find_named(const char *names, size_t stride, size_t n, const char *nam
 
 int scene_load(const char *path, scene **out, char *err, size_t err_size)
 {
+	return scene_load_with(path, NULL, out, err, err_size);
+}
+
+int scene_load_with(const char *path, const scene_load_desc *desc, scene **out, char *err, size_t err_size)
+{
 	*out = NULL;
+	uint32_t ts = desc ? desc->texture_size : 0;
+	if (ts && (ts < 4 || ts > 4096 || (ts & (ts - 1))))
+		return tl_error(err, err_size, TL_ERR_ARG, "texture size %u: use a power of two from 4 to 4096", ts);
 	size_t plen = strlen(path);
-	if ((plen > 5 && !strcmp(path + plen - 5, ".gltf")) || (plen > 4 && !strcmp(path + plen - 4, ".glb")))
-		return scene_from_gltf(path, out, err, err_size);
+	if ((plen > 5 && !strcmp(path + plen - 5, ".gltf")) || (plen > 4 && !strcmp(path + plen - 4, ".glb"))) {
+		int rc = scene_from_gltf(path, ts, out, err, err_size);
+		if (rc)
+			scene_err_one_line(err, err_size);
+		return rc;
+	}
 	char *buf = NULL;
 	size_t len = 0;
 	int rc = tl_read_file(path, 64u << 20, &buf, &len, err, err_size);
 	if (rc == TL_ERR_INPUT && !tl_is_file(path))
 		snprintf(err, err_size, "%s: cannot open scene file: %s (built-in scenes are in scenes/; see 'taslab scenes')", path,
 			 strerror(errno ? errno : ENOENT));
-	if (rc)
+	if (rc) {
+		scene_err_one_line(err, err_size);
 		return rc;
-	rc = scene_load_from_memory(buf, len, path, out, err, err_size);
+	}
+	rc = scene_parse_memory(buf, len, path, ts, out, err, err_size);
 	free(buf);
 	return rc;
 }

@@ -24,7 +24,7 @@
 /* A scene around a bare glTF file (`taslab render --scene model.gltf`): the asset on a floor, a sun, a key
  * spot and a fill light scaled to the asset's bounds at t = 0, and two camera paths framing the bounds:
  * `orbit` (moving, a 90 degree arc over 5 s) and `front` (stationary), plus the asset's own cameras. */
-int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
+int scene_from_gltf(const char *path, uint32_t texture_size, scene **out, char *err, size_t err_size)
 {
 	scene *s = calloc(1, sizeof *s);
 	tlm_mat4 *world = NULL;
@@ -41,7 +41,7 @@ int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
 	s->exposure = 1.0f;
 	s->ambient[0] = s->ambient[1] = s->ambient[2] = 0.03f;
 	s->sky[0] = 0.05f, s->sky[1] = 0.06f, s->sky[2] = 0.08f;
-	s->texture_size = 1024;
+	s->texture_size = texture_size ? texture_size : 1024;
 	s->shadow_map_size = 1024;
 	int rc = gltf_append(s, path, -1, NULL, err, err_size);
 	if (rc)
@@ -59,6 +59,12 @@ int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
 			tlm_vec3 p = tlm_v3(k & 1 ? m->bounds_max.x : m->bounds_min.x, k & 2 ? m->bounds_max.y : m->bounds_min.y,
 					    k & 4 ? m->bounds_max.z : m->bounds_min.z);
 			p = tlm_mat4_mul_point(world[i], p);
+			if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+				snprintf(err, err_size, "%s: object %s is not finite at t = 0 (transforms too large)", path,
+					 s->objects[i].name);
+				rc = TL_ERR_INPUT;
+				goto fail;
+			}
 			lo = tlm_v3(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
 			hi = tlm_v3(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
 		}
@@ -70,6 +76,12 @@ int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size)
 	}
 	tlm_vec3 c = tlm_v3_scale(tlm_v3_add(lo, hi), 0.5f);
 	float r = fmaxf(0.5f * tlm_v3_length(tlm_v3_sub(hi, lo)), 1e-3f);
+	/* The lights and cameras below scale with r (the key light with (3r)^2, the far plane with ~50 r). */
+	if (!isfinite(c.x + c.y + c.z) || !isfinite(100.0f * r * r)) {
+		snprintf(err, err_size, "%s: the asset is too large to frame in float (bounding radius %g)", path, (double)r);
+		rc = TL_ERR_INPUT;
+		goto fail;
+	}
 	/* floor */
 	GROW(s->meshes, s->mesh_count, 1);
 	GROW(s->materials, s->material_count, 1);

@@ -17,6 +17,7 @@ typedef struct jp {
 	const char *file;
 	char *err;
 	size_t err_size;
+	uint32_t texture_size; /* scene_load_desc.texture_size: replaces the file's texture_size unless 0 */
 } jp;
 
 /* Formats "FILE: PATH: message" into the error buffer; returns TL_ERR_INPUT. */
@@ -39,11 +40,18 @@ int jbool(jp *c, json_t *obj, const char *key, const char *path, bool def, bool 
 /* A scene name: 1..SCENE_NAME_MAX-1 characters of [A-Za-z0-9_.-]. */
 int jname(jp *c, const char *s, const char *p, char out[SCENE_NAME_MAX]);
 
+/* Replaces control characters (a newline in a file name or in a library's message) by spaces, so that every
+ * message stays one line. */
+void scene_err_one_line(char *err, size_t err_size);
+
 /* Index of the entry called `name` in an array of structs starting with a name (stride bytes apart), or -1. */
 int scene_find_named(const char *names, size_t stride, size_t n, const char *name);
 #define SCENE_FIND(arr, n, key) scene_find_named((arr)[0].name, sizeof((arr)[0]), (n), (key))
 
-/* A scene around a bare .gltf/.glb file (scene_gltf.c). */
-int scene_from_gltf(const char *path, scene **out, char *err, size_t err_size);
+/* A scene around a bare .gltf/.glb file (scene_gltf.c), with textures of texture_size (0: the default). */
+int scene_from_gltf(const char *path, uint32_t texture_size, scene **out, char *err, size_t err_size);
+/* scene_load_from_memory with a texture size override (0: none). */
+int scene_parse_memory(const char *json, size_t len, const char *origin, uint32_t texture_size, scene **out, char *err,
+		       size_t err_size);
 
 #endif

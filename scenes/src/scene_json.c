@@ -84,8 +84,9 @@ int jarr_floats(jp *c, json_t *v, const char *p, int n, float *out)
 		return jfail(c, p, "expected an array of %d numbers", n);
 	for (int i = 0; i < n; i++) {
 		json_t *e = json_array_get(v, (size_t)i);
-		if (!json_is_number(e) || !isfinite(json_number_value(e)))
-			return jfail(c, p, "element %d is not a finite number", i);
+		/* finite as a float too: 1e39 is a valid JSON number but infinity after the conversion */
+		if (!json_is_number(e) || !isfinite((float)json_number_value(e)))
+			return jfail(c, p, "element %d is not a finite number (in float range, |x| < 3.4e38)", i);
 		out[i] = (float)json_number_value(e);
 	}
 	return 0;
@@ -146,6 +147,13 @@ int jbool(jp *c, json_t *obj, const char *key, const char *path, bool def, bool 
 		return jfail(c, p, "expected true or false");
 	*out = json_is_true(v);
 	return 0;
+}
+
+void scene_err_one_line(char *err, size_t err_size)
+{
+	for (size_t i = 0; i < err_size && err[i]; i++)
+		if ((unsigned char)err[i] < 0x20 || err[i] == 0x7f)
+			err[i] = ' ';
 }
 
 int jname(jp *c, const char *s, const char *p, char out[SCENE_NAME_MAX])

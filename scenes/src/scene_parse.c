@@ -29,6 +29,10 @@ static int parse_rotation(jp *c, json_t *obj, const char *path, tlm_quat *out)
 		subpath(p, path, "rotation");
 		if (jarr_floats(c, q, p, 4, v))
 			return TL_ERR_INPUT;
+		/* a unit quaternion, normalised here; a zero one has no rotation to normalise to */
+		if (!(sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]) >= 1e-6f))
+			return jfail(c, p, "[%g, %g, %g, %g] is not a rotation quaternion (x, y, z, w; not all zero)",
+				     (double)v[0], (double)v[1], (double)v[2], (double)v[3]);
 		*out = tlm_quat_normalize((tlm_quat){v[0], v[1], v[2], v[3]});
 	} else if (e) {
 		subpath(p, path, "rotation_deg");
@@ -49,6 +53,11 @@ static int parse_trs(jp *c, json_t *obj, const char *path, tlm_trs *trs)
 	json_t *s = json_object_get(obj, "scale");
 	if (json_is_number(s)) {
 		float k = (float)json_number_value(s);
+		if (!isfinite(k)) {
+			char p[PATH_MAX_LEN];
+			subpath(p, path, "scale");
+			return jfail(c, p, "not a finite number (in float range, |x| < 3.4e38)");
+		}
 		trs->s = tlm_v3(k, k, k);
 	} else if (jv3(c, obj, "scale", path, tlm_v3(1, 1, 1), 0, &trs->s)) {
 		return TL_ERR_INPUT;
@@ -97,6 +106,16 @@ static int parse_track(jp *c, json_t *m, const char *path, const char *key, anim
 	return 0;
 }
 
+/* Rotation axes of spin and orbit: a zero axis has no direction (evaluation would silently use +Y). */
+static int nonzero_axis(jp *c, tlm_vec3 axis, const char *path)
+{
+	char p[PATH_MAX_LEN];
+	subpath(p, path, "axis");
+	if (!(tlm_v3_length(axis) >= 1e-6f))
+		return jfail(c, p, "must not be the zero vector");
+	return 0;
+}
+
 static int parse_motion(jp *c, json_t *m, const char *path, anim_motion *out)
 {
 	const char *type;
@@ -113,7 +132,7 @@ static int parse_motion(jp *c, json_t *m, const char *path, anim_motion *out)
 		out->kind = ANIM_MOTION_SPIN;
 		if (jkeys(c, m, path, k) || jv3(c, m, "axis", path, tlm_v3(0, 1, 0), 0, &out->axis) ||
 		    jnum(c, m, "rate_deg_s", path, 90, -big, big, &out->rate_deg_s) ||
-		    jnum(c, m, "phase_deg", path, 0, -big, big, &out->phase_deg))
+		    jnum(c, m, "phase_deg", path, 0, -big, big, &out->phase_deg) || nonzero_axis(c, out->axis, path))
 			return TL_ERR_INPUT;
 	} else if (!strcmp(type, "orbit")) {
 		static const char *const k[] = {"type", "axis", "center", "radius", "rate_deg_s", "phase_deg", "start_s", NULL};
@@ -122,7 +141,7 @@ static int parse_motion(jp *c, json_t *m, const char *path, anim_motion *out)
 		    jv3(c, m, "center", path, tlm_v3(0, 0, 0), 0, &out->center) ||
 		    jnum(c, m, "radius", path, 1, 0, big, &out->radius) ||
 		    jnum(c, m, "rate_deg_s", path, 30, -big, big, &out->rate_deg_s) ||
-		    jnum(c, m, "phase_deg", path, 0, -big, big, &out->phase_deg))
+		    jnum(c, m, "phase_deg", path, 0, -big, big, &out->phase_deg) || nonzero_axis(c, out->axis, path))
 			return TL_ERR_INPUT;
 	} else if (!strcmp(type, "bob")) {
 		static const char *const k[] = {"type", "amplitude", "frequency_hz", "phase_deg", "start_s", NULL};
@@ -263,7 +282,7 @@ static int parse_textures(jp *c, scene *s, json_t *root)
 		    jvec(c, d, "b", p, 4, one, desc.b) || jnum(c, d, "strength", p, 4, 0, 1000, &desc.strength) ||
 		    jnum(c, d, "seed", p, 1, 0, 4294967295.0f, &seed))
 			return TL_ERR_INPUT;
-		desc.seed = (uint32_t)seed;
+		desc.seed = seed >= 4294967295.0f ? UINT32_MAX : (uint32_t)seed; /* the float rounds up to 2^32 */
 		desc.pattern = procgen_pattern_from_string(pat);
 		desc.output = procgen_output_from_string(outp);
 		char pp[PATH_MAX_LEN];
@@ -276,6 +295,12 @@ static int parse_textures(jp *c, scene *s, json_t *root)
 			return jfail(c, pp, "unknown output '%s' (use color, normal, metal_rough or occlusion)", outp);
 		}
 		tex->srgb = desc.output == PROCGEN_OUTPUT_COLOR;
+		size_t same = 0;
+		for (size_t i = 0; i < s->texture_count; i++)
+			same += s->textures[i].srgb == tex->srgb;
+		if (same >= SCENE_MAX_TEXTURES)
+			return jfail(c, p, "more than %d %s textures (the renderer's texture array limit)", SCENE_MAX_TEXTURES,
+				     tex->srgb ? "colour" : "linear");
 		tex->rgba = malloc((size_t)s->texture_size * s->texture_size * 4);
 		if (!tex->rgba)
 			return TL_ERR_NOMEM;
@@ -517,6 +542,8 @@ static int parse_intensity_keys(jp *c, json_t *light, const char *p, scene_light
 			return jfail(c, pp, "times and values must be numbers");
 		l->intensity_times[i] = (float)json_number_value(ti);
 		l->intensity_values[i] = (float)json_number_value(vi);
+		if (!isfinite(l->intensity_times[i]) || !isfinite(l->intensity_values[i]))
+			return jfail(c, pp, "times and values must be finite numbers (in float range, |x| < 3.4e38)");
 		if (l->intensity_values[i] < 0 || (i && l->intensity_times[i] <= l->intensity_times[i - 1]))
 			return jfail(c, pp, "values must be >= 0 and times strictly increasing");
 	}
@@ -682,6 +709,8 @@ static int parse_root(jp *c, scene *s, json_t *root)
 	s->shadow_map_size = (uint32_t)ss;
 	if ((s->texture_size & (s->texture_size - 1)) || (float)s->texture_size != ts)
 		return jfail(c, "$.texture_size", "must be a power of two");
+	if (c->texture_size)
+		s->texture_size = c->texture_size;
 	int rc;
 	if ((rc = parse_textures(c, s, root)) || (rc = parse_materials(c, s, root)) || (rc = parse_meshes(c, s, root)) ||
 	    (rc = parse_objects(c, s, root)) || (rc = parse_assets(c, s, root)) || (rc = parse_lights(c, s, root)) ||
@@ -700,12 +729,19 @@ static int parse_root(jp *c, scene *s, json_t *root)
 
 int scene_load_from_memory(const char *json, size_t len, const char *origin, scene **out, char *err, size_t err_size)
 {
-	jp c = {origin, err, err_size};
+	return scene_parse_memory(json, len, origin, 0, out, err, err_size);
+}
+
+int scene_parse_memory(const char *json, size_t len, const char *origin, uint32_t texture_size, scene **out, char *err,
+		       size_t err_size)
+{
+	jp c = {origin, err, err_size, texture_size};
 	json_error_t je;
 	*out = NULL;
 	json_t *root = json_loadb(json, len, JSON_REJECT_DUPLICATES, &je);
 	if (!root) {
 		snprintf(err, err_size, "%s:%d:%d: not valid JSON: %s", origin, je.line, je.column, je.text);
+		scene_err_one_line(err, err_size);
 		return TL_ERR_INPUT;
 	}
 	scene *s = calloc(1, sizeof *s);
@@ -720,6 +756,7 @@ int scene_load_from_memory(const char *json, size_t len, const char *origin, sce
 	if (rc == TL_ERR_NOMEM)
 		snprintf(err, err_size, "%s: out of memory while loading the scene", origin);
 	if (rc) {
+		scene_err_one_line(err, err_size);
 		scene_destroy(&s);
 		return rc;
 	}

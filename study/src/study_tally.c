@@ -613,7 +613,7 @@ close:
 		else
 			tl_atomic_abort(&outs[k]);
 	}
-	if (rc == TL_OK) {
+	if (rc == TL_OK && !td->no_plot) {
 		/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). */
 		snprintf(path, sizeof path, "%s/fig3.gp", td->out);
 		mtr_plot plot;

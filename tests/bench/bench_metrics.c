@@ -1,16 +1,30 @@
-/* bench_metrics.c — compute-only throughput of mtr_frame_compare on two 1920x1080 float RGB frames (from
- * PNG files, or synthetic), against a plain memory-bandwidth measurement over the same two buffers:
- * a multithreaded read of every float (the least any comparison must do). Medians of 9. Not a test.
- *   bench_metrics [A.png B.png] */
+/* bench_metrics.c — compute-only speed of the metrics on one 1920x1080 frame pair (from PNG files, or synthetic)
+ * with its previous pair (flicker), medians of `runs` (default 9). Not a test. Prints:
+ *  - the whole comparison (every metric, an mtr_comparer as `metrics diff` uses it) per pair, and each metric alone;
+ *  - LDR-FLIP alone (mtr_flip_compute with its error map) on 1 and 2 threads, against NVIDIA's FLIP tool's 1.14 s /
+ *    0.60 s per 1080p pair on this kind of 2-core machine (../shared/reference/flip/README.md);
+ *  - a plain multithreaded read of the same four float buffers (vectorised, independent partial sums: the least any
+ *    comparison must do) and the comparison's speed as a share of it.
+ *   bench_metrics [--runs N] [--threads N] [A.png B.png]
+ * Older binaries (before the plug-in registry) print only the first lines; scripts/bench-metrics parses by key. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
+/* The same source also builds against the code before the plug-in registry (scripts/bench-metrics --before REV),
+ * where only mtr_frame_compare exists. */
+#if __has_include("taslab/metrics_flip.h")
+#include "taslab/metrics_flip.h"
+#define HAVE_REGISTRY 1
+#else
+#define HAVE_REGISTRY 0
+#endif
 
 static double now(void)
 {
@@ -25,77 +39,181 @@ static int cmpd(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+static double median(double *t, int n)
+{
+	qsort(t, (size_t)n, sizeof *t, cmpd);
+	return t[n / 2];
+}
+
 typedef struct rd {
-	const float *a, *b;
-	size_t n;
-	double sum;
+	const float *buf[4];
+	size_t lo, hi;
+	float sum;
 } rd;
 
 static void *read_part(void *p)
 {
 	rd *r = p;
+	float acc[16] = {0};
+	for (int k = 0; k < 4; k++) {
+		const float *v = r->buf[k];
+		size_t i = r->lo;
+		for (; i + 16 <= r->hi; i += 16)
+			for (int u = 0; u < 16; u++)
+				acc[u] += v[i + (size_t)u];
+		for (; i < r->hi; i++)
+			acc[0] += v[i];
+	}
 	float s = 0;
-	for (size_t i = 0; i < r->n; i++)
-		s += r->a[i] + r->b[i];
+	for (int u = 0; u < 16; u++)
+		s += acc[u];
 	r->sum = s;
 	return NULL;
 }
 
 int main(int argc, char **argv)
 {
+	int runs = 9, nt = 0;
+	const char *files[2] = {NULL, NULL};
+	int nf = 0;
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--runs") && i + 1 < argc)
+			runs = atoi(argv[++i]);
+		else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
+			nt = atoi(argv[++i]);
+		else if (nf < 2)
+			files[nf++] = argv[i];
+	}
+	if (runs < 1 || runs > 99)
+		runs = 9;
+	if (nt <= 0) {
+		long cores = sysconf(_SC_NPROCESSORS_ONLN);
+		nt = cores > 0 ? (int)(cores < 64 ? cores : 64) : 1;
+	}
 	uint32_t w = 1920, h = 1080;
 	size_t n = (size_t)w * h * 3;
-	float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
-	if (argc == 3) {
+	float *buf[4];
+	for (int k = 0; k < 4; k++)
+		if (!(buf[k] = malloc(n * sizeof(float))))
+			return 1;
+	if (nf == 2) {
 		char err[512];
 		uint8_t *pa, *pb;
 		uint32_t w2, h2;
-		if (imageio_read_rgb8(argv[1], &w, &h, &pa, err, sizeof err) || imageio_read_rgb8(argv[2], &w2, &h2, &pb, err, sizeof err) ||
-		    w != w2 || h != h2 || (size_t)w * h * 3 != n) {
+		if (imageio_read_rgb8(files[0], &w, &h, &pa, err, sizeof err) ||
+		    imageio_read_rgb8(files[1], &w2, &h2, &pb, err, sizeof err) || w != w2 || h != h2 ||
+		    (size_t)w * h * 3 != n) {
 			fprintf(stderr, "bench_metrics: need two 1920x1080 images (%s)\n", err);
 			return 1;
 		}
 		for (size_t i = 0; i < n; i++)
-			a[i] = pa[i], b[i] = pb[i];
+			buf[0][i] = pa[i], buf[1][i] = pb[i];
 		free(pa);
 		free(pb);
 	} else {
 		for (size_t i = 0; i < n; i++)
-			a[i] = (float)(i % 251), b[i] = (float)((i * 7) % 253);
+			buf[0][i] = (float)(i % 251), buf[1][i] = (float)((i * 7) % 253);
 	}
-	mtr_image A = {w, h, a}, B = {w, h, b};
-	float *map = malloc((size_t)w * h * sizeof *map);
-	double tc[9], tr[9];
-	long cores = sysconf(_SC_NPROCESSORS_ONLN);
-	int nt = cores > 0 ? (int)cores : 1;
-	for (int k = 0; k < 9; k++) {
-		mtr_frame_stats s;
-		char err[256];
-		double t0 = now();
-		mtr_frame_compare(&A, &B, &A, &B, map, 0, &s, err, sizeof err);
-		tc[k] = now() - t0;
+	/* The previous pair: the same frames one pixel to the left (distinct buffers, as in a sequence). */
+	for (size_t i = 0; i < n; i++) {
+		buf[2][i] = buf[0][i >= 3 ? i - 3 : i];
+		buf[3][i] = buf[1][i >= 3 ? i - 3 : i];
+	}
+	mtr_image A = {w, h, buf[0]}, B = {w, h, buf[1]}, Ap = {w, h, buf[2]}, Bp = {w, h, buf[3]};
+	double *t = malloc(sizeof(double) * (size_t)runs);
+	char err[256];
+
+	/* Plain read of the four buffers on nt threads. */
+	for (int r = 0; r < runs; r++) {
 		pthread_t th[64];
 		rd parts[64];
-		t0 = now();
-		for (int t = 0; t < nt && t < 64; t++) {
-			size_t lo = n * t / nt, hi = n * (t + 1) / nt;
-			parts[t] = (rd){a + lo, b + lo, hi - lo, 0};
-			pthread_create(&th[t], NULL, read_part, &parts[t]);
+		double t0 = now();
+		for (int k = 0; k < nt; k++) {
+			parts[k] = (rd){{buf[0], buf[1], buf[2], buf[3]}, n * (size_t)k / (size_t)nt, n * (size_t)(k + 1) / (size_t)nt, 0};
+			if (k)
+				pthread_create(&th[k], NULL, read_part, &parts[k]);
 		}
-		for (int t = 0; t < nt && t < 64; t++)
-			pthread_join(th[t], NULL);
-		tr[k] = now() - t0;
+		read_part(&parts[0]);
+		for (int k = 1; k < nt; k++)
+			pthread_join(th[k], NULL);
+		t[r] = now() - t0;
 	}
-	qsort(tc, 9, sizeof *tc, cmpd);
-	qsort(tr, 9, sizeof *tr, cmpd);
-	double bytes = 2.0 * n * sizeof(float); /* current pair; the previous pair (flicker) adds the same again */
-	printf("compare (all statistics incl. SSIM, percentiles, flicker): %.1f ms/pair, %.2f GB/s of input\n", tc[4] * 1e3,
-	       2 * bytes / tc[4] / 1e9);
-	printf("plain read of the same buffers (%d threads):              %.1f ms,      %.2f GB/s\n", nt, tr[4] * 1e3,
-	       bytes / tr[4] / 1e9);
-	printf("ratio: compare runs at %.1f%% of the read bandwidth\n", 100.0 * (2 * bytes / tc[4]) / (bytes / tr[4]));
-	free(a);
-	free(b);
+	const double bytes = 4.0 * (double)n * sizeof(float), t_read = median(t, runs);
+
+	/* The one-shot API (all metrics; allocates per call), the same call before and after the registry. */
+	{
+		mtr_frame_stats s;
+		mtr_frame_compare(&A, &B, &Ap, &Bp, NULL, nt, &s, err, sizeof err);
+		for (int r = 0; r < runs; r++) {
+			double t0 = now();
+			if (mtr_frame_compare(&A, &B, &Ap, &Bp, NULL, nt, &s, err, sizeof err)) {
+				fprintf(stderr, "bench_metrics: %s\n", err);
+				return 1;
+			}
+			t[r] = now() - t0;
+		}
+		printf("frame_compare_ms %.2f  (mtr_frame_compare, all metrics of this version)\n", median(t, runs) * 1e3);
+	}
+	printf("read_ms %.2f  (plain %d-thread read of the same 4 float buffers, %.2f GB/s)\n", t_read * 1e3, nt,
+	       bytes / t_read / 1e9);
+#if HAVE_REGISTRY
+	/* The whole comparison, as `metrics diff` runs it (one comparer, kept across frames). */
+	const char *sel[] = {"all", "maxrgb", "psnr", "ssim", "flicker", "flip"};
+	double t_all = 0;
+	for (size_t m = 0; m < sizeof sel / sizeof sel[0]; m++) {
+		mtr_comparer *c = NULL;
+		mtr_compare_desc d = {.metrics = sel[m], .threads = nt};
+		if (mtr_comparer_create(&d, &c, err, sizeof err)) {
+			fprintf(stderr, "bench_metrics: %s\n", err);
+			return 1;
+		}
+		mtr_frame_stats s;
+		mtr_comparer_frame(c, &A, &B, &Ap, &Bp, NULL, NULL, &s, err, sizeof err); /* warm-up: allocations */
+		for (int r = 0; r < runs; r++) {
+			double t0 = now();
+			if (mtr_comparer_frame(c, &A, &B, &Ap, &Bp, NULL, NULL, &s, err, sizeof err)) {
+				fprintf(stderr, "bench_metrics: %s\n", err);
+				return 1;
+			}
+			t[r] = now() - t0;
+		}
+		mtr_comparer_destroy(&c);
+		double tm = median(t, runs);
+		if (m == 0) {
+			t_all = tm;
+			printf("compare_ms %.2f  (all metrics, %d threads, per 1920x1080 pair)\n", tm * 1e3, nt);
+		} else {
+			printf("metric_ms %-8s %.2f\n", sel[m], tm * 1e3);
+		}
+	}
+	printf("compare_gbps %.3f\n", bytes / t_all / 1e9);
+	printf("compare_share_of_read_bw %.1f%%\n", 100.0 * t_read / t_all);
+
+	/* FLIP alone, 1 and 2 threads, with its error map (as the reference tool produces one). */
+	mtr_flip *f = NULL;
+	float *map = malloc((size_t)w * h * sizeof *map);
+	if (!map || mtr_flip_create(MTR_FLIP_PPD_DEFAULT, &f, err, sizeof err)) {
+		fprintf(stderr, "bench_metrics: %s\n", err);
+		return 1;
+	}
+	const double ref_s[3] = {0, 1.14, 0.60};
+	for (int threads = 1; threads <= 2; threads++) {
+		double mean;
+		mtr_flip_compute(f, w, h, buf[0], buf[1], map, threads, &mean, err, sizeof err);
+		for (int r = 0; r < runs; r++) {
+			double t0 = now();
+			mtr_flip_compute(f, w, h, buf[0], buf[1], map, threads, &mean, err, sizeof err);
+			t[r] = now() - t0;
+		}
+		double tm = median(t, runs);
+		printf("flip_%dt_ms %.2f  (NVIDIA FLIP tool %.2f s: %.1fx)\n", threads, tm * 1e3, ref_s[threads],
+		       ref_s[threads] / tm);
+	}
+	mtr_flip_destroy(&f);
 	free(map);
+#endif
+	for (int k = 0; k < 4; k++)
+		free(buf[k]);
+	free(t);
 	return 0;
 }

@@ -14,6 +14,7 @@
  *    (co)variances, computed per RGB channel over the windows that fit inside the image and averaged over
  *    pixels and channels (equals scikit-image's structural_similarity(..., gaussian_weights=True,
  *    use_sample_covariance=False, data_range=255, channel_axis=2));
+ *  - FLIP: LDR-FLIP (Andersson et al. 2020) on the display values at `ppd` pixels per degree (metrics_flip.h);
  *  - flicker (temporal difference): for frame t > 0, the max-RGB difference of the two sequences'
  *    frame-to-frame changes, f(p) = max_c |(a_t - a_t-1) - (b_t - b_t-1)|; flicker_mean = mean over pixels.
  *    Popping or flicker that one frame pair does not show (a sample reshaded late, then corrected) shows here.
@@ -40,22 +41,82 @@ typedef struct mtr_image {
 	const float *rgb; /* width * height * 3, 0..255 */
 } mtr_image;
 
+/* Statistics of one frame pair (or pooled over frames). Fields of metrics that were not computed are NAN. */
 typedef struct mtr_frame_stats {
 	double mean, p50, p95, p99, max;       /* of the max-RGB difference map */
 	double exceed[MTR_THRESHOLD_COUNT];
 	double mse, psnr, ssim;                /* psnr = INFINITY for identical images */
 	double flicker_mean;                   /* NAN when there is no previous frame */
 	uint32_t max_x, max_y;                 /* where the max difference is (first in row order) */
+	/* LDR-FLIP (metrics_flip.h): mean per-pixel error, and the pooled values NVIDIA's tool prints: weighted
+	 * median and quartiles (weights = the error values), min, max. Per frame over its pixels; pooled over all
+	 * pixels of all frames (mtr_comparer_pool). The weighted ones come from a value-weighted histogram with a
+	 * relative bin width of 2^-12 (error below 2.5e-4 x the value); mean, min and max are exact. */
+	double flip_mean, flip_weighted_median, flip_q1_weighted, flip_q3_weighted, flip_min, flip_max;
+	uint32_t metrics;                      /* bit i set: registry metric i (mtr_metric_name(i)) was computed */
 } mtr_frame_stats;
 
-/* All statistics of one frame pair. `a_prev`/`b_prev` (both or neither may be NULL) enable flicker.
- * `map` (optional, width*height floats) receives the max-RGB difference map. `threads` <= 0: all cores. */
+/* All statistics of one frame pair: every metric of the registry with its default options. `a_prev`/`b_prev`
+ * (both or neither may be NULL) enable flicker. `map` (optional, width*height floats) receives the max-RGB
+ * difference map. `threads` <= 0: all cores. For a sequence use an mtr_comparer (it keeps its buffers). */
 int mtr_frame_compare(const mtr_image *a, const mtr_image *b, const mtr_image *a_prev, const mtr_image *b_prev,
 		      float *map, int threads, mtr_frame_stats *out, char *err, size_t err_size);
 
-/* Clip-level pooling over n frames: means of per-frame mean/p50/p95/p99/exceed/ssim/flicker (flicker over
- * the frames that have it), max of max, PSNR from the mean MSE. */
+/* Clip-level pooling over n frames: means of per-frame mean/p50/p95/p99/exceed/ssim/flicker/flip_mean (flicker
+ * over the frames that have it), max of max, PSNR from the mean MSE, FLIP min/max; the weighted FLIP percentiles
+ * need the pixels and are NAN here (an mtr_comparer pools them). Metrics no frame computed stay NAN. */
 void mtr_pool(const mtr_frame_stats *frames, size_t n, mtr_frame_stats *pooled);
+
+/* ---- metric selection (the registry: maxrgb, psnr, ssim, flicker, flip — one file each in metrics/src) ---- */
+
+/* Number of metrics in the registry; the name of metric i (NULL past the end); its index by name (-1: none). */
+int mtr_metric_count(void);
+const char *mtr_metric_name(int i);
+int mtr_metric_find(const char *name);
+/* "maxrgb,psnr,ssim,flicker,flip" into buf. */
+const char *mtr_metric_list(char *buf, size_t buf_size);
+/* Parses a comma-separated metric list ("all" or NULL/empty: every metric) into a bit mask. TL_ERR_ARG with one
+ * line naming the unknown metric and the known ones. */
+int mtr_metric_parse(const char *list, uint32_t *mask, char *err, size_t err_size);
+
+/* A metric option by name, e.g. {"ppd", 40.0} (see `taslab metrics diff --help`). */
+typedef struct mtr_option_value {
+	const char *name;
+	double value;
+} mtr_option_value;
+
+typedef struct mtr_compare_desc {
+	const char *metrics;              /* comma-separated list; NULL, "" or "all": every metric */
+	const mtr_option_value *options;  /* applied to every selected metric that declares the option */
+	size_t option_count;
+	int threads;                      /* <= 0: all cores */
+} mtr_compare_desc;
+
+/* A comparer runs the selected metrics on a sequence of frame pairs and pools them (mtr_diff_run uses one).
+ * Options unknown to every metric, values out of range and unknown metrics are TL_ERR_ARG. */
+typedef struct mtr_comparer mtr_comparer;
+int mtr_comparer_create(const mtr_compare_desc *desc, mtr_comparer **out, char *err, size_t err_size);
+/* Frees it and nulls the pointer; accepts NULL. */
+void mtr_comparer_destroy(mtr_comparer **c);
+/* One frame pair (as mtr_frame_compare; `flip_map`, optional, receives the per-pixel FLIP error). Frames of one
+ * comparer must have one size. */
+int mtr_comparer_frame(mtr_comparer *c, const mtr_image *a, const mtr_image *b, const mtr_image *a_prev,
+		       const mtr_image *b_prev, float *map, float *flip_map, mtr_frame_stats *out, char *err,
+		       size_t err_size);
+/* Pools the n frames given (mtr_pool) plus what needs the comparer's per-pixel state (FLIP weighted percentiles
+ * over all frames compared so far). */
+void mtr_comparer_pool(mtr_comparer *c, const mtr_frame_stats *frames, size_t n, mtr_frame_stats *pooled);
+/* The selected metrics: bit i for registry metric i. */
+uint32_t mtr_comparer_selected(const mtr_comparer *c);
+/* Counts of floor(d) (max-RGB difference, bin 255 includes larger) over all frames compared; NULL when maxrgb is
+ * not selected. */
+const uint64_t *mtr_comparer_histogram(const mtr_comparer *c);
+
+/* Result columns in frames.csv / summary.json order (DESIGN section 6): column i's name (NULL past the end), its
+ * value in *s (NAN when its metric was not computed), and where it goes (1: frames.csv, 2: summary.json, 3: both). */
+const char *mtr_column_name(int i);
+double mtr_column_value(int i, const mtr_frame_stats *s);
+unsigned mtr_column_where(int i);
 
 /* Percentile (0..100) of n values by linear interpolation (type 7); reorders `values`. */
 double mtr_percentile(float *values, size_t n, double pct);

@@ -1,6 +1,6 @@
 /* metrics_diff.h — `taslab metrics diff`: compare two frame sequences (run folders or image folders) and
  * write DIR/frames.csv and DIR/summary.json (names as in DESIGN section 6), optional heatmaps and plots.
- * Decoding of frame pair i+1 overlaps the statistics of pair i (a prefetch thread). */
+ * Decoding of frame pair i+1 (its two frames on two threads) overlaps the statistics of pair i. */
 #ifndef TASLAB_METRICS_DIFF_H
 #define TASLAB_METRICS_DIFF_H
 
@@ -21,10 +21,14 @@ typedef struct mtr_diff_desc {
 	const char *out;        /* output folder */
 	mtr_format format;      /* PNG: the display frames as stored; EXR: through `colour` (unquantised) */
 	const struct colour *colour;   /* required for EXR */
-	bool heatmaps;          /* DIR/heatmaps/NNNNNN.png for every frame */
+	bool heatmaps;          /* DIR/heatmaps/NNNNNN.png (max-RGB) and, with flip, DIR/heatmaps/flip/NNNNNN.png */
 	double heatmap_max;     /* colour scale maximum (code values); 0: 64 */
 	bool plots;             /* DIR/plots/ PNG plots through gnuplot (skipped with a note if gnuplot is missing) */
 	int threads;            /* <= 0: all cores */
+	const char *metrics;    /* comma-separated metrics to compute (NULL or "all": every one); the columns of the
+	                           others stay in frames.csv (empty) and summary.json (null) */
+	const mtr_option_value *options; /* metric options by name, e.g. {"ppd", 67.02} (mtr_compare_desc) */
+	size_t option_count;
 } mtr_diff_desc;
 
 typedef struct mtr_diff_result {

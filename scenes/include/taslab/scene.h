@@ -30,6 +30,14 @@ extern "C" {
 #define SCENE_MAX_SHADOW_LAYERS 48 /* directional/spot: 1 layer, point: 6 (cube faces) */
 #define SCENE_TEX_NONE (-1)
 
+/* Limits on untrusted input: files beyond them are refused with TL_ERR_INPUT and a message. */
+#define SCENE_MAX_JSON_DEPTH 64                /* nesting of [ and { in a glTF's JSON */
+#define SCENE_GLTF_MAX_JSON_BYTES (64u << 20)  /* a .gltf file, or the JSON chunk of a .glb */
+#define SCENE_GLTF_MAX_FILE_BYTES (1u << 30)   /* a .glb, and each external buffer or image file */
+#define SCENE_MAX_IMAGE_SIDE 16384             /* width and height of a glTF image, in pixels */
+#define SCENE_MAX_TEXTURES 256                 /* per colour space (sRGB, linear): Vulkan's guaranteed
+						  maxImageArrayLayers, the renderer's texture arrays */
+
 /* Vertex layout shared with the shaders (48 bytes). Tangent w = bitangent sign (glTF). */
 typedef struct scene_vertex {
 	float position[3];
@@ -172,6 +180,16 @@ typedef struct scene_camera_state {
 
 /* Loads a scene file. `err` receives "FILE: $.json.path: what is wrong" on failure. */
 int scene_load(const char *path, scene **out, char *err, size_t err_size);
+
+/* Options of scene_load_with; zero-initialised = scene_load. */
+typedef struct scene_load_desc {
+	/* Edge of every texture layer (a power of two, 4..4096) instead of the scene file's texture_size (a bare
+	 * glTF file's default: 1024); 0 keeps it. Texture memory grows with its square: small sizes make quick
+	 * previews and keep fuzzing inside its memory limit. */
+	uint32_t texture_size;
+} scene_load_desc;
+/* scene_load with options (desc may be NULL). TL_ERR_ARG for an invalid option. */
+int scene_load_with(const char *path, const scene_load_desc *desc, scene **out, char *err, size_t err_size);
 /* Same, from a JSON text already in memory (`origin` names it in messages; used by fuzzing). */
 int scene_load_from_memory(const char *json, size_t len, const char *origin, scene **out, char *err,
 			   size_t err_size);

@@ -134,6 +134,7 @@ typedef struct sty_tally_desc {
 	bool keep_flagged;        /* keep observers flagged by the catch-trial screening */
 	uint32_t bootstrap;       /* bootstrap resamples for JOD intervals (default 1000) */
 	uint64_t seed;            /* bootstrap seed */
+	bool no_plot;             /* skip the Fig. 3 plot (gnuplot; tests and fuzzing) */
 } sty_tally_desc;
 
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size);

@@ -1,0 +1,939 @@
+/* flip.c — LDR-FLIP image difference (metrics_flip.h; the `flip` metric plug-in is metric_flip.c), written from
+ * the paper:
+ *
+ *   P. Andersson, J. Nilsson, T. Akenine-Möller, M. Oskarsson, K. Åström, M. D. Fairchild,
+ *   "FLIP: A Difference Evaluator for Alternating Images", Proc. ACM CGIT 3(2), 2020 (HPG 2020),
+ *
+ * with the refinements of NVIDIA's public FLIP releases (v1.6 is the reference for the tests). Comments cite the
+ * paper's pipeline stages by name: "colour pipeline" (spatial filtering, perceptual uniform colour space, Hunt
+ * adjustment, HyAB, colour-difference re-mapping), "feature pipeline" (edge and point detection, feature difference)
+ * and "final error" (combination of the two), plus "pooling" for the statistics.
+ *
+ * Pipeline per pixel (both images unless stated):
+ *   1. sRGB (0..255) -> linear RGB (sRGB EOTF) -> XYZ (D65) -> YyCxCz opponent space (linearised CIELAB):
+ *        Yy = 116 Y/Yn - 16, Cx = 500 (X/Xn - Y/Yn), Cz = 200 (Y/Yn - Z/Zn).
+ *   2. Spatial filtering of each opponent channel with the contrast sensitivity function of that channel
+ *      (colour pipeline, "spatial filtering"). The CSFs are (sums of) Gaussians in frequency,
+ *        S(f) = a1 exp(-b1 f^2) + a2 exp(-b2 f^2),
+ *      whose spatial-domain counterparts are Gaussians a sqrt(pi/b) exp(-pi^2 x^2 / b), x in degrees
+ *      (x = pixel offset / ppd). Constants: achromatic a1=1, b1=0.0047; red-green a1=1, b1=0.0053; blue-yellow
+ *      a1=34.1, b1=0.04, a2=13.5, b2=0.025. Kernel radius = ceil(3 * sqrt(max b / (2 pi^2)) * ppd) (3 standard
+ *      deviations of the widest Gaussian). The 2D kernel is sum_i a_i sqrt(pi/b_i) exp(-pi^2 r^2 / b_i) normalised
+ *      to unit sum (as in FLIP v1.x); each term is separable, so the blue-yellow channel is filtered as the sum of two
+ *      separable passes with 1D kernels sqrt(a_i sqrt(pi/b_i)) exp(-pi^2 x^2 / b_i), normalised jointly.
+ *   3. Back to linear RGB, clamp to [0,1] (colour pipeline: keeps filtered colours inside the display gamut),
+ *      to CIELAB (D65), Hunt adjustment a' = 0.01 L a, b' = 0.01 L b (colour pipeline, "Hunt effect").
+ *   4. HyAB distance |dL| + sqrt(da'^2 + db'^2), raised to q_c = 0.7, and re-mapped to [0,1] with the
+ *      compression function of the paper (p_c = 0.4, p_t = 0.95), normalised by c_max = HyAB(Hunt(green),
+ *      Hunt(blue))^q_c, the largest difference between two colours of the sRGB gamut after the Hunt adjustment.
+ *   5. Feature pipeline on the achromatic channel normalised to [0,1], (Yy + 16) / 116 = Y/Yn (linear luminance):
+ *      edges = first derivative of a Gaussian, points = second derivative, sigma = 0.5 * 0.082 * ppd pixels,
+ *      radius ceil(3 sigma); positive weights of each derivative kernel sum to 1, negative weights to -1 (the
+ *      Gaussian itself sums to 1). Edge/point magnitudes are |(d/dx, d/dy)|; the feature difference is
+ *        dE_f = ( max(| |e_r| - |e_t| |, | |p_r| - |p_t| |) / sqrt(2) )^q_f,  q_f = 0.5.
+ *   6. Final error dE = dE_c^(1 - dE_f).
+ * Borders: clamp-to-edge (pixel indices outside the image take the nearest edge pixel), for every filter. Determined
+ * empirically: with clamp-to-edge a double-precision direct-2D-convolution version matches the reference means to
+ * ~1e-9, while mirror (with or without edge repeat) and zero padding are off by 3e-4..8e-3.
+ *
+ * Implementation notes (speed): all filters are applied separably, vertical pass first then horizontal, over
+ * column strips of at most STRIP_W output pixels so the working set stays in L2. The vertical pass of one output
+ * row reads its (2R+1) converted input rows from a ring buffer (each input row is converted once per strip). Inner
+ * loops are written over fixed-size chunks of VW floats with no branches so that gcc -O2 vectorises them; the
+ * transcendental functions (pow, cbrt, sqrt) are replaced by vectorisable float approximations accurate to a few
+ * 1e-7 relative (the per-pixel result stays within ~5e-6 of a double-precision evaluation). For integral inputs the
+ * sRGB EOTF is a 256-entry table. On x86-64 the hot functions also get an AVX2 clone (see FLIP_TARGET_CLONES).
+ */
+#include "taslab/metrics_flip.h"
+#include "taslab/tl_error.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* Chunk width of the vectorised loops (floats). All row buffers are padded to a multiple of it. */
+#define VW 8
+/* On x86-64 Linux with gcc, the hot row functions are compiled twice, for AVX2 and for the baseline ISA, and the
+ * variant is picked at load time (ifunc). Plain C everywhere else, with -DFLIP_NO_CLONES, and under ThreadSanitizer
+ * (whose runtime is not initialised yet when ifunc resolvers run). Both variants give the same results: no FMA
+ * contraction in ISO C mode, and vectorisation does not reorder floating-point operations. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) &&                           \
+    !defined(FLIP_NO_CLONES) && !defined(__SANITIZE_THREAD__)
+#define FLIP_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FLIP_TARGET_CLONES
+#endif
+
+/* Maximum number of output columns processed per strip. */
+#define STRIP_W 512
+/* Largest accepted pixels-per-degree value (kernel radius ~0.135 ppd; scratch memory grows with its square). */
+#define FLIP_MAX_PPD 1000.0
+/* Largest accepted thread count. */
+#define FLIP_MAX_THREADS 256
+
+/* ---- constants (paper: colour pipeline) ---- */
+
+/* CSF parameters per opponent channel (achromatic, red-green, blue-yellow). */
+static const double CSF_A1[3] = {1.0, 1.0, 34.1};
+static const double CSF_B1[3] = {0.0047, 0.0053, 0.04};
+static const double CSF_A2[3] = {0.0, 0.0, 13.5};
+static const double CSF_B2[3] = {1e-5, 1e-5, 0.025};
+
+/* Colour-difference exponent and compression parameters. */
+#define FLIP_QC 0.7
+#define FLIP_PC 0.4
+#define FLIP_PT 0.95
+/* Feature pipeline: kernel width in degrees and exponent. */
+#define FLIP_GW 0.082
+#define FLIP_QF 0.5
+
+/* Linear sRGB -> XYZ (D65), exact rational form of the IEC 61966-2-1 matrix. */
+static const double RGB2XYZ[9] = {
+    10135552.0 / 24577794.0, 8788810.0 / 24577794.0, 4435075.0 / 24577794.0,
+    2613072.0 / 12288897.0,  8788810.0 / 12288897.0, 887015.0 / 12288897.0,
+    1425312.0 / 73733382.0,  8788810.0 / 73733382.0, 70074185.0 / 73733382.0,
+};
+
+/* ---- the filter object ---- */
+
+struct mtr_flip {
+	double ppd;
+	int r;  /* CSF kernel radius */
+	int fr; /* feature kernel radius */
+	int R;  /* max(r, fr): ring height is 2R+1, horizontal halo is R */
+	/* Half kernels, index k = |offset|, length R+1, zero beyond their own radius. */
+	float *wy, *wcx, *wcz1, *wcz2; /* CSF: achromatic, red-green, blue-yellow (two Gaussians) */
+	float *fg, *fdg, *fddg;        /* feature: Gaussian, first derivative (weight at +k; -k is its negative),
+	                                  second derivative */
+	/* Per-pixel constants (single precision, computed in double). */
+	float lin2opp[9];  /* linear RGB -> (Y/Yn, X/Xn - Y/Yn, Y/Yn - Z/Zn) */
+	float opp2rgb[9];  /* filtered (Y/Yn, X/Xn - Y/Yn, Y/Yn - Z/Zn) -> linear RGB */
+	float rgb2xyzn[9]; /* linear RGB -> (X/Xn, Y/Yn, Z/Zn) */
+	float cmax_lo;     /* p_c * c_max */
+	float slope_lo;    /* p_t / (p_c c_max) */
+	float slope_hi;    /* (1 - p_t) / (c_max - p_c c_max) */
+	float srgb_lut[256];
+};
+
+static void set_err(char *err, size_t err_size, const char *fmt, ...)
+{
+	if (!err || err_size == 0)
+		return;
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(err, err_size, fmt, ap);
+	va_end(ap);
+}
+
+/* ---- double-precision helpers used only at set-up ---- */
+
+static void mat3_inv(const double *a, double *o)
+{
+	double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8], c02 = a[3] * a[7] - a[4] * a[6];
+	double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+	o[0] = c00 / det;
+	o[1] = (a[2] * a[7] - a[1] * a[8]) / det;
+	o[2] = (a[1] * a[5] - a[2] * a[4]) / det;
+	o[3] = c01 / det;
+	o[4] = (a[0] * a[8] - a[2] * a[6]) / det;
+	o[5] = (a[2] * a[3] - a[0] * a[5]) / det;
+	o[6] = c02 / det;
+	o[7] = (a[1] * a[6] - a[0] * a[7]) / det;
+	o[8] = (a[0] * a[4] - a[1] * a[3]) / det;
+}
+
+static void mat3_mul(const double *a, const double *b, double *o)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			o[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+}
+
+static double srgb_eotf(double c)
+{
+	return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+/* CIELAB companding function f(t). */
+static double lab_f(double t)
+{
+	const double d = 6.0 / 29.0;
+	return t > d * d * d ? cbrt(t) : t / (3.0 * d * d) + 4.0 / 29.0;
+}
+
+/* Linear RGB -> Hunt-adjusted CIELAB (colour pipeline, Hunt effect), double precision. */
+static void rgb_to_hunt_lab(const double rgb[3], double lab[3])
+{
+	double white[3], xyz[3];
+	for (int i = 0; i < 3; i++) {
+		white[i] = RGB2XYZ[3 * i] + RGB2XYZ[3 * i + 1] + RGB2XYZ[3 * i + 2];
+		xyz[i] = RGB2XYZ[3 * i] * rgb[0] + RGB2XYZ[3 * i + 1] * rgb[1] + RGB2XYZ[3 * i + 2] * rgb[2];
+	}
+	double fx = lab_f(xyz[0] / white[0]), fy = lab_f(xyz[1] / white[1]), fz = lab_f(xyz[2] / white[2]);
+	double L = 116.0 * fy - 16.0;
+	lab[0] = L;
+	lab[1] = 0.01 * L * 500.0 * (fx - fy);
+	lab[2] = 0.01 * L * 200.0 * (fy - fz);
+}
+
+/* ---- creation ---- */
+
+int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size)
+{
+	if (!out) {
+		set_err(err, err_size, "flip: NULL output pointer");
+		return TL_ERR_ARG;
+	}
+	*out = NULL;
+	if (!(ppd > 0.0) || !(ppd <= FLIP_MAX_PPD)) {
+		set_err(err, err_size, "flip: pixels per degree must be in (0, %g], got %g", FLIP_MAX_PPD, ppd);
+		return TL_ERR_ARG;
+	}
+	/* Colour pipeline, spatial filtering: radius = 3 standard deviations of the widest spatial Gaussian; the
+	 * Gaussian exp(-pi^2 x^2 / b) has variance b / (2 pi^2). */
+	double bmax = 0.0;
+	for (int c = 0; c < 3; c++) {
+		bmax = fmax(bmax, CSF_B1[c]);
+		bmax = fmax(bmax, CSF_B2[c]);
+	}
+	int r = (int)ceil(3.0 * sqrt(bmax / (2.0 * M_PI * M_PI)) * ppd);
+	/* Feature pipeline: sigma = 0.5 * 0.082 degrees, in pixels; radius 3 sigma. */
+	double sd = 0.5 * FLIP_GW * ppd;
+	int fr = (int)ceil(3.0 * sd);
+	int R = r > fr ? r : fr;
+
+	mtr_flip *f = calloc(1, sizeof *f);
+	float *kern = f ? calloc(7 * (size_t)(R + 1), sizeof(float)) : NULL;
+	if (!kern) {
+		free(f);
+		set_err(err, err_size, "flip: out of memory");
+		return TL_ERR_NOMEM;
+	}
+	f->ppd = ppd;
+	f->r = r;
+	f->fr = fr;
+	f->R = R;
+	f->wy = kern;
+	f->wcx = kern + (R + 1);
+	f->wcz1 = kern + 2 * (R + 1);
+	f->wcz2 = kern + 3 * (R + 1);
+	f->fg = kern + 4 * (R + 1);
+	f->fdg = kern + 5 * (R + 1);
+	f->fddg = kern + 6 * (R + 1);
+
+	/* CSF kernels. For each channel the 2D kernel sum_i a_i sqrt(pi/b_i) exp(-pi^2 |x|^2 / b_i) is normalised to
+	 * unit sum; with the separable 1D factors g_i(x) = sqrt(a_i sqrt(pi/b_i)) exp(-pi^2 x^2 / b_i) the 2D sum is
+	 * sum_i (sum_x g_i(x))^2, so each 1D factor is divided by the square root of that. */
+	double *g1 = malloc(3 * (size_t)(R + 1) * sizeof(double));
+	if (!g1) {
+		free(kern);
+		free(f);
+		set_err(err, err_size, "flip: out of memory");
+		return TL_ERR_NOMEM;
+	}
+	double *g2 = g1 + (R + 1), *g = g2 + (R + 1);
+	float *w1[3] = {f->wy, f->wcx, f->wcz1};
+	for (int c = 0; c < 3; c++) {
+		double s1 = 0.0, s2 = 0.0;
+		for (int k = 0; k <= R; k++) {
+			double x = k / ppd, x2 = x * x;
+			g1[k] = k <= r ? sqrt(CSF_A1[c] * sqrt(M_PI / CSF_B1[c])) * exp(-M_PI * M_PI * x2 / CSF_B1[c]) : 0.0;
+			g2[k] = k <= r ? sqrt(CSF_A2[c] * sqrt(M_PI / CSF_B2[c])) * exp(-M_PI * M_PI * x2 / CSF_B2[c]) : 0.0;
+			s1 += (k ? 2.0 : 1.0) * g1[k];
+			s2 += (k ? 2.0 : 1.0) * g2[k];
+		}
+		double norm = 1.0 / sqrt(s1 * s1 + s2 * s2);
+		for (int k = 0; k <= R; k++) {
+			w1[c][k] = (float)(g1[k] * norm);
+			if (c == 2)
+				f->wcz2[k] = (float)(g2[k] * norm);
+		}
+	}
+
+	/* Feature kernels (feature pipeline): Gaussian g, -x g, (x^2/sigma^2 - 1) g. The 2D detectors are products
+	 * with a Gaussian in the other direction; normalising g to unit sum and the positive / negative lobes of the
+	 * derivatives to +1 / -1 in 1D gives the same 2D normalisation. */
+	{
+		double gs = 0.0, dpos = 0.0, ddpos = 0.0, ddneg = 0.0;
+		for (int k = 0; k <= R; k++) {
+			g[k] = k <= fr ? exp(-(double)k * k / (2.0 * sd * sd)) : 0.0;
+			gs += (k ? 2.0 : 1.0) * g[k];
+			dpos += k * g[k]; /* positive lobe of -x g lies at x = -k */
+			double dd = ((double)k * k / (sd * sd) - 1.0) * g[k];
+			if (dd > 0.0)
+				ddpos += (k ? 2.0 : 1.0) * dd;
+			else
+				ddneg -= (k ? 2.0 : 1.0) * dd;
+		}
+		for (int k = 0; k <= R; k++) {
+			double dd = ((double)k * k / (sd * sd) - 1.0) * g[k];
+			f->fg[k] = (float)(g[k] / gs);
+			f->fdg[k] = dpos > 0.0 ? (float)(-k * g[k] / dpos) : 0.0f;
+			f->fddg[k] = (float)(dd > 0.0 ? dd / ddpos : (ddneg > 0.0 ? dd / ddneg : 0.0));
+		}
+	}
+	free(g1);
+
+	/* Colour transforms folded into 3x3 matrices. White point Xn, Yn, Zn = XYZ of linear RGB (1,1,1). */
+	double white[3], xyz2rgb[9], m[9], opp2xyz[9], tmp[9];
+	for (int i = 0; i < 3; i++)
+		white[i] = RGB2XYZ[3 * i] + RGB2XYZ[3 * i + 1] + RGB2XYZ[3 * i + 2];
+	mat3_inv(RGB2XYZ, xyz2rgb);
+	for (int j = 0; j < 3; j++) {
+		double xn = RGB2XYZ[j] / white[0], yn = RGB2XYZ[3 + j] / white[1], zn = RGB2XYZ[6 + j] / white[2];
+		m[j] = yn;          /* Yy channel, stored as Y/Yn = (Yy + 16) / 116 */
+		m[3 + j] = xn - yn; /* Cx / 500 */
+		m[6 + j] = yn - zn; /* Cz / 200 */
+		f->rgb2xyzn[j] = (float)xn;
+		f->rgb2xyzn[3 + j] = (float)yn;
+		f->rgb2xyzn[6 + j] = (float)zn;
+	}
+	for (int i = 0; i < 9; i++)
+		f->lin2opp[i] = (float)m[i];
+	/* (Y/Yn, X/Xn - Y/Yn, Y/Yn - Z/Zn) -> XYZ: X = Xn (cx + y), Y = Yn y, Z = Zn (y - cz). */
+	const double o2x[9] = {white[0], white[0], 0.0, white[1], 0.0, 0.0, white[2], 0.0, -white[2]};
+	memcpy(opp2xyz, o2x, sizeof o2x);
+	mat3_mul(xyz2rgb, opp2xyz, tmp);
+	for (int i = 0; i < 9; i++)
+		f->opp2rgb[i] = (float)tmp[i];
+
+	/* Colour pipeline, re-mapping: c_max = HyAB(Hunt(green), Hunt(blue))^q_c. */
+	{
+		const double green[3] = {0.0, 1.0, 0.0}, blue[3] = {0.0, 0.0, 1.0};
+		double lg[3], lb[3];
+		rgb_to_hunt_lab(green, lg);
+		rgb_to_hunt_lab(blue, lb);
+		double hy = fabs(lg[0] - lb[0]) + hypot(lg[1] - lb[1], lg[2] - lb[2]);
+		double cmax = pow(hy, FLIP_QC);
+		f->cmax_lo = (float)(FLIP_PC * cmax);
+		f->slope_lo = (float)(FLIP_PT / (FLIP_PC * cmax));
+		f->slope_hi = (float)((1.0 - FLIP_PT) / (cmax - FLIP_PC * cmax));
+	}
+	for (int i = 0; i < 256; i++)
+		f->srgb_lut[i] = (float)srgb_eotf(i / 255.0);
+	*out = f;
+	return 0;
+}
+
+void mtr_flip_destroy(mtr_flip **f)
+{
+	if (!f || !*f)
+		return;
+	free((*f)->wy);
+	free(*f);
+	*f = NULL;
+}
+
+/* ---- vectorisable float approximations ---- */
+
+static inline float bits_to_float(uint32_t u)
+{
+	float x;
+	memcpy(&x, &u, sizeof x);
+	return x;
+}
+
+static inline uint32_t float_to_bits(float x)
+{
+	uint32_t u;
+	memcpy(&u, &x, sizeof u);
+	return u;
+}
+
+/* Branch-free select (c ? a : b) through bit masks. A plain ?: whose operands are floating-point expressions is
+ * not if-converted by gcc under the default -ftrapping-math (the arithmetic could trap if speculated), which blocks
+ * vectorisation; this form is. */
+static inline float select_f(int c, float a, float b)
+{
+	uint32_t m = 0u - (uint32_t)(c != 0);
+	return bits_to_float((float_to_bits(a) & m) | (float_to_bits(b) & ~m));
+}
+
+/* log2(x) for positive normal x; error within ~1 ulp of the result (measured < 1.1e-6 absolute for |log2 x| <= 20,
+ * < 2e-7 near x = 1). Mantissa reduced to [sqrt(1/2), sqrt(2)), then
+ * ln(m) = 2 atanh(s), s = (m-1)/(m+1), by its odd series up to s^9. */
+static inline float fast_log2(float x)
+{
+	uint32_t u = float_to_bits(x);
+	int32_t e = (int32_t)((u >> 23) & 0xffu) - 127;
+	float m = bits_to_float((u & 0x007fffffu) | 0x3f800000u);
+	int big = m > 1.41421356f;
+	m = select_f(big, m * 0.5f, m);
+	e += big;
+	float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
+	float p = 1.0f / 9.0f;
+	p = p * s2 + 1.0f / 7.0f;
+	p = p * s2 + 1.0f / 5.0f;
+	p = p * s2 + 1.0f / 3.0f;
+	p = p * s2 + 1.0f;
+	return (float)e + s * p * 2.88539008f; /* 2 / ln 2 */
+}
+
+/* 2^x, x clamped to [-126, 127]; relative error < 1e-7 (measured). n = round(x), 2^f for f in [-0.5, 0.5] by Taylor
+ * series. */
+static inline float fast_exp2(float x)
+{
+	x = select_f(x > -126.0f, x, -126.0f); /* also maps NaN to -126 */
+	x = select_f(x < 127.0f, x, 127.0f);
+	int32_t n = (int32_t)(x + 127.5f) - 127; /* floor(x + 0.5); argument positive so truncation is floor */
+	float t = (x - (float)n) * 0.693147181f;
+	float p = 1.0f / 5040.0f;
+	p = p * t + 1.0f / 720.0f;
+	p = p * t + 1.0f / 120.0f;
+	p = p * t + 1.0f / 24.0f;
+	p = p * t + 1.0f / 6.0f;
+	p = p * t + 0.5f;
+	p = p * t + 1.0f;
+	p = p * t + 1.0f;
+	return p * bits_to_float((uint32_t)(n + 127) << 23);
+}
+
+/* Cube root of a positive normal float: bit-level initial guess (~4 % error) refined by two Halley steps
+ * (cubic convergence; relative error < 3e-7, measured). */
+static inline float fast_cbrt(float t)
+{
+	float y = bits_to_float(float_to_bits(t) / 3u + 0x2a5137a0u);
+	float y3 = y * y * y;
+	y = y * (y3 + 2.0f * t) / (2.0f * y3 + t);
+	y3 = y * y * y;
+	y = y * (y3 + 2.0f * t) / (2.0f * y3 + t);
+	return y;
+}
+
+/* Square root of a non-negative float via Newton-refined reciprocal square root (3 steps from the bit-level guess;
+ * relative error < 2e-7, measured). Used instead of sqrtf() in the vectorised loops because sqrtf() keeps an errno
+ * branch for negative arguments (C's default math-errno semantics), which prevents vectorisation. Exactly 0 for x = 0.
+ */
+static inline float fast_sqrt(float x)
+{
+	float r = bits_to_float(0x5f375a86u - (float_to_bits(x) >> 1));
+	float hx = 0.5f * x;
+	r = r * (1.5f - hx * r * r);
+	r = r * (1.5f - hx * r * r);
+	r = r * (1.5f - hx * r * r);
+	return x * r;
+}
+
+/* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
+static inline float lab_f_fast(float t)
+{
+	float cr = fast_cbrt(select_f(t > 0.008856f, t, 0.008856f)); /* keep the unused branch finite */
+	return select_f(t > 0.00885645168f, cr, t * 7.78703704f + 0.137931034f);
+}
+
+static inline float clamp01(float v)
+{
+	v = select_f(v > 0.0f, v, 0.0f);
+	return select_f(v < 1.0f, v, 1.0f);
+}
+
+/* sRGB EOTF (IEC 61966-2-1) for values in 0..1: linear segment below 0.04045, else ((c + 0.055) / 1.055)^2.4
+ * (relative error < 1e-6, measured). Used for non-integral inputs; integral ones use the exact table. */
+static inline float srgb_eotf_fast(float v)
+{
+	float base = (v + 0.055f) * (1.0f / 1.055f);
+	base = select_f(base > 0.01f, base, 0.01f); /* keep the unused branch finite */
+	float hi = fast_exp2(2.4f * fast_log2(base));
+	return select_f(v <= 0.04045f, v * (1.0f / 12.92f), hi);
+}
+
+/* ---- per-thread work ---- */
+
+typedef struct {
+	const mtr_flip *f;
+	uint32_t W, H;
+	const float *img[2]; /* ref, test */
+	float *map;          /* may be NULL */
+	uint32_t y0, y1;     /* band of output rows */
+	double sum;          /* sum of the band's error values */
+	int status;          /* 0 or negative */
+} band_job;
+
+/* Per-thread scratch. Planes are rows of `swp` floats. */
+typedef struct {
+	size_t swp;
+	float *ring; /* (2R+1) row slots x 2 images x 3 opponent planes (Y/Yn, Cx/500, Cz/200) */
+	float *vbuf; /* 2 images x V_N vertically filtered planes */
+	float *hbuf; /* 2 images x H_N planes: filtered Y, Cx, Cz, edge/point responses, then L, a', b' */
+	float *err;  /* one row of errors */
+} scratch;
+
+/* Vertically filtered planes: CSF-filtered Y, Cx, Cz (two Gaussians), and Y/Yn filtered with the feature Gaussian,
+ * its first and its second derivative. */
+enum { V_Y, V_CX, V_CZ1, V_CZ2, V_G, V_DG, V_DDG, V_N };
+/* Fully filtered planes: CSF-filtered Y, Cx, Cz; edge x/y and point x/y responses; Hunt-adjusted L, a', b'. */
+enum { H_Y, H_CX, H_CZ, H_EX, H_EY, H_PX, H_PY, H_L, H_A, H_B, H_N };
+
+static inline float *ring_plane(const scratch *s, int R, uint32_t src_row, int im, int plane)
+{
+	size_t slot = src_row % (uint32_t)(2 * R + 1);
+	return s->ring + ((slot * 2 + (size_t)im) * 3 + (size_t)plane) * s->swp;
+}
+
+/* Colour pipeline, colour space transform: n packed sRGB pixels (0..255) -> linear RGB (sRGB EOTF) -> the three
+ * opponent planes Y/Yn = (Yy + 16) / 116, X/Xn - Y/Yn = Cx / 500, Y/Yn - Z/Zn = Cz / 200 (YyCxCz up to constant
+ * scale and offset, which the unit-sum CSF filters commute with). Y/Yn is also the feature pipeline's input. */
+FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *rgb, uint32_t n, float *restrict py,
+                                           float *restrict pcx, float *restrict pcz)
+{
+	const float *m = f->lin2opp;
+	/* Integral 0..255 inputs take the table; anything else the (vectorised) EOTF formula.
+	 * Chunks of VW pixels keep the loops vectorisable at -O2 (no epilogue inside); a scalar tail follows. */
+	const uint32_t nv = n / VW * VW;
+	int integral = 1;
+	for (uint32_t i = 0; i < 3 * nv; i += VW) {
+		int ok = 1;
+		for (int u = 0; u < VW; u++) {
+			float v = rgb[i + (uint32_t)u];
+			int inr = (v >= 0.0f) & (v <= 255.0f);
+			float c = select_f(inr, v, 0.0f); /* keeps the conversion below defined */
+			ok &= inr & ((float)(int)c == c);
+		}
+		integral &= ok;
+	}
+	for (uint32_t i = 3 * nv; i < 3 * n; i++) {
+		float v = rgb[i];
+		integral &= (v >= 0.0f) & (v <= 255.0f) && (float)(int)v == v;
+	}
+	if (integral) {
+		for (uint32_t i = 0; i < n; i++) {
+			float r = f->srgb_lut[(int)rgb[3 * i]], g = f->srgb_lut[(int)rgb[3 * i + 1]],
+			      b = f->srgb_lut[(int)rgb[3 * i + 2]];
+			py[i] = m[0] * r + m[1] * g + m[2] * b;
+			pcx[i] = m[3] * r + m[4] * g + m[5] * b;
+			pcz[i] = m[6] * r + m[7] * g + m[8] * b;
+		}
+		return;
+	}
+	/* Fractional inputs: de-interleave into the output planes (scalar), then the vectorised EOTF + matrix. */
+	for (uint32_t i = 0; i < n; i++) {
+		py[i] = rgb[3 * i];
+		pcx[i] = rgb[3 * i + 1];
+		pcz[i] = rgb[3 * i + 2];
+	}
+	for (uint32_t i = 0; i < nv; i += VW)
+		for (int u = 0; u < VW; u++) {
+			const uint32_t p = i + (uint32_t)u;
+			float r = srgb_eotf_fast(py[p] * (1.0f / 255.0f));
+			float g = srgb_eotf_fast(pcx[p] * (1.0f / 255.0f));
+			float b = srgb_eotf_fast(pcz[p] * (1.0f / 255.0f));
+			py[p] = m[0] * r + m[1] * g + m[2] * b;
+			pcx[p] = m[3] * r + m[4] * g + m[5] * b;
+			pcz[p] = m[6] * r + m[7] * g + m[8] * b;
+		}
+	for (uint32_t i = nv; i < n; i++) {
+		float r = srgb_eotf_fast(py[i] * (1.0f / 255.0f));
+		float g = srgb_eotf_fast(pcx[i] * (1.0f / 255.0f));
+		float b = srgb_eotf_fast(pcz[i] * (1.0f / 255.0f));
+		py[i] = m[0] * r + m[1] * g + m[2] * b;
+		pcx[i] = m[3] * r + m[4] * g + m[5] * b;
+		pcz[i] = m[6] * r + m[7] * g + m[8] * b;
+	}
+}
+
+/* Vertical pass of the separable filters for one output row (colour pipeline: CSF spatial filtering; feature
+ * pipeline: edge / point detection), buffer columns [j0, j1) (multiples of VW). ry/rcx/rcz[k], k = 0..2R, are the
+ * opponent planes of source rows clamp(y - R + k); symmetric kernels fold the taps at -k and +k, the antisymmetric
+ * first derivative takes their difference. Outputs are the V_N vertically filtered planes. */
+FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, int R, float *const *ry, float *const *rcx,
+                                             float *const *rcz, size_t j0, size_t j1, float *restrict oy,
+                                             float *restrict ocx, float *restrict ocz1, float *restrict ocz2,
+                                             float *restrict og, float *restrict odg, float *restrict oddg)
+{
+	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
+	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
+	for (size_t j = j0; j < j1; j += VW) {
+		float ay[VW], ag[VW], ad[VW], add[VW], ax[VW], az1[VW], az2[VW];
+		const float *cy = ry[R] + j, *cx = rcx[R] + j, *cz = rcz[R] + j;
+		for (int v = 0; v < VW; v++) {
+			ay[v] = wy[0] * cy[v];
+			ag[v] = fg[0] * cy[v];
+			ad[v] = 0.0f;
+			add[v] = fdd[0] * cy[v];
+			ax[v] = wcx[0] * cx[v];
+			az1[v] = wz1[0] * cz[v];
+			az2[v] = wz2[0] * cz[v];
+		}
+		for (int k = 1; k <= R; k++) {
+			const float *ym = ry[R - k] + j, *yp = ry[R + k] + j;
+			const float *xm = rcx[R - k] + j, *xp = rcx[R + k] + j;
+			const float *zm = rcz[R - k] + j, *zp = rcz[R + k] + j;
+			const float a = wy[k], b = fg[k], c = fdg[k], d = fdd[k], e = wcx[k], g1 = wz1[k], g2 = wz2[k];
+			for (int v = 0; v < VW; v++) {
+				float s = ym[v] + yp[v], dd = yp[v] - ym[v];
+				float sx = xm[v] + xp[v], sz = zm[v] + zp[v];
+				ay[v] += a * s;
+				ag[v] += b * s;
+				ad[v] += c * dd;
+				add[v] += d * s;
+				ax[v] += e * sx;
+				az1[v] += g1 * sz;
+				az2[v] += g2 * sz;
+			}
+		}
+		for (int v = 0; v < VW; v++) {
+			oy[j + v] = ay[v];
+			og[j + v] = ag[v];
+			odg[j + v] = ad[v];
+			oddg[j + v] = add[v];
+			ocx[j + v] = ax[v];
+			ocz1[j + v] = az1[v];
+			ocz2[j + v] = az2[v];
+		}
+	}
+}
+
+/* Horizontal pass of the separable filters: output i in [0, n) (n multiple of VW) reads the vertically filtered
+ * planes at i + R + offset (the R halo columns were filled by clamp-to-edge). Produces the CSF-filtered Y, Cx,
+ * Cz = (Cz Gaussian 1 + Cz Gaussian 2) and the detectors: edge x = d/dx (x) Gaussian (y), edge y = Gaussian (x)
+ * d/dy (y), and likewise for the points with the second derivative. */
+FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, int R, const float *restrict v, size_t swp, size_t n,
+                                               float *restrict h)
+{
+	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
+	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
+	const float *iy = v + V_Y * swp + R, *ix = v + V_CX * swp + R, *iz1 = v + V_CZ1 * swp + R,
+	            *iz2 = v + V_CZ2 * swp + R, *ig = v + V_G * swp + R, *id = v + V_DG * swp + R,
+	            *idd = v + V_DDG * swp + R;
+	for (size_t i = 0; i < n; i += VW) {
+		float ay[VW], ax[VW], az[VW], aex[VW], aey[VW], apx[VW], apy[VW];
+		for (int u = 0; u < VW; u++) {
+			size_t p = i + (size_t)u;
+			ay[u] = wy[0] * iy[p];
+			ax[u] = wcx[0] * ix[p];
+			az[u] = wz1[0] * iz1[p] + wz2[0] * iz2[p];
+			aex[u] = 0.0f;
+			aey[u] = fg[0] * id[p];
+			apx[u] = fdd[0] * ig[p];
+			apy[u] = fg[0] * idd[p];
+		}
+		for (int k = 1; k <= R; k++) {
+			const float a = wy[k], b = wcx[k], c1 = wz1[k], c2 = wz2[k], g = fg[k], d = fdg[k], dd = fdd[k];
+			/* Left (-k) and right (+k) taps; the R halo columns keep every index inside the row buffer. */
+			const ptrdiff_t lo = (ptrdiff_t)i - k, hi = (ptrdiff_t)i + k;
+			const float *yl = iy + lo, *yh = iy + hi, *xl = ix + lo, *xh = ix + hi, *z1l = iz1 + lo, *z1h = iz1 + hi,
+			            *z2l = iz2 + lo, *z2h = iz2 + hi, *gl = ig + lo, *gh = ig + hi, *dl = id + lo, *dh = id + hi,
+			            *ddl = idd + lo, *ddh = idd + hi;
+			for (int u = 0; u < VW; u++) {
+				ay[u] += a * (yl[u] + yh[u]);
+				ax[u] += b * (xl[u] + xh[u]);
+				az[u] += c1 * (z1l[u] + z1h[u]) + c2 * (z2l[u] + z2h[u]);
+				aex[u] += d * (gh[u] - gl[u]);
+				apx[u] += dd * (gl[u] + gh[u]);
+				aey[u] += g * (dl[u] + dh[u]);
+				apy[u] += g * (ddl[u] + ddh[u]);
+			}
+		}
+		for (int u = 0; u < VW; u++) {
+			h[H_Y * swp + i + u] = ay[u];
+			h[H_CX * swp + i + u] = ax[u];
+			h[H_CZ * swp + i + u] = az[u];
+			h[H_EX * swp + i + u] = aex[u];
+			h[H_EY * swp + i + u] = aey[u];
+			h[H_PX * swp + i + u] = apx[u];
+			h[H_PY * swp + i + u] = apy[u];
+		}
+	}
+}
+
+/* Filtered opponent values -> linear RGB clamped to [0,1] -> Hunt-adjusted CIELAB (colour pipeline):
+ * (py, pcx, pcz) -> (pl, pa, pb). The conversion is written out without branches so that gcc -O2
+ * if-converts and vectorises the loop. */
+FLIP_TARGET_CLONES static void hunt_lab_row(const mtr_flip *f, const float *restrict py, const float *restrict pcx,
+                                            const float *restrict pcz, float *restrict pl, float *restrict pa,
+                                            float *restrict pb, size_t n)
+{
+	const float *m = f->opp2rgb, *nm = f->rgb2xyzn;
+	const float m0 = m[0], m1 = m[1], m2 = m[2], m3 = m[3], m4 = m[4], m5 = m[5], m6 = m[6], m7 = m[7], m8 = m[8];
+	const float n0 = nm[0], n1 = nm[1], n2 = nm[2], n3 = nm[3], n4 = nm[4], n5 = nm[5], n6 = nm[6], n7 = nm[7],
+	            n8 = nm[8];
+	for (size_t i = 0; i < n; i += VW) {
+		for (int u = 0; u < VW; u++) {
+			const size_t p = i + (size_t)u;
+			const float y = py[p], cx = pcx[p], cz = pcz[p];
+			const float r = clamp01(m0 * y + m1 * cx + m2 * cz);
+			const float g = clamp01(m3 * y + m4 * cx + m5 * cz);
+			const float b = clamp01(m6 * y + m7 * cx + m8 * cz);
+			const float fx = lab_f_fast(n0 * r + n1 * g + n2 * b);
+			const float fy = lab_f_fast(n3 * r + n4 * g + n5 * b);
+			const float fz = lab_f_fast(n6 * r + n7 * g + n8 * b);
+			const float l = 116.0f * fy - 16.0f;
+			pl[p] = l;
+			pa[p] = 0.01f * l * 500.0f * (fx - fy); /* Hunt: a' = 0.01 L a */
+			pb[p] = 0.01f * l * 200.0f * (fy - fz); /* Hunt: b' = 0.01 L b */
+		}
+	}
+}
+
+/* Colour difference, feature difference and final error for n (multiple of VW) pixels; hr / ht hold L, a', b' (see
+ * hunt_lab_row) and the edge / point responses. */
+FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *restrict hr, const float *restrict ht,
+                                            size_t swp, size_t n, float *restrict out)
+{
+	const float cmax_lo = f->cmax_lo, slope_lo = f->slope_lo, slope_hi = f->slope_hi;
+	for (size_t i = 0; i < n; i += VW) {
+		for (int u = 0; u < VW; u++) {
+			const size_t p = i + (size_t)u;
+			/* HyAB distance, then ^q_c and the compression re-mapping into [0,1]. */
+			float dl = hr[H_L * swp + p] - ht[H_L * swp + p];
+			float da = hr[H_A * swp + p] - ht[H_A * swp + p], db = hr[H_B * swp + p] - ht[H_B * swp + p];
+			float hy = fabsf(dl) + fast_sqrt(da * da + db * db);
+			float dc = fast_exp2((float)FLIP_QC * fast_log2(select_f(hy > 1e-30f, hy, 1e-30f)));
+			dc = select_f(hy > 0.0f, dc, 0.0f);
+			dc = select_f(dc < cmax_lo, slope_lo * dc, (float)FLIP_PT + (dc - cmax_lo) * slope_hi);
+			/* Feature pipeline: edge and point magnitudes, difference, / sqrt(2), ^q_f (q_f = 0.5 -> sqrt). */
+			float ex1 = hr[H_EX * swp + p], ey1 = hr[H_EY * swp + p], px1 = hr[H_PX * swp + p],
+			      py1 = hr[H_PY * swp + p];
+			float ex2 = ht[H_EX * swp + p], ey2 = ht[H_EY * swp + p], px2 = ht[H_PX * swp + p],
+			      py2 = ht[H_PY * swp + p];
+			float de = fabsf(fast_sqrt(ex1 * ex1 + ey1 * ey1) - fast_sqrt(ex2 * ex2 + ey2 * ey2));
+			float dp = fabsf(fast_sqrt(px1 * px1 + py1 * py1) - fast_sqrt(px2 * px2 + py2 * py2));
+			float df = fast_sqrt(select_f(de > dp, de, dp) * 0.707106781f);
+			/* Final error dE_c^(1 - dE_f); 0^0 = 1 as with pow(). */
+			float ex = 1.0f - df;
+			float e = fast_exp2(ex * fast_log2(select_f(dc > 1e-30f, dc, 1e-30f)));
+			out[p] = select_f(dc > 0.0f, e, select_f(ex == 0.0f, 1.0f, 0.0f));
+		}
+	}
+}
+
+static size_t round_up(size_t v, size_t m)
+{
+	return (v + m - 1) / m * m;
+}
+
+static void *band_worker(void *arg)
+{
+	band_job *job = arg;
+	const mtr_flip *f = job->f;
+	const int R = f->R;
+	const uint32_t W = job->W, H = job->H;
+	const uint32_t sw_max = W < STRIP_W ? W : STRIP_W;
+	scratch s;
+	s.swp = round_up(round_up(sw_max, VW) + 2 * (size_t)R, VW);
+	s.ring = calloc((size_t)(2 * R + 1) * 6 * s.swp, sizeof(float));
+	s.vbuf = calloc(2 * V_N * s.swp, sizeof(float));
+	s.hbuf = calloc(2 * H_N * s.swp, sizeof(float));
+	s.err = calloc(s.swp, sizeof(float));
+	float **rp = malloc(sizeof(float *) * 6 * (size_t)(2 * R + 1));
+	job->sum = 0.0;
+	if (!s.ring || !s.vbuf || !s.hbuf || !s.err || !rp) {
+		job->status = -2;
+		goto done;
+	}
+	for (uint32_t x0 = 0; x0 < W; x0 += sw_max) {
+		const uint32_t x1 = x0 + sw_max < W ? x0 + sw_max : W;
+		const size_t sw = x1 - x0;
+		/* Buffer index j holds image column x0 - R + j; columns [cx0, cx1) exist in the image, at buffer
+		 * indices [jv0, jv1). */
+		const int64_t ox0 = (int64_t)x0 - R;
+		const uint32_t cx0 = ox0 > 0 ? (uint32_t)ox0 : 0u;
+		const uint32_t cx1 = (uint64_t)x1 + (uint64_t)R < W ? x1 + (uint32_t)R : W;
+		const size_t jv0 = (size_t)((int64_t)cx0 - ox0), jv1 = jv0 + (cx1 - cx0);
+		const size_t ja = jv0 / VW * VW, jb = round_up(jv1, VW);
+		const size_t swr = round_up(sw, VW);
+		uint32_t next_src = job->y0 > (uint32_t)R ? job->y0 - (uint32_t)R : 0u;
+		for (uint32_t y = job->y0; y < job->y1; y++) {
+			/* Convert the input rows that enter the vertical window of row y (clamped to the image). */
+			const uint32_t last = (uint64_t)y + (uint64_t)R < H ? y + (uint32_t)R : H - 1;
+			for (; next_src <= last; next_src++)
+				for (int im = 0; im < 2; im++)
+					convert_row(f, job->img[im] + ((size_t)next_src * W + cx0) * 3, cx1 - cx0,
+					            ring_plane(&s, R, next_src, im, 0) + jv0, ring_plane(&s, R, next_src, im, 1) + jv0,
+					            ring_plane(&s, R, next_src, im, 2) + jv0);
+			for (int im = 0; im < 2; im++) {
+				float **ry = rp + (size_t)(3 * im) * (size_t)(2 * R + 1);
+				float **rcx = ry + (2 * R + 1), **rcz = rcx + (2 * R + 1);
+				for (int k = 0; k <= 2 * R; k++) {
+					int64_t sy = (int64_t)y - R + k; /* clamp-to-edge rows */
+					uint32_t cy = sy < 0 ? 0u : (sy >= (int64_t)H ? H - 1 : (uint32_t)sy);
+					ry[k] = ring_plane(&s, R, cy, im, 0);
+					rcx[k] = ring_plane(&s, R, cy, im, 1);
+					rcz[k] = ring_plane(&s, R, cy, im, 2);
+				}
+				float *v = s.vbuf + (size_t)im * V_N * s.swp;
+				vertical_pass(f, R, ry, rcx, rcz, ja, jb, v + V_Y * s.swp, v + V_CX * s.swp, v + V_CZ1 * s.swp,
+				              v + V_CZ2 * s.swp, v + V_G * s.swp, v + V_DG * s.swp, v + V_DDG * s.swp);
+				/* Clamp-to-edge columns: replicate the first / last image column into the halo. */
+				for (int pl = 0; pl < V_N; pl++) {
+					float *row = v + (size_t)pl * s.swp;
+					for (size_t j = 0; j < jv0; j++)
+						row[j] = row[jv0];
+					for (size_t j = jv1; j < swr + 2 * (size_t)R; j++)
+						row[j] = row[jv1 - 1];
+				}
+				horizontal_pass(f, R, v, s.swp, swr, s.hbuf + (size_t)im * H_N * s.swp);
+			}
+			for (int im = 0; im < 2; im++) {
+				float *h = s.hbuf + (size_t)im * H_N * s.swp;
+				hunt_lab_row(f, h + H_Y * s.swp, h + H_CX * s.swp, h + H_CZ * s.swp, h + H_L * s.swp, h + H_A * s.swp,
+				             h + H_B * s.swp, swr);
+			}
+			finalize_row(f, s.hbuf, s.hbuf + H_N * s.swp, s.swp, swr, s.err);
+			double rs = 0.0;
+			for (size_t i = 0; i < sw; i++)
+				rs += (double)s.err[i];
+			job->sum += rs;
+			if (job->map)
+				memcpy(job->map + (size_t)y * W + x0, s.err, sw * sizeof(float));
+		}
+	}
+	job->status = 0;
+done:
+	free(s.ring);
+	free(s.vbuf);
+	free(s.hbuf);
+	free(s.err);
+	free(rp);
+	return NULL;
+}
+
+int mtr_flip_compute(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb, const float *test_rgb,
+                     float *map, int threads, double *mean, char *err, size_t err_size)
+{
+	if (!f || !ref_rgb || !test_rgb || !mean) {
+		set_err(err, err_size, "flip: NULL argument");
+		return TL_ERR_ARG;
+	}
+	if (width == 0 || height == 0) {
+		set_err(err, err_size, "flip: empty image (%ux%u)", (unsigned)width, (unsigned)height);
+		return TL_ERR_ARG;
+	}
+	if (width > INT32_MAX || height > INT32_MAX ||
+	    (uint64_t)width * height > (uint64_t)(SIZE_MAX / (3 * sizeof(float)))) {
+		set_err(err, err_size, "flip: image too large (%ux%u)", (unsigned)width, (unsigned)height);
+		return TL_ERR_ARG;
+	}
+	if (threads <= 0) {
+		long nc = sysconf(_SC_NPROCESSORS_ONLN);
+		threads = nc > 0 ? (int)(nc < FLIP_MAX_THREADS ? nc : FLIP_MAX_THREADS) : 1;
+	}
+	if (threads > FLIP_MAX_THREADS)
+		threads = FLIP_MAX_THREADS;
+	/* Bands of at least 16 rows; halo rows are converted twice, so tiny bands would waste work. */
+	uint32_t max_bands = height / 16 > 0 ? height / 16 : 1;
+	uint32_t nb = (uint32_t)threads < max_bands ? (uint32_t)threads : max_bands;
+	band_job *jobs = calloc(nb, sizeof *jobs);
+	pthread_t *tid = calloc(nb, sizeof *tid);
+	int *started = calloc(nb, sizeof *started);
+	if (!jobs || !tid || !started) {
+		free(jobs);
+		free(tid);
+		free(started);
+		set_err(err, err_size, "flip: out of memory");
+		return TL_ERR_NOMEM;
+	}
+	for (uint32_t b = 0; b < nb; b++) {
+		jobs[b].f = f;
+		jobs[b].W = width;
+		jobs[b].H = height;
+		jobs[b].img[0] = ref_rgb;
+		jobs[b].img[1] = test_rgb;
+		jobs[b].map = map;
+		jobs[b].y0 = (uint32_t)((uint64_t)height * b / nb);
+		jobs[b].y1 = (uint32_t)((uint64_t)height * (b + 1) / nb);
+		jobs[b].status = -1;
+	}
+	for (uint32_t b = 1; b < nb; b++)
+		started[b] = pthread_create(&tid[b], NULL, band_worker, &jobs[b]) == 0;
+	band_worker(&jobs[0]);
+	for (uint32_t b = 1; b < nb; b++) {
+		if (started[b])
+			pthread_join(tid[b], NULL);
+		else
+			band_worker(&jobs[b]); /* thread creation failed: do the band here */
+	}
+	double sum = 0.0;
+	int status = 0;
+	for (uint32_t b = 0; b < nb; b++) {
+		sum += jobs[b].sum;
+		if (jobs[b].status < 0)
+			status = jobs[b].status;
+	}
+	free(jobs);
+	free(tid);
+	free(started);
+	if (status < 0) {
+		set_err(err, err_size, "flip: out of memory");
+		return TL_ERR_NOMEM;
+	}
+	*mean = sum / ((double)width * (double)height);
+	return 0;
+}
+
+/* ---- pooling ---- */
+
+/* Order-preserving unsigned key of a float (negative values reversed, NaN sorts last). */
+static inline uint32_t sort_key(float v)
+{
+	uint32_t u = float_to_bits(v);
+	return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+int mtr_flip_pool_stats(const float *map, size_t n, mtr_flip_pool *out)
+{
+	if (!map || !out || n == 0)
+		return TL_ERR_ARG;
+	uint32_t *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+	if (!a || !b) {
+		free(a);
+		free(b);
+		return TL_ERR_NOMEM;
+	}
+	double sum = 0.0;
+	for (size_t i = 0; i < n; i++) {
+		a[i] = sort_key(map[i]);
+		sum += (double)map[i];
+	}
+	/* LSD radix sort, 3 passes of 11 bits. */
+	for (int pass = 0; pass < 3; pass++) {
+		const int shift = 11 * pass;
+		size_t cnt[2048] = {0};
+		for (size_t i = 0; i < n; i++)
+			cnt[(a[i] >> shift) & 2047u]++;
+		size_t acc = 0;
+		for (int k = 0; k < 2048; k++) {
+			size_t c = cnt[k];
+			cnt[k] = acc;
+			acc += c;
+		}
+		for (size_t i = 0; i < n; i++)
+			b[cnt[(a[i] >> shift) & 2047u]++] = a[i];
+		uint32_t *t = a;
+		a = b;
+		b = t;
+	}
+	free(b);
+	/* Pooling: weighted percentiles, weight = value; first value whose running sum exceeds p * total. */
+	const double ps[3] = {0.25, 0.5, 0.75};
+	double res[3] = {0.0, 0.0, 0.0};
+	int found[3] = {0, 0, 0};
+	double run = 0.0;
+	for (size_t i = 0, q = 0; i < n && q < 3; i++) {
+		uint32_t k = a[i];
+		float v = bits_to_float((k & 0x80000000u) ? (k & 0x7fffffffu) : ~k);
+		run += (double)v;
+		while (q < 3 && run > ps[q] * sum) {
+			res[q] = v;
+			found[q] = 1;
+			q++;
+		}
+	}
+	uint32_t kmin = a[0], kmax = a[n - 1];
+	out->min = bits_to_float((kmin & 0x80000000u) ? (kmin & 0x7fffffffu) : ~kmin);
+	out->max = bits_to_float((kmax & 0x80000000u) ? (kmax & 0x7fffffffu) : ~kmax);
+	out->mean = sum / (double)n;
+	out->q1_weighted = found[0] ? res[0] : 0.0;
+	out->weighted_median = found[1] ? res[1] : 0.0;
+	out->q3_weighted = found[2] ? res[2] : 0.0;
+	free(a);
+	return 0;
+}

@@ -1,0 +1,188 @@
+/* metric_ssim.c — the `ssim` metric: SSIM (Wang, Bovik, Sheikh, Simoncelli, "Image Quality Assessment: From Error
+ * Visibility to Structural Similarity", IEEE TIP 13(4), 2004), eq. 13 with the 11x11 Gaussian window (sigma 1.5)
+ * of their sec. III-C, K1 = 0.01, K2 = 0.03, L = 255, population (co)variances, per RGB channel over the windows
+ * that fit inside the image, averaged over pixels and channels — equal to scikit-image's
+ * structural_similarity(gaussian_weights=True, use_sample_covariance=False, data_range=255, channel_axis=2)
+ * within 1e-5 (tests/reference/ssim_reference.json).
+ *
+ * Speed: one sweep down each row band. Every input row is filtered horizontally once, for all 15 quantities at once
+ * (a, b, a^2, b^2, ab for the three channels), into a ring of the last 11 rows; each output row is then the
+ * vertical filter of the ring followed by eq. 13. Both filters fold the symmetric window (6 multiplies for 11
+ * taps) in branch-free loops over x that gcc vectorises; row sums of eq. 13 in 8 independent partial sums, then
+ * double. Values are centred (v - 128) before the products, so the variances E[a^2] - E[a]^2 are differences of
+ * smaller numbers; the means get the 128 back for the luminance term. On a rendered 1080p pair the result is within
+ * 1e-7 of a double-precision evaluation (the implementation before this one: 5.8e-5, over the 1e-5 tolerance;
+ * tests/test_metrics.c test_ssim_frame).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "metric.h"
+
+#define SSIM_R 5 /* 11x11 window */
+#define SSIM_N (2 * SSIM_R + 1)
+#define SSIM_Q 15 /* quantities filtered: 5 per channel */
+#define VW 8
+
+typedef struct ssim_ctx {
+	const mtr_image *a, *b;
+	float g[SSIM_R + 1]; /* half window: g[k] = weight at offset +-k */
+	double sum[MTR_MAX_THREADS];
+	int oom;
+} ssim_ctx;
+
+/* out[x] = sum_k g[|k|] in[x + R + k], x in [0, n): the symmetric window folded. */
+static inline void hfilter(const float *restrict in, float *restrict out, uint32_t n, const float *g)
+{
+	const float g0 = g[0], g1 = g[1], g2 = g[2], g3 = g[3], g4 = g[4], g5 = g[5];
+	for (uint32_t x = 0; x < n; x++) {
+		const float *v = in + x + SSIM_R;
+		out[x] = g0 * v[0] + g1 * (v[-1] + v[1]) + g2 * (v[-2] + v[2]) + g3 * (v[-3] + v[3]) + g4 * (v[-4] + v[4]) +
+			 g5 * (v[-5] + v[5]);
+	}
+}
+
+/* out[x] = sum_k g[|k - R|] rows[k][x]. */
+static inline void vfilter(float *const *rows, float *restrict out, uint32_t n, const float *g)
+{
+	const float g0 = g[0], g1 = g[1], g2 = g[2], g3 = g[3], g4 = g[4], g5 = g[5];
+	const float *r0 = rows[0], *r1 = rows[1], *r2 = rows[2], *r3 = rows[3], *r4 = rows[4], *r5 = rows[5],
+		    *r6 = rows[6], *r7 = rows[7], *r8 = rows[8], *r9 = rows[9], *r10 = rows[10];
+	for (uint32_t x = 0; x < n; x++)
+		out[x] = g0 * r5[x] + g1 * (r4[x] + r6[x]) + g2 * (r3[x] + r7[x]) + g3 * (r2[x] + r8[x]) +
+			 g4 * (r1[x] + r9[x]) + g5 * (r0[x] + r10[x]);
+}
+
+MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t y1)
+{
+	/* Output rows [y0, y1) of the valid region (image rows y + R); input rows [y0, y1 + 2R). */
+	ssim_ctx *c = p;
+	const uint32_t w = c->a->width, ow = w - 2 * SSIM_R;
+	const size_t owp = ((size_t)ow + VW - 1) / VW * VW;
+	float *ring = malloc((size_t)SSIM_N * SSIM_Q * owp * sizeof *ring);
+	float *in = malloc((size_t)5 * w * sizeof *in); /* one channel's a, b, a^2, b^2, ab of an input row */
+	float *v = malloc((size_t)5 * owp * sizeof *v); /* vertically filtered quantities of one channel */
+	float *srow = malloc(owp * sizeof *srow);
+	if (!ring || !in || !v || !srow) {
+		free(ring), free(in), free(v), free(srow);
+		c->oom = 1;
+		return;
+	}
+	const float C1 = (0.01f * 255) * (0.01f * 255), C2 = (0.03f * 255) * (0.03f * 255);
+	double total = 0;
+	for (uint32_t r = y0; r < y1 + 2 * SSIM_R; r++) {
+		/* Horizontal pass of input row r into ring slot r mod 11, all 15 quantities. */
+		float *slot = ring + (size_t)(r % SSIM_N) * SSIM_Q * owp;
+		const float *ar = c->a->rgb + (size_t)r * w * 3, *br = c->b->rgb + (size_t)r * w * 3;
+		for (int ch = 0; ch < 3; ch++) {
+			float *ia = in, *ib = in + w, *iaa = in + 2 * (size_t)w, *ibb = in + 3 * (size_t)w, *iab = in + 4 * (size_t)w;
+			for (uint32_t x = 0; x < w; x++) {
+				float va = ar[3 * (size_t)x + ch] - 128.0f, vb = br[3 * (size_t)x + ch] - 128.0f;
+				ia[x] = va;
+				ib[x] = vb;
+				iaa[x] = va * va;
+				ibb[x] = vb * vb;
+				iab[x] = va * vb;
+			}
+			for (int q = 0; q < 5; q++)
+				hfilter(in + (size_t)q * w, slot + (size_t)(5 * ch + q) * owp, ow, c->g);
+		}
+		if (r < y0 + 2 * SSIM_R)
+			continue;
+		/* Output row o = r - 2R: vertical pass over ring rows o..o+2R, then eq. 13 per channel. */
+		const uint32_t o = r - 2 * SSIM_R;
+		for (int ch = 0; ch < 3; ch++) {
+			for (int q = 0; q < 5; q++) {
+				float *rows[SSIM_N];
+				for (int k = 0; k < SSIM_N; k++)
+					rows[k] = ring + ((size_t)((o + (uint32_t)k) % SSIM_N) * SSIM_Q + (size_t)(5 * ch + q)) * owp;
+				vfilter(rows, v + (size_t)q * owp, ow, c->g);
+			}
+			const float *ma = v, *mb = v + owp, *eaa = v + 2 * owp, *ebb = v + 3 * owp, *eab = v + 4 * owp;
+			for (uint32_t x = 0; x < ow; x++) {
+				const float va = eaa[x] - ma[x] * ma[x], vb = ebb[x] - mb[x] * mb[x], cov = eab[x] - ma[x] * mb[x];
+				const float ua = ma[x] + 128.0f, ub = mb[x] + 128.0f;
+				srow[x] = ((2 * ua * ub + C1) * (2 * cov + C2)) / ((ua * ua + ub * ub + C1) * (va + vb + C2));
+			}
+			float acc[VW] = {0};
+			uint32_t x = 0;
+			for (; x + VW <= ow; x += VW)
+				for (int u = 0; u < VW; u++)
+					acc[u] += srow[x + (uint32_t)u];
+			double row = 0;
+			for (; x < ow; x++)
+				row += srow[x];
+			for (int u = 0; u < VW; u++)
+				row += acc[u];
+			total += row;
+		}
+	}
+	free(ring);
+	free(in);
+	free(v);
+	free(srow);
+	c->sum[band] = total;
+}
+
+double mtr_ssim(const mtr_image *a, const mtr_image *b, int threads)
+{
+	if (a->width != b->width || a->height != b->height || a->width < SSIM_N || a->height < SSIM_N)
+		return NAN;
+	ssim_ctx *c = calloc(1, sizeof *c);
+	if (!c)
+		return NAN;
+	c->a = a;
+	c->b = b;
+	double gs = 0, g[SSIM_R + 1];
+	for (int k = 0; k <= SSIM_R; k++) {
+		g[k] = exp(-(double)(k * k) / (2 * 1.5 * 1.5));
+		gs += (k ? 2 : 1) * g[k];
+	}
+	for (int k = 0; k <= SSIM_R; k++)
+		c->g[k] = (float)(g[k] / gs);
+	uint32_t valid_rows = a->height - 2 * SSIM_R;
+	int nt = mtr_thread_count(threads, valid_rows);
+	mtr_parallel_rows(valid_rows, nt, ssim_band, c);
+	double sum = 0;
+	for (int t = 0; t < nt; t++)
+		sum += c->sum[t];
+	int oom = c->oom;
+	free(c);
+	if (oom)
+		return NAN;
+	return sum / (3.0 * (double)valid_rows * (double)(a->width - 2 * SSIM_R));
+}
+
+static int ssim_compute(void *state, const mtr_pair *p, mtr_frame_stats *out, char *err, size_t err_size)
+{
+	(void)state;
+	out->ssim = mtr_ssim(p->a, p->b, p->threads); /* NAN for images smaller than the window */
+	if (isnan(out->ssim) && p->a->width >= SSIM_N && p->a->height >= SSIM_N)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "ssim: out of memory");
+	return TL_OK;
+}
+
+static void ssim_pool(void *state, const mtr_frame_stats *f, size_t n, mtr_frame_stats *p)
+{
+	(void)state;
+	double s = 0;
+	size_t k = 0;
+	for (size_t i = 0; i < n; i++)
+		if (!isnan(f[i].ssim))
+			s += f[i].ssim, k++;
+	p->ssim = k ? s / (double)k : NAN;
+}
+
+static const mtr_column ssim_columns[] = {
+	{"ssim", offsetof(mtr_frame_stats, ssim), MTR_COL_BOTH},
+	{0},
+};
+
+const mtr_metric mtr_metric_ssim = {
+	.name = "ssim",
+	.help = "SSIM (Wang et al. 2004), 11x11 Gaussian window, per RGB channel, averaged",
+	.columns = ssim_columns,
+	.compute = ssim_compute,
+	.pool = ssim_pool,
+};
