@@ -7,6 +7,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "taslab/imageio.h"
 #include "taslab/pairs.h"
 #include "taslab/run.h"
 #include "taslab/tl_fs.h"
@@ -17,6 +18,8 @@
 
 static uint16_t hdr[W * H * 4];
 static uint8_t disp[W * H * 4];
+static uint8_t decisions[W * H];
+static bool with_decisions; /* write_run: also decision maps */
 
 /* Writes a run of frames [first, first + n) with fake pixels and stats. */
 static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, bool exr)
@@ -27,7 +30,8 @@ static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, boo
 	run_info info = {.scene_name = "s", .scene_path = "s.json", .camera = "c", .camera_motion = "moving",
 			 .device = "dev", .driver = "drv", .method = "tarc-oracle", .variant = "tarc-oracle@8",
 			 .threshold = 8, .options = opts, .option_count = 2, .first_frame = first,
-			 .last_frame = first + n - 1, .width = W, .height = H, .fps = 30, .write_exr = exr, .write_png = png};
+			 .last_frame = first + n - 1, .width = W, .height = H, .fps = 30, .write_exr = exr, .write_png = png,
+			 .write_decisions = with_decisions};
 	run_writer *w = NULL;
 	if (run_writer_create(dir, &info, &w, err, sizeof err))
 		fail_msg("%s", err);
@@ -37,7 +41,9 @@ static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, boo
 				  .new_units = 1, .fs_invocations = -1, .cs_invocations = -1, .gpu_ms_total = 1.5,
 				  .pass_count = 1, .pass_names = {"shade"}, .gpu_ms = {1.25}, .extra_count = 1,
 				  .extra_names = {"cpu_ms_alloc"}, .extra = {NAN}};
-		frame_image img = {W, H, hdr, disp};
+		frame_image img = {W, H, hdr, disp, with_decisions ? decisions : NULL};
+		for (int i = 0; i < W * H; i++)
+			decisions[i] = (uint8_t)((i + f) % FRAME_DECISION_COUNT);
 		memset(disp, (int)(f * 10), sizeof disp);
 		if (run_writer_frame(w, &img, &st, err, sizeof err))
 			fail_msg("%s", err);
@@ -80,6 +86,38 @@ static void test_run_round_trip(void **state)
 	assert_non_null(strstr(text, "\"method_options\""));
 	assert_non_null(strstr(text, "\"oracle\": true"));
 	free(text);
+}
+
+/* render --decisions: RUN/decisions/NNNNNN.png in the documented colours, decoded back exactly; a re-run
+ * without them leaves none of the old maps. */
+static void test_decision_maps(void **state)
+{
+	(void)state;
+	char err[1024], p[4096];
+	const char *d = tu_tmpdir("output_decisions");
+	with_decisions = true;
+	write_run(d, 3, 2, true, false);
+	with_decisions = false;
+	for (uint32_t f = 3; f < 5; f++) {
+		snprintf(p, sizeof p, "%s/decisions/%06u.png", d, f);
+		uint32_t w, h;
+		uint8_t *rgb = NULL;
+		if (imageio_read_rgb8(p, &w, &h, &rgb, err, sizeof err))
+			fail_msg("%s", err);
+		assert_true(w == W && h == H);
+		for (int i = 0; i < W * H; i++)
+			assert_int_equal(run_decision_code(rgb + i * 3), (int)((i + f) % FRAME_DECISION_COUNT));
+		free(rgb);
+	}
+	const uint8_t other[3] = {1, 2, 3};
+	assert_int_equal(run_decision_code(other), -1);
+	snprintf(p, sizeof p, "%s/manifest.json", d);
+	char *text = tu_read_file(p, NULL);
+	assert_non_null(strstr(text, "\"decisions\": true"));
+	free(text);
+	write_run(d, 3, 1, true, false);
+	snprintf(p, sizeof p, "%s/decisions/000003.png", d);
+	assert_false(tu_file_exists(p));
 }
 
 static void test_run_folder_reuse(void **state)
@@ -185,6 +223,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_run_round_trip),
 		cmocka_unit_test(test_run_folder_reuse),
+		cmocka_unit_test(test_decision_maps),
 		cmocka_unit_test(test_run_bad_input),
 		cmocka_unit_test(test_pairs),
 	};

@@ -73,6 +73,9 @@ static const cli_opt render_options[] = {
 	{.name = "no-png", .arg = NULL,
 	 .help = "do not write PNG frames",
 	 .type = CLI_FLAG, .offset = offsetof(render_opts, no_png)},
+	{.name = "decisions", .arg = NULL,
+	 .help = "also write RUN/decisions/NNNNNN.png, the reuse decision of every pixel (reuse methods)",
+	 .type = CLI_FLAG, .offset = offsetof(render_opts, decisions)},
 	{.name = "trivial-shading", .arg = NULL,
 	 .help = "benchmark only: replace shading with base colour output",
 	 .type = CLI_FLAG, .offset = offsetof(render_opts, trivial_shading)},
@@ -93,7 +96,12 @@ static void render_defaults(void *opts, cli_setup_opts *setup)
 static int render_validate(void *opts, cli_ctx *ctx)
 {
 	render_opts *o = opts;
-	return cli_method_config(o->method, &o->margs, &o->config, ctx->err, sizeof ctx->err);
+	int rc = cli_method_config(o->method, &o->margs, &o->config, ctx->err, sizeof ctx->err);
+	if (!rc && o->decisions && !o->config.method->decisions)
+		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+			      "--decisions: method %s makes no reuse decisions (use rrc, tarc or their variants)",
+			      o->config.method->name);
+	return rc;
 }
 
 static void methods_help(FILE *out)
@@ -167,6 +175,7 @@ static int render_main(void *opts, cli_ctx *ctx)
 		.write_exr = !o->no_exr,
 		.write_png = !o->no_png,
 		.trivial_shading = o->trivial_shading,
+		.write_decisions = o->decisions,
 		.out = out,
 		.command_line = ctx->command_line,
 		.progress = o->quiet ? NULL : progress,

@@ -76,6 +76,8 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 		return tl_error(err, err_size, TL_ERR_ARG, "no such camera path");
 	if (desc->width < 1 || desc->height < 1 || desc->width > 16384 || desc->height > 16384)
 		return tl_error(err, err_size, TL_ERR_ARG, "frame size %ux%u out of range (1..16384)", desc->width, desc->height);
+	if (desc->decisions && !m->decisions)
+		return tl_error(err, err_size, TL_ERR_ARG, "decision maps: method %s makes no reuse decisions", m->info.name);
 	render *r = calloc(1, sizeof *r);
 	if (!r)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
@@ -176,6 +178,7 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 	img->height = r->desc.height;
 	img->hdr_rgba_half = r->hdr_packed;
 	img->display_rgba = r->display_packed;
+	img->decisions = r->desc.decisions ? r->method->decisions(r) : NULL;
 	st->frame = frame;
 	st->time_s = (double)frame / (double)r->desc.fps;
 	st->shaded_samples = st->reused_samples = st->visible_units = st->shaded_units = st->new_units = -1;

@@ -29,6 +29,7 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.fps = d->fps,
 		.method = mc,
 		.trivial_shading = d->trivial_shading,
+		.decisions = d->write_decisions,
 		.colour = d->colour,
 	};
 	if ((rc = render_create(d->dev, &rd, &r, err, err_size)))
@@ -59,6 +60,7 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.validation = d->dev->validation,
 		.write_exr = d->write_exr,
 		.write_png = d->write_png,
+		.write_decisions = d->write_decisions,
 		.command_line = d->command_line,
 		.display_transform = d->colour ? colour_name(d->colour) : NULL,
 	};

@@ -932,7 +932,7 @@ int add_node(loader &L, int node, int parent, int first_material, std::vector<in
 			return L.fail("node %d: mesh %d out of range (the file has %zu)", node, n.mesh, L.m.meshes.size());
 		const tinygltf::Mesh &mesh = L.m.meshes[(size_t)n.mesh];
 		for (size_t p = 0; p < mesh.primitives.size(); p++) {
-			int mi, child;
+			int mi = -1, child = -1;
 			if ((rc = add_primitive(L, n.mesh, (int)p, &mi)))
 				return rc;
 			int mat = mesh.primitives[p].material;

@@ -54,6 +54,7 @@ typedef struct method_info {
 	const method_option *options; /* the method's option table */
 	size_t option_count;
 	size_t options_size;          /* sizeof the method's options struct (<= METHOD_OPTIONS_MAX_B) */
+	bool decisions;               /* makes per-sample reuse decisions it can report (render --decisions) */
 	/* Cross-option checks beyond the table's ranges (NULL: none); called by method_config_check. */
 	int (*check)(const void *options, char *err, size_t err_size);
 } method_info;

@@ -41,6 +41,7 @@ typedef struct render_desc {
 	float fps;              /* frame f is at t = f / fps; 0 = the scene's fps */
 	const method_config *method; /* the method and its options (copied); NULL: ref */
 	bool trivial_shading;   /* benchmark only: swap the shading for base colour output */
+	bool decisions;         /* fill frame_image.decisions (methods with reuse decisions only) */
 	const struct colour *colour; /* display transform (borrowed); NULL: the built-in ACES default */
 } render_desc;
 
@@ -66,6 +67,7 @@ typedef struct render_run_desc {
 	uint32_t width, height;
 	float fps;
 	bool write_exr, write_png, trivial_shading;
+	bool write_decisions;   /* RUN/decisions/ (render_desc.decisions) */
 	const char *out;
 	const char *command_line;
 	void (*progress)(void *user, uint32_t done, uint32_t total);

@@ -50,19 +50,52 @@ static int clear_run(const char *dir, char *err, size_t err_size)
 					strerror(errno));
 	}
 	tl_fs_clean_temps(dir);
-	snprintf(p, sizeof p, "%s/frames", dir);
-	tl_fs_clean_temps(p);
-	DIR *d = opendir(p);
-	struct dirent *e;
 	int rc = TL_OK;
-	while (d && (e = readdir(d)) && !rc) {
-		char f[TL_PATH_MAX];
-		if (is_frame_name(e->d_name) && snprintf(f, sizeof f, "%s/%s", p, e->d_name) < (int)sizeof f && unlink(f) != 0)
-			rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot remove the previous run's frame: %s", f,
-				      strerror(errno));
+	const char *subdirs[2] = {"frames", "decisions"};
+	for (int i = 0; i < 2 && !rc; i++) {
+		snprintf(p, sizeof p, "%s/%s", dir, subdirs[i]);
+		tl_fs_clean_temps(p);
+		DIR *d = opendir(p);
+		struct dirent *e;
+		while (d && (e = readdir(d)) && !rc) {
+			char f[TL_PATH_MAX];
+			if (is_frame_name(e->d_name) && snprintf(f, sizeof f, "%s/%s", p, e->d_name) < (int)sizeof f &&
+			    unlink(f) != 0)
+				rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot remove the previous run's frame: %s", f,
+					      strerror(errno));
+		}
+		if (d)
+			closedir(d);
 	}
-	if (d)
-		closedir(d);
+	return rc;
+}
+
+/* Decision map colours (run.h): black background, grey reused, cyan new, blue second frame, red predicted,
+ * yellow scheduled. */
+static const uint8_t decision_rgb[FRAME_DECISION_COUNT][3] = {
+	{0, 0, 0}, {96, 96, 96}, {0, 220, 255}, {40, 90, 255}, {255, 48, 0}, {255, 210, 0},
+};
+
+int run_decision_code(const uint8_t rgb[3])
+{
+	for (int c = 0; c < FRAME_DECISION_COUNT; c++)
+		if (!memcmp(rgb, decision_rgb[c], 3))
+			return c;
+	return -1;
+}
+
+static int write_decisions(const char *path, const frame_image *img, char *err, size_t err_size)
+{
+	size_t n = (size_t)img->width * img->height;
+	uint8_t *rgb = malloc(n * 3);
+	if (!rgb)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	for (size_t i = 0; i < n; i++) {
+		uint8_t c = img->decisions[i] < FRAME_DECISION_COUNT ? img->decisions[i] : 0;
+		memcpy(rgb + i * 3, decision_rgb[c], 3);
+	}
+	int rc = imageio_write_png_rgb8_packed(path, img->width, img->height, rgb, err, err_size);
+	free(rgb);
 	return rc;
 }
 
@@ -98,6 +131,11 @@ int run_writer_create(const char *dir, const run_info *info, run_writer **out, c
 	int rc = tl_mkdirs(frames, err, err_size);
 	if (rc || (rc = clear_run(dir, err, err_size)))
 		return rc;
+	if (info->write_decisions) {
+		snprintf(frames, sizeof frames, "%s/decisions", dir);
+		if ((rc = tl_mkdirs(frames, err, err_size)))
+			return rc;
+	}
 	run_writer *w = calloc(1, sizeof *w);
 	if (!w)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
@@ -178,6 +216,13 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 		if ((rc = imageio_write_png_rgb8(path, img->width, img->height, img->display_rgba, err, err_size)))
 			return rc;
 	}
+	if (w->info.write_decisions) {
+		if (!img->decisions)
+			return tl_error(err, err_size, TL_ERR_INTERNAL, "frame %u: no decision map", st->frame);
+		snprintf(path, sizeof path, "%s/decisions/%06u.png", w->dir, st->frame);
+		if ((rc = write_decisions(path, img, err, err_size)))
+			return rc;
+	}
 	FILE *f = w->stats.f;
 	/* reuse_fraction: 1 - shaded / denominator, the denominator being the allocated atlas texels for atlas
 	 * methods ("fraction of the total allocated space in the atlas", paper sec. 4.3) and the visible
@@ -243,10 +288,10 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 	char created[32];
 	tl_clock_utc(created, sizeof created);
 	const run_info *in = &w->info;
-	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:s}, s:{s:i, s:I, s:I, s:I, s:f, s:f}, s:s}",
+	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, s:{s:i, s:I, s:I, s:I, s:f, s:f}, s:s}",
 			      "taslab_version", TASLAB_VERSION_STRING, "created_utc", created, "inputs", w->inputs,
 			      "device", "name", in->device, "driver", in->driver, "validation", in->validation, "outputs",
-			      "exr", in->write_exr, "png", in->write_png, "display_transform",
+			      "exr", in->write_exr, "png", in->write_png, "decisions", in->write_decisions, "display_transform",
 			      in->display_transform ? in->display_transform : "", "totals", "frames", (int)w->frames,
 			      "visible_samples", (json_int_t)w->visible_total, "shaded_samples", (json_int_t)w->shaded_total,
 			      "fs_invocations", (json_int_t)w->fs_total, "gpu_ms_median", median, "wall_s", wall_s,

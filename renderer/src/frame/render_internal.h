@@ -35,6 +35,8 @@ typedef struct render_method {
 	void (*record)(render *r, VkCommandBuffer cmd, uint32_t frame);
 	/* Fills the method-specific statistics after the frame completed. */
 	void (*collect)(render *r, frame_stats *st);
+	/* With render_desc.decisions (method_info.decisions): one frame_decision per pixel of the last frame. */
+	const uint8_t *(*decisions)(render *r);
 	void (*finish)(render *r);
 } render_method;
 

@@ -25,6 +25,8 @@ typedef struct reproj_state {
 	reproj_variant v;
 	vkdev_image img[IMG_COUNT];
 	vkdev_buffer counters; /* 8 uints, host visible (Counters in reproj.glsl) */
+	vkdev_buffer decision_buf; /* render --decisions: the next cache state, host visible */
+	uint8_t *decision_codes;   /* frame_decision per pixel, unpacked from decision_buf */
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet sets[2]; /* sets[p]: read cache p, write cache 1 - p */
 	render_pipeline reproject, mark, shade, truth;
@@ -116,13 +118,22 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 					       : VK_FORMAT_R32G32B32A32_SFLOAT;
 		/* rrc never reads G or F: one texel each keeps the descriptor set uniform */
 		uint32_t iw = arr && !v->tarc ? 1 : low ? lw : w, ih = arr && !v->tarc ? 1 : low ? lh : h;
-		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-					      VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
+		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
+			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, use, VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
 			return render_vk_error(err, err_size, names[i], res);
 	}
 	if ((res = vkdev_buffer_create(r->dev, 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
 				       "cache counters", &s->counters)))
 		return render_vk_error(err, err_size, "counter buffer", res);
+	if (r->desc.decisions) {
+		if ((res = vkdev_buffer_create(r->dev, (VkDeviceSize)w * h * 16, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
+					       "decision readback", &s->decision_buf)))
+			return render_vk_error(err, err_size, "decision readback buffer", res);
+		if (!(s->decision_codes = malloc((size_t)w * h)))
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
 	int rc = make_sets(r, s, err, err_size);
 	if (!rc && v->tarc)
 		rc = tas_filter_init(r, &s->filter, err, err_size);
@@ -211,6 +222,20 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 				  &(render_scene_pass){.pipe = &s->truth, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD});
 		barrier_all(cmd);
 	}
+	if (s->decision_buf.buffer) {
+		VkBufferImageCopy c = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+				       .imageExtent = {r->desc.width, r->desc.height, 1}};
+		vkdev_image *im = &s->img[IMG_STATE0 + next];
+		vkdev_barrier_image(cmd, im, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_GRAPHICS_BIT,
+				    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+				    VK_ACCESS_2_TRANSFER_READ_BIT);
+		vkCmdCopyImageToBuffer(cmd, im->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s->decision_buf.buffer, 1, &c);
+		vkdev_barrier_image(cmd, im, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+				    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+				    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	}
 	render_ts(r, cmd);
 	if (r->blend_count) {
 		memset(r->push_aux, 0, sizeof r->push_aux);
@@ -236,11 +261,21 @@ void reproj_collect(render *r, frame_stats *st)
 	st->visible_units = st->visible_samples;
 	st->shaded_units = c[1];
 	st->new_units = c[2];
-	st->late_samples = s->v.truth ? (s->v.oracle ? 0 : (int64_t)c[3]) : -1;
+	st->late_samples = s->v.truth ? (int64_t)c[3] : -1;
 	if (s->v.tarc && !s->v.oracle) {
 		st->extra_names[st->extra_count] = "forced_samples";
 		st->extra[st->extra_count++] = c[4];
 	}
+}
+
+/* state.z bits 24..26 (reproj.glsl DEC_*): the frame's decision per pixel; background pixels hold 0. */
+const uint8_t *reproj_decisions(render *r)
+{
+	reproj_state *s = state_of(r);
+	const uint32_t *st = s->decision_buf.mapped;
+	for (size_t i = 0, n = (size_t)r->desc.width * r->desc.height; i < n; i++)
+		s->decision_codes[i] = (uint8_t)((st[i * 4 + 2] >> 24) & 7u);
+	return s->decision_codes;
 }
 
 void reproj_finish(render *r)
@@ -248,6 +283,8 @@ void reproj_finish(render *r)
 	reproj_state *s = state_of(r);
 	if (!s)
 		return;
+	vkdev_buffer_destroy(r->dev, &s->decision_buf);
+	free(s->decision_codes);
 	render_pipeline *pipes[4] = {&s->reproject, &s->mark, &s->shade, &s->truth};
 	for (int i = 0; i < 4; i++)
 		render_pipeline_destroy(r, pipes[i]);

@@ -21,6 +21,7 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size);
 int reproj_prepare(render *r, uint32_t frame, char *err, size_t err_size);
 void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame);
 void reproj_collect(render *r, frame_stats *st);
+const uint8_t *reproj_decisions(render *r);
 void reproj_finish(render *r);
 
 #endif

@@ -48,6 +48,7 @@ const render_method render_method_rrc = {
 		 .available = true,
 		 .options = rrc_option_table,
 		 .option_count = sizeof rrc_option_table / sizeof rrc_option_table[0],
+		 .decisions = true,
 		 .options_size = sizeof(rrc_options)},
 	.pass_names = rrc_passes,
 	.pass_count = sizeof rrc_passes / sizeof rrc_passes[0],
@@ -56,5 +57,6 @@ const render_method render_method_rrc = {
 	.prepare = reproj_prepare,
 	.record = reproj_record,
 	.collect = reproj_collect,
+	.decisions = reproj_decisions,
 	.finish = reproj_finish,
 };

@@ -68,6 +68,7 @@ const render_method render_method_tarc = {
 		 .available = true,
 		 .options = tarc_option_table,
 		 .option_count = sizeof tarc_option_table / sizeof tarc_option_table[0],
+		 .decisions = true,
 		 .options_size = sizeof(tarc_options),
 		 .check = tarc_check},
 	.pass_names = tarc_passes,
@@ -77,5 +78,6 @@ const render_method render_method_tarc = {
 	.prepare = reproj_prepare,
 	.record = reproj_record,
 	.collect = reproj_collect,
+	.decisions = reproj_decisions,
 	.finish = reproj_finish,
 };

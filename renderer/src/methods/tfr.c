@@ -23,6 +23,7 @@
 typedef struct tfr_options {
 	float threshold; /* T in 8-bit code values: reshade when d(s_a, s_0) > T (DESIGN section 3) */
 	uint32_t max_age; /* K: reshade at the latest at this age */
+	bool truth;       /* write late_samples (always 0: tfr reuses only what is within T of s_0) */
 } tfr_options;
 
 static const method_option tfr_option_table[] = {
@@ -31,6 +32,9 @@ static const method_option tfr_option_table[] = {
 	 .variant = '@', .variant_required = true},
 	{.name = "max-age", .arg = "K", .help = "reshade at the latest at age K frames (1..119)", .type = METHOD_OPT_UINT,
 	 .offset = offsetof(tfr_options, max_age), .def = TFR_MAX_AGE, .min = 1, .max = TFR_MAX_AGE},
+	{.name = "truth", .help = "write late_samples: reused samples more than T from the truth (0 for tfr by construction; "
+				  "counted, not assumed)",
+	 .type = METHOD_OPT_BOOL, .offset = offsetof(tfr_options, truth)},
 };
 
 static const tfr_options *options(const render *r) { return (const tfr_options *)r->config.values.bytes; }
@@ -38,7 +42,7 @@ static const tfr_options *options(const render *r) { return (const tfr_options *
 typedef struct tfr_state {
 	uint32_t K;
 	vkdev_image age[2];           /* rgba32ui: age after the frame, object + 1, view distance */
-	vkdev_buffer counters;        /* reshaded, reused, disoccluded, pad */
+	vkdev_buffer counters;        /* reshaded, reused, disoccluded, late */
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet sets[2];      /* sets[i]: read age[i], write age[1 - i] */
 	render_pipeline pipe;
@@ -198,6 +202,7 @@ static void tfr_collect(render *r, frame_stats *st)
 	st->visible_units = st->visible_samples;
 	st->shaded_units = c[0];
 	st->new_units = c[2];
+	st->late_samples = options(r)->truth ? (int64_t)c[3] : -1;
 }
 
 static void tfr_finish(render *r)

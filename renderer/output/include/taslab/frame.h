@@ -32,11 +32,24 @@ typedef struct frame_stats {
 	double extra[FRAME_MAX_EXTRA];
 } frame_stats;
 
+/* Per-pixel reuse decision of a reuse method for the opaque sample of a pixel (`render --decisions`,
+ * RUN/decisions/NNNNNN.png; TAS-METHODS section 9 checks them pixel by pixel). */
+typedef enum frame_decision {
+	FRAME_DECISION_NONE = 0,      /* no opaque sample (background; BLEND surfaces are not counted) */
+	FRAME_DECISION_REUSED = 1,    /* shown from earlier shading */
+	FRAME_DECISION_NEW = 2,       /* shaded: no valid cache entry (first frame, disocclusion, cache miss) */
+	FRAME_DECISION_SECOND = 3,    /* shaded: second frame after becoming visible (paper sec. 6 step 1) */
+	FRAME_DECISION_PREDICTED = 4, /* shaded: predicted change beyond T (oracle: true change beyond T) */
+	FRAME_DECISION_SCHEDULED = 5, /* shaded on a schedule: rrc tile refresh, --max-age, --force-reshade */
+	FRAME_DECISION_COUNT
+} frame_decision;
+
 /* A frame's pixels. Pointers are borrowed (the renderer's: valid until its next frame). */
 typedef struct frame_image {
 	uint32_t width, height;
 	const uint16_t *hdr_rgba_half; /* scene-linear radiance * exposure, alpha = coverage; tightly packed */
 	const uint8_t *display_rgba;   /* display-referred 8-bit, tightly packed */
+	const uint8_t *decisions;      /* one frame_decision per pixel; NULL unless requested and supported */
 } frame_image;
 
 #ifdef __cplusplus

@@ -2,6 +2,9 @@
  *
  *   RUN/frames/NNNNNN.exr   scene-linear RGBA half (attributes taslab:scene, :camera, :method, ...)
  *   RUN/frames/NNNNNN.png   display-referred 8-bit RGB
+ *   RUN/decisions/NNNNNN.png  `render --decisions`: the reuse decision per pixel (frame_decision, frame.h) as
+ *                           colours: none black, reused (96,96,96), new (0,220,255), second frame
+ *                           (40,90,255), predicted (255,48,0), scheduled (255,210,0)
  *   RUN/stats.csv           one row per frame (frame.h)
  *   RUN/manifest.json       written last and atomically: inputs, method options, device, totals
  *
@@ -51,6 +54,7 @@ typedef struct run_info {
 	float fps;
 	bool validation;
 	bool write_exr, write_png;
+	bool write_decisions; /* RUN/decisions/NNNNNN.png from frame_image.decisions */
 	const char *command_line;
 	const char *display_transform; /* colour_name() of the view transform used for the PNGs */
 } run_info;
@@ -60,6 +64,8 @@ typedef struct run_writer run_writer;
 int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size);
 /* Writes the frame's EXR and PNG and appends its stats.csv row. */
 int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size);
+/* The frame_decision a decision-map colour stands for; -1 for any other colour. */
+int run_decision_code(const uint8_t rgb[3]);
 /* Closes stats.csv and writes manifest.json (atomically) with totals. */
 int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size);
 /* Frees the writer; an unfinished run leaves no manifest.json. */
