@@ -93,6 +93,16 @@ static void test_render_options(void **state)
 	assert_true(method_config_threshold(&o->config) == 16);
 	PARSE_OK("render", "render", "--scene", "s", "--method", "tfr"); /* --threshold's default */
 	assert_true(method_config_threshold(&o->config) == 8);
+	/* the reuse methods: variants, option tables, render-level flags */
+	PARSE_OK("render", "render", "--scene", "s", "--method", "rrc/8", "--resample", "nearest", "--decisions");
+	assert_true(method_config_period(&o->config) == 8 && o->decisions);
+	PARSE_OK("render", "render", "--scene", "s", "--method", "tarc", "--threshold", "16", "--truth", "--max-age=30");
+	assert_true(method_config_threshold(&o->config) == 16 && method_config_number(&o->config, "max-age") == 30);
+	PARSE_OK("render", "render", "--scene", "s", "--method", "tarc", "--oracle", "--threshold", "0");
+	PARSE_BAD("render", "T > 0", "render", "--scene", "s", "--method", "tarc", "--threshold", "0");
+	PARSE_BAD("render", "one of 1, 2, 4, 8", "render", "--scene", "s", "--method", "rrc", "--period", "3");
+	PARSE_BAD("render", "not an option of rrc", "render", "--scene", "s", "--method", "rrc", "--oracle");
+	PARSE_BAD("render", "no reuse decisions", "render", "--scene", "s", "--method", "tfr@8", "--decisions");
 	PARSE_BAD("render", "magic", "render", "--scene", "s", "--method", "magic");
 	PARSE_BAD("render", "not implemented", "render", "--scene", "s", "--method", "tasa");
 	PARSE_BAD("render", "--scene", "render", "--size", "96x54");
@@ -116,6 +126,9 @@ static void test_pair_options(void **state)
 	PARSE_OK("pair", "pair", "--scene", "calm", "--out", "d", "--variants", "ref,tfr@2,tfr@8");
 	assert_int_equal(o->count, 3);
 	assert_true(method_config_threshold(&o->configs[2]) == 8);
+	PARSE_OK("pair", "pair", "--scene", "calm", "--out", "d", "--variants", "rrc/4,rrc/8,tarc@8,tarc-oracle@8");
+	assert_int_equal(o->count, 4);
+	assert_true(method_config_period(&o->configs[1]) == 8 && method_config_threshold(&o->configs[3]) == 8);
 	PARSE_OK("pair", "pair", "--scene", "calm", "--out", "d"); /* default: the catch pair */
 	assert_int_equal(o->count, 1);
 	PARSE_BAD("pair", "tfr@8", "pair", "--scene", "calm", "--out", "d", "--variants", "tfr");
@@ -147,6 +160,13 @@ static void test_metrics_options(void **state)
 	PARSE_BAD("metrics diff", "--ref", "diff", "--ref", "a", "--out", "o");
 	PARSE_BAD("metrics diff", "--format", "diff", "--ref", "a", "--test", "b", "--out", "o", "--format", "jpg");
 	PARSE_BAD("metrics diff", "--threads", "diff", "--ref", "a", "--test", "b", "--out", "o", "--threads", "1.5");
+	/* the metric registry's selection and FLIP's viewing condition */
+	PARSE_OK("metrics diff", "diff", "--ref", "a", "--test", "b", "--out", "o", "--metrics", "maxrgb,flip", "--ppd=30");
+	PARSE_OK("metrics diff", "diff", "--ref", "a", "--test", "b", "--out", "o", "--metrics", "all");
+	PARSE_BAD("metrics diff", "unknown metric 'vmaf'", "diff", "--ref", "a", "--test", "b", "--out", "o", "--metrics",
+		  "psnr,vmaf");
+	PARSE_BAD("metrics diff", "--ppd", "diff", "--ref", "a", "--test", "b", "--out", "o", "--ppd", "0");
+	PARSE_BAD("metrics diff", "--ppd", "diff", "--ref", "a", "--test", "b", "--out", "o", "--ppd", "x");
 	PARSE_OK("metrics runs", "runs", "--out", "o", "r1", "r2");
 	assert_int_equal(ctx.npos, 2);
 	PARSE_BAD("metrics runs", "RUN", "runs", "--out", "o");

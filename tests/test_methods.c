@@ -59,6 +59,10 @@ static void test_variants(void **state)
 	expect_variant("ref", "ref", "ref", "ref", NAN, 0);
 	expect_variant("tfr@8", "tfr@8", "tfr", "tfr-T8", 8, 0);
 	expect_variant("tfr@2.5", "tfr@2.5", "tfr", "tfr-T2.5", 2.5, 0);
+	expect_variant("rrc/4", "rrc/4", "rrc", "rrc-N4", NAN, 4);
+	expect_variant("tarc@8", "tarc@8", "tarc", "tarc-T8", 8, 0);
+	expect_variant("tarc-oracle@8", "tarc-oracle@8", "tarc-oracle", "tarc-oracle-T8", 8, 0);
+	expect_variant("tarc-oracle@0", "tarc-oracle@0", "tarc-oracle", "tarc-oracle-T0", 0, 0);
 	char err[256];
 	method_config c;
 	struct {
@@ -70,6 +74,10 @@ static void test_variants(void **state)
 		{"tfr@8@9", "once"},		  {"tfr-oracle@8", "no '-oracle' form"},
 		{"magic@8", "unknown method"},	  {"", "empty"},
 		{"tasa@8", "not implemented"},	  {"tfr/4", "takes no '/'"},
+		{"rrc", "rrc/4"},		  {"rrc/3", "3"},
+		{"rrc/16", "one of 1, 2, 4, 8"},	  {"rrc-oracle/4", "no '-oracle' form"},
+		{"tarc", "tarc@8"},		  {"tarc@0", "T > 0"},
+		{"tarc@256", "out of range"},	  {"rrc@8", "takes no '@'"},
 	};
 	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		int rc = method_config_parse_variant(&c, bad[i].token, err, sizeof err);
@@ -96,13 +104,22 @@ static void test_options(void **state)
 	/* Manifest entries: every option, defaults included. */
 	run_option o[8];
 	size_t n = method_config_run_options(&c, o, 8);
-	assert_int_equal(n, 2);
+	assert_int_equal(n, 3);
 	assert_string_equal(o[0].key, "threshold");
+	assert_true(o[2].type == RUN_VALUE_BOOL && !o[2].boolean); /* truth */
 	assert_true(o[1].type == RUN_VALUE_NUMBER && o[1].number == 3);
 	assert_int_equal(method_config_init(&c, "ref", err, sizeof err), TL_OK);
 	assert_int_equal(method_config_run_options(&c, o, 8), 0);
 	assert_int_equal(method_config_set(&c, "threshold", "8", err, sizeof err), TL_ERR_ARG);
-	assert_non_null(strstr(err, "it applies to: tfr"));
+	assert_non_null(strstr(err, "it applies to: tfr, tarc"));
+	/* tarc: the cross-option check (method_info.check) */
+	assert_int_equal(method_config_init(&c, "tarc", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_set(&c, "threshold", "0", err, sizeof err), TL_OK); /* in range for the oracle */
+	assert_int_equal(method_config_check(&c, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "T > 0"));
+	assert_int_equal(method_config_set(&c, "oracle", "true", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_check(&c, err, sizeof err), TL_OK);
+	assert_true(method_config_number(&c, "max-age") == 0); /* no age limit unless asked (the paper has none) */
 }
 
 int main(void)
