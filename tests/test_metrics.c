@@ -739,7 +739,7 @@ static void test_percentile_paths(void **state)
 	free(map);
 }
 
-static void make_run(const char *dir, const char *method, double T, const char *csv)
+static void make_run(const char *dir, const char *method, double T, const char *size, const char *csv)
 {
 	char p[4096];
 	snprintf(p, sizeof p, "mkdir -p %s", dir);
@@ -747,7 +747,7 @@ static void make_run(const char *dir, const char *method, double T, const char *
 	snprintf(p, sizeof p, "%s/manifest.json", dir);
 	FILE *f = fopen(p, "w");
 	fprintf(f, "{\"inputs\": {\"method\": \"%s\", \"scene\": \"s\", \"camera\": \"c\", \"threshold\": %g, "
-		   "\"frames\": [0, 3], \"size\": [8, 8], \"fps\": 60}}", method, T);
+		   "\"frames\": [0, 2], \"size\": %s, \"fps\": 60}}", method, T, size);
 	fclose(f);
 	snprintf(p, sizeof p, "%s/stats.csv", dir);
 	f = fopen(p, "w");
@@ -758,51 +758,75 @@ static void make_run(const char *dir, const char *method, double T, const char *
 static void test_runs_summary(void **state)
 {
 	(void)state;
-	/* Hand-made runs. ref: invocations 1000 + 1000 = 2000, gpu ms 10, 12, 14 -> median 12.
-	 * tas@8: invocations (300+50) + (200+50) + (100+50) = 750 -> reduction 1 - 750/2000 = 62.5%;
-	 * reuse mean (0.5 + 0.7 + 0.9)/3 = 0.7; gpu ms 4, 8, 6 -> median 6 -> speedup 12/6 = 2;
-	 * tallies late 1+0+2 = 3, early 4, on_time 10, unchanged 100. */
+	/* Hand-made runs (3 frames, 100 visible samples each).
+	 * ref: shaded 100 per frame = 300, gpu ms 10, 14, 12 -> median 12; fs_invocations 1000 + 1000 (one empty cell).
+	 * tas@8: shaded 30 + 20 + 25 = 75 -> reduction 1 - 75/300 = 75%; reuse mean (0.7 + 0.8 + 0.75)/3 = 0.75;
+	 * gpu ms 4, 8, 6 -> median 6 -> speedup 12/6 = 2; late_samples 1 + 0 + 2 = 3 of reused 70 + 80 + 75 = 225;
+	 * tallies late 1+0+2 = 3, early 4, on_time 10, unchanged 100.
+	 * big: the same as tas but 16x16 frames: no ref or baseline run of its size -> NAN. */
 	const char *base = tu_tmpdir("metrics_runs");
-	char ref[4096], tas[4096], out[4096], err[1024];
+	char ref[4096], tas[4096], big[4096], out[4096], err[1024];
 	snprintf(ref, sizeof ref, "%s/ref", base);
 	snprintf(tas, sizeof tas, "%s/tas", base);
+	snprintf(big, sizeof big, "%s/big", base);
 	snprintf(out, sizeof out, "%s/out", base);
 	const char *hdr = "frame,time_s,visible_samples,shaded_samples,visible_units,shaded_units,new_units,reuse_fraction,"
 			  "fs_invocations,cs_invocations,gpu_ms_total,gpu_ms_shade";
 	char csv[2048];
-	snprintf(csv, sizeof csv, "%s\n0,0,1,1,1,1,,0,1000,,10,1\n1,0,1,1,1,1,,0,,,14,1\n2,0,1,1,1,1,,0,1000,0,12,1\n", hdr);
-	make_run(ref, "ref", 8, csv);
-	snprintf(csv, sizeof csv, "%s,late,early,on_time,unchanged\n0,0,1,1,1,1,,0.5,300,50,4,1,1,1,3,30\n"
-		 "1,0,1,1,1,1,,0.7,200,50,8,1,0,2,3,30\n2,0,1,1,1,1,,0.9,100,50,6,1,2,1,4,40\n", hdr);
-	make_run(tas, "tas", 8, csv);
-	const char *runs[2] = {tas, ref};
-	mtr_run_summary s[2];
-	if (mtr_runs_summarise(runs, 2, -1, s, err, sizeof err))
+	snprintf(csv, sizeof csv, "%s\n0,0,100,100,1,1,,0,1000,,10,1\n1,0,100,100,1,1,,0,,,14,1\n2,0,100,100,1,1,,0,1000,0,12,1\n",
+		 hdr);
+	make_run(ref, "ref", 8, "[8, 8]", csv);
+	snprintf(csv, sizeof csv,
+		 "%s,reused_samples,late_samples,late,early,on_time,unchanged\n0,0,100,30,1,1,,0.7,300,50,4,1,70,1,1,1,3,30\n"
+		 "1,0,100,20,1,1,,0.8,200,50,8,1,80,0,0,2,3,30\n2,0,100,25,1,1,,0.75,100,50,6,1,75,2,2,1,4,40\n",
+		 hdr);
+	make_run(tas, "tas", 8, "[8, 8]", csv);
+	make_run(big, "tas", 8, "[16, 16]", csv);
+	const char *runs[3] = {tas, ref, big};
+	mtr_run_summary s[3];
+	if (mtr_runs_summarise(runs, 3, NULL, s, err, sizeof err))
 		fail_msg("%s", err);
-	assert_float_equal(s[1].invocations, 2000, 0);
-	assert_float_equal(s[0].invocation_reduction, 0.625, 1e-12);
-	assert_float_equal(s[0].reuse_mean, 0.7, 1e-12);
+	assert_float_equal(s[1].shaded_samples, 300, 0);
+	assert_float_equal(s[1].fs_invocations, 2000, 0);
+	assert_float_equal(s[0].shaded_samples, 75, 0);
+	assert_float_equal(s[0].reduction, 0.75, 1e-12);
+	assert_string_equal(s[0].baseline, "ref");
+	assert_float_equal(s[1].reduction, 0, 0);
+	assert_float_equal(s[0].reuse_mean, 0.75, 1e-12);
 	assert_float_equal(s[1].gpu_ms_median, 12, 0);
 	assert_float_equal(s[0].speedup_vs_ref, 2.0, 1e-12);
+	assert_float_equal(s[0].late_samples, 3, 0);
+	assert_float_equal(s[0].reused_samples, 225, 0);
 	assert_float_equal(s[0].late, 3, 0);
 	assert_float_equal(s[0].early, 4, 0);
 	assert_float_equal(s[0].on_time, 10, 0);
 	assert_float_equal(s[0].unchanged, 100, 0);
-	assert_true(isnan(s[1].late));
-	assert_int_equal(mtr_runs_write(s, 2, out, err, sizeof err), 0);
+	assert_true(isnan(s[1].late) && isnan(s[1].late_samples) && isnan(s[1].allocated_samples));
+	assert_true(isnan(s[2].reduction) && isnan(s[2].speedup_vs_ref)); /* no partner of its size */
+	assert_int_equal(mtr_runs_write(s, 3, out, err, sizeof err), 0);
 	char p[4096];
 	snprintf(p, sizeof p, "%s/table1.md", out);
 	char *md = tu_read_file(p, NULL);
 	assert_non_null(md);
-	assert_non_null(strstr(md, "| tas | 62.5 |"));
+	assert_non_null(strstr(md, "| tas | 25 | 75.00 % vs ref | 75.00 % | 2.00x |"));
+	assert_non_null(strstr(md, "## s / c (), 16x16, 3 frames from 0"));
 	free(md);
+	snprintf(p, sizeof p, "%s/runs.csv", out);
+	char *rcsv = tu_read_file(p, NULL);
+	assert_non_null(strstr(rcsv, ",reused_samples,late_samples,late_percent,late,early,on_time,unchanged\n"));
+	assert_non_null(strstr(rcsv, ",225,3,1.3333,3,4,10,100\n")); /* late_percent = 3 / 225 */
+	free(rcsv);
+	/* Another baseline variant: reductions against it. */
+	if (mtr_runs_summarise(runs, 3, "tas", s, err, sizeof err))
+		fail_msg("%s", err);
+	assert_float_equal(s[1].reduction, -3.0, 1e-12); /* ref shades 4x as much as tas */
 	/* A run with a short row, and a folder that is no run. */
 	snprintf(csv, sizeof csv, "%s\n0,0,1\n", hdr);
-	make_run(tas, "tas", 8, csv);
-	assert_int_not_equal(mtr_runs_summarise(runs, 2, -1, s, err, sizeof err), 0);
+	make_run(tas, "tas", 8, "[8, 8]", csv);
+	assert_int_not_equal(mtr_runs_summarise(runs, 2, NULL, s, err, sizeof err), 0);
 	assert_non_null(strstr(err, "row 2"));
 	const char *none[1] = {base};
-	assert_int_not_equal(mtr_runs_summarise(none, 1, -1, s, err, sizeof err), 0);
+	assert_int_not_equal(mtr_runs_summarise(none, 1, NULL, s, err, sizeof err), 0);
 	assert_non_null(strstr(err, "manifest.json"));
 }
 

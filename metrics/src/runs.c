@@ -2,6 +2,7 @@
 #include "taslab/metrics_runs.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +23,20 @@ static int cmpd(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+/* Sum of a column over the rows; NAN when the column is absent or every cell empty. */
+static double column_sum(const run_stats *st, const char *name)
+{
+	int c = run_stats_col(st, name);
+	double sum = 0;
+	int seen = 0;
+	for (size_t r = 0; c >= 0 && r < st->rows; r++) {
+		double v = st->values[r * st->cols + (size_t)c];
+		if (isfinite(v))
+			sum += v, seen = 1;
+	}
+	return seen ? sum : NAN;
+}
+
 static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t err_size)
 {
 	memset(s, 0, sizeof *s);
@@ -32,47 +47,48 @@ static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t 
 	if (rc || (rc = run_stats_read(run, &st, err, err_size)))
 		return rc;
 	snprintf(s->method, sizeof s->method, "%s", m.method);
+	snprintf(s->variant, sizeof s->variant, "%s", m.variant[0] ? m.variant : m.method);
 	snprintf(s->scene, sizeof s->scene, "%s", m.scene);
 	snprintf(s->camera, sizeof s->camera, "%s", m.camera);
+	snprintf(s->camera_motion, sizeof s->camera_motion, "%s", m.camera_motion);
 	s->threshold = m.threshold;
+	s->period = m.period;
+	s->width = m.width;
+	s->height = m.height;
+	s->first_frame = m.first_frame;
 	int c_reuse = run_stats_col(&st, "reuse_fraction"), c_gpu = run_stats_col(&st, "gpu_ms_total");
-	int c_fs = run_stats_col(&st, "fs_invocations"), c_cs = run_stats_col(&st, "cs_invocations");
-	static const char *const tally_cols[4] = {"late", "early", "on_time", "unchanged"};
-	if (c_reuse < 0 || c_fs < 0 || c_cs < 0 || c_gpu < 0 || st.rows == 0) {
+	int c_shaded = run_stats_col(&st, "shaded_samples"), c_vis = run_stats_col(&st, "visible_samples");
+	if (c_reuse < 0 || c_gpu < 0 || c_shaded < 0 || c_vis < 0 || st.rows == 0) {
 		run_stats_free(&st);
 		return tl_error(err, err_size, TL_ERR_INPUT,
-				"%s/stats.csv: no frames, or missing columns (reuse_fraction, fs_invocations, cs_invocations, "
+				"%s/stats.csv: no frames, or missing columns (visible_samples, shaded_samples, reuse_fraction, "
 				"gpu_ms_total)", run);
 	}
-	double tally[4] = {0, 0, 0, 0}, inv = 0;
-	int inv_seen = 0, have_tally[4];
-	for (int k = 0; k < 4; k++)
-		have_tally[k] = run_stats_col(&st, tally_cols[k]) >= 0;
 	double *gpu_ms = malloc(st.rows * sizeof *gpu_ms);
-	size_t ng = 0;
 	if (!gpu_ms) {
 		run_stats_free(&st);
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
+	size_t ng = 0;
 	for (size_t r = 0; r < st.rows; r++) {
 		const double *v = st.values + r * st.cols;
 		s->frames++;
 		s->reuse_mean += isfinite(v[c_reuse]) ? v[c_reuse] : 0.0;
-		if (isfinite(v[c_fs]) || isfinite(v[c_cs])) {
-			inv += (isfinite(v[c_fs]) ? v[c_fs] : 0) + (isfinite(v[c_cs]) ? v[c_cs] : 0);
-			inv_seen = 1;
-		}
-		for (int k = 0; k < 4; k++) {
-			double t = run_stats_get(&st, r, tally_cols[k]);
-			if (isfinite(t))
-				tally[k] += t;
-		}
 		if (isfinite(v[c_gpu]))
 			gpu_ms[ng++] = v[c_gpu];
 	}
-	run_stats_free(&st);
 	s->reuse_mean /= (double)s->frames;
-	s->invocations = inv_seen ? inv : NAN;
+	s->visible_samples = column_sum(&st, "visible_samples");
+	s->shaded_samples = column_sum(&st, "shaded_samples");
+	s->allocated_samples = column_sum(&st, "allocated_samples");
+	s->fs_invocations = column_sum(&st, "fs_invocations");
+	s->reused_samples = column_sum(&st, "reused_samples");
+	s->late_samples = column_sum(&st, "late_samples");
+	s->late = column_sum(&st, "late");
+	s->early = column_sum(&st, "early");
+	s->on_time = column_sum(&st, "on_time");
+	s->unchanged = column_sum(&st, "unchanged");
+	run_stats_free(&st);
 	if (ng) {
 		qsort(gpu_ms, ng, sizeof *gpu_ms, cmpd);
 		s->gpu_ms_median = ng % 2 ? gpu_ms[ng / 2] : 0.5 * (gpu_ms[ng / 2 - 1] + gpu_ms[ng / 2]);
@@ -80,35 +96,38 @@ static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t 
 		s->gpu_ms_median = NAN;
 	}
 	free(gpu_ms);
-	s->late = have_tally[0] ? tally[0] : NAN;
-	s->early = have_tally[1] ? tally[1] : NAN;
-	s->on_time = have_tally[2] ? tally[2] : NAN;
-	s->unchanged = have_tally[3] ? tally[3] : NAN;
 	return TL_OK;
 }
 
-int mtr_runs_summarise(const char *const *runs, size_t n, int baseline, mtr_run_summary *out, char *err, size_t err_size)
+/* Same scene, camera path, frames and size: runs whose counts and times can be compared. */
+static bool same_clip(const mtr_run_summary *a, const mtr_run_summary *b)
 {
+	return !strcmp(a->scene, b->scene) && !strcmp(a->camera, b->camera) && a->first_frame == b->first_frame &&
+	       a->frames == b->frames && a->width == b->width && a->height == b->height;
+}
+
+int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, mtr_run_summary *out, char *err,
+		       size_t err_size)
+{
+	if (!baseline)
+		baseline = "ref";
 	for (size_t i = 0; i < n; i++) {
 		int rc = summarise_one(runs[i], &out[i], err, err_size);
 		if (rc)
 			return rc;
 	}
-	if (baseline < 0)
-		for (size_t i = 0; i < n && baseline < 0; i++)
-			if (!strcmp(out[i].method, "ref"))
-				baseline = (int)i;
 	for (size_t i = 0; i < n; i++) {
-		out[i].invocation_reduction = baseline >= 0 && out[baseline].invocations > 0
-						      ? 1.0 - out[i].invocations / out[baseline].invocations
-						      : NAN;
-		out[i].speedup_vs_ref = NAN;
-		for (size_t r = 0; r < n; r++)
-			if (!strcmp(out[r].method, "ref") && !strcmp(out[r].scene, out[i].scene) &&
-			    !strcmp(out[r].camera, out[i].camera)) {
-				out[i].speedup_vs_ref = out[r].gpu_ms_median / out[i].gpu_ms_median;
-				break;
+		out[i].reduction = out[i].speedup_vs_ref = NAN;
+		for (size_t r = 0; r < n; r++) {
+			if (!same_clip(&out[r], &out[i]))
+				continue;
+			if (!isfinite(out[i].reduction) && !strcmp(out[r].variant, baseline) && out[r].shaded_samples > 0) {
+				out[i].reduction = 1.0 - out[i].shaded_samples / out[r].shaded_samples;
+				snprintf(out[i].baseline, sizeof out[i].baseline, "%s", baseline);
 			}
+			if (!isfinite(out[i].speedup_vs_ref) && !strcmp(out[r].method, "ref"))
+				out[i].speedup_vs_ref = out[r].gpu_ms_median / out[i].gpu_ms_median;
+		}
 	}
 	return 0;
 }
@@ -121,6 +140,53 @@ static void num(FILE *f, double v, const char *fmt)
 
 static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
+/* runs.csv columns, in order (mtr_runs_plot finds its columns here by name). */
+static const char *const csv_columns[] = {
+	"run", "scene", "camera", "camera_motion", "method", "variant", "T", "period", "frames", "width", "height",
+	"visible_samples", "shaded_samples", "allocated_samples", "reuse_percent", "reduction_percent", "baseline",
+	"fs_invocations", "gpu_ms_median", "speedup_vs_ref", "reused_samples", "late_samples", "late_percent", "late",
+	"early", "on_time", "unchanged", NULL};
+
+static int csv_column(const char *name)
+{
+	for (int i = 0; csv_columns[i]; i++)
+		if (!strcmp(csv_columns[i], name))
+			return i + 1; /* gnuplot counts from 1 */
+	return 0;
+}
+
+static void write_table1(FILE *f, const mtr_run_summary *s, size_t n)
+{
+	fprintf(f, "# Shaded samples and their reduction against the baseline (cf. paper Table 1)\n\n"
+		   "Shaded samples are the methods' own counts of samples whose shading ran (DESIGN section 5), per "
+		   "frame; the reduction is 1 - shaded / baseline's shaded over the same frames.\n");
+	for (size_t g = 0; g < n; g++) {
+		bool first = true;
+		for (size_t j = 0; j < g; j++)
+			first &= !same_clip(&s[j], &s[g]);
+		if (!first)
+			continue;
+		fprintf(f, "\n## %s / %s (%s), %ux%u, %zu frames from %u\n\n", s[g].scene, s[g].camera, s[g].camera_motion,
+			s[g].width, s[g].height, s[g].frames, s[g].first_frame);
+		fprintf(f, "| variant | shaded samples per frame | reduction | reuse | speedup vs ref |\n|---|---:|---:|---:|---:|\n");
+		for (size_t i = g; i < n; i++) {
+			if (!same_clip(&s[i], &s[g]))
+				continue;
+			fprintf(f, "| %s | %.0f | ", s[i].variant, s[i].shaded_samples / (double)s[i].frames);
+			if (isfinite(s[i].reduction))
+				fprintf(f, "%.2f %% vs %s", 100 * s[i].reduction, s[i].baseline);
+			else
+				fprintf(f, "–");
+			fprintf(f, " | %.2f %% | ", 100 * s[i].reuse_mean);
+			if (isfinite(s[i].speedup_vs_ref))
+				fprintf(f, "%.2fx", s[i].speedup_vs_ref);
+			else
+				fprintf(f, "–");
+			fprintf(f, " |\n");
+		}
+	}
+}
+
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
 {
 	char path[4096];
@@ -132,32 +198,53 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 	if ((rc = tl_atomic_open(&csv, path, err, err_size)))
 		return rc;
 	FILE *f = csv.f;
-	fprintf(f, "run,scene,camera,method,T,frames,reuse_percent,invocations,invocation_reduction_percent,gpu_ms_median,"
-		   "speedup_vs_ref,late,early,on_time,unchanged\n");
+	for (int c = 0; csv_columns[c]; c++)
+		fprintf(f, "%s%s", c ? "," : "", csv_columns[c]);
+	fputc('\n', f);
 	json_t *arr = json_array();
 	for (size_t i = 0; i < n; i++) {
 		const mtr_run_summary *r = &s[i];
-		fprintf(f, "%s,%s,%s,%s,%g,%zu,", r->path, r->scene, r->camera, r->method, r->threshold, r->frames);
-		num(f, 100 * r->reuse_mean, "%.4f");
+		double late_pct = r->reused_samples > 0 ? 100 * r->late_samples / r->reused_samples : NAN;
+		fprintf(f, "%s,%s,%s,%s,%s,%s,", r->path, r->scene, r->camera, r->camera_motion, r->method, r->variant);
+		num(f, r->threshold, "%g");
 		fputc(',', f);
-		num(f, r->invocations, "%.0f");
-		fputc(',', f);
-		num(f, 100 * r->invocation_reduction, "%.4f");
-		fputc(',', f);
-		num(f, r->gpu_ms_median, "%.4f");
-		fputc(',', f);
-		num(f, r->speedup_vs_ref, "%.4f");
+		if (r->period)
+			fprintf(f, "%u", r->period);
+		fprintf(f, ",%zu,%u,%u,", r->frames, r->width, r->height);
+		num(f, r->visible_samples, "%.0f"), fputc(',', f);
+		num(f, r->shaded_samples, "%.0f"), fputc(',', f);
+		num(f, r->allocated_samples, "%.0f"), fputc(',', f);
+		num(f, 100 * r->reuse_mean, "%.4f"), fputc(',', f);
+		num(f, 100 * r->reduction, "%.4f"), fprintf(f, ",%s,", r->baseline);
+		num(f, r->fs_invocations, "%.0f"), fputc(',', f);
+		num(f, r->gpu_ms_median, "%.4f"), fputc(',', f);
+		num(f, r->speedup_vs_ref, "%.4f"), fputc(',', f);
+		num(f, r->reused_samples, "%.0f"), fputc(',', f);
+		num(f, r->late_samples, "%.0f"), fputc(',', f);
+		num(f, late_pct, "%.4f");
 		double t[4] = {r->late, r->early, r->on_time, r->unchanged};
 		for (int k = 0; k < 4; k++)
 			fputc(',', f), num(f, t[k], "%.0f");
 		fputc('\n', f);
-		json_array_append_new(arr, json_pack("{s:s, s:s, s:s, s:s, s:f, s:I, s:o, s:o, s:o, s:o, s:o, s:o, s:o, s:o, s:o}",
-						     "run", r->path, "scene", r->scene, "camera", r->camera, "method", r->method,
-						     "T", r->threshold, "frames", (json_int_t)r->frames, "reuse", jnum(r->reuse_mean),
-						     "invocations", jnum(r->invocations), "invocation_reduction",
-						     jnum(r->invocation_reduction), "gpu_ms_median", jnum(r->gpu_ms_median),
-						     "speedup_vs_ref", jnum(r->speedup_vs_ref), "late", jnum(r->late), "early",
-						     jnum(r->early), "on_time", jnum(r->on_time), "unchanged", jnum(r->unchanged)));
+		json_t *o = json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:o, s:o, s:I, s:[i,i]}", "run", r->path, "scene", r->scene,
+				      "camera", r->camera, "camera_motion", r->camera_motion, "method", r->method, "variant",
+				      r->variant, "T", jnum(r->threshold), "period",
+				      r->period ? json_integer(r->period) : json_null(), "frames", (json_int_t)r->frames, "size",
+				      (int)r->width, (int)r->height);
+		const struct {
+			const char *k;
+			double v;
+		} nums[] = {{"visible_samples", r->visible_samples}, {"shaded_samples", r->shaded_samples},
+			    {"allocated_samples", r->allocated_samples}, {"reuse", r->reuse_mean},
+			    {"reduction", r->reduction}, {"fs_invocations", r->fs_invocations},
+			    {"gpu_ms_median", r->gpu_ms_median}, {"speedup_vs_ref", r->speedup_vs_ref},
+			    {"reused_samples", r->reused_samples}, {"late_samples", r->late_samples},
+			    {"late", r->late}, {"early", r->early}, {"on_time", r->on_time}, {"unchanged", r->unchanged}};
+		for (size_t k = 0; o && k < sizeof nums / sizeof nums[0]; k++)
+			json_object_set_new(o, nums[k].k, jnum(nums[k].v));
+		if (o)
+			json_object_set_new(o, "baseline", r->baseline[0] ? json_string(r->baseline) : json_null());
+		json_array_append_new(arr, o);
 	}
 	rc = tl_atomic_commit(&csv, err, err_size);
 	snprintf(path, sizeof path, "%s/runs.json", dir);
@@ -166,49 +253,10 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 	json_decref(arr);
 	if (rc)
 		return rc;
-	/* Table 1 layout: shader-invocation reduction (%) per method (rows) and T (columns). */
-	double ts[32];
-	int nt = 0;
-	for (size_t i = 0; i < n; i++) {
-		int seen = 0;
-		for (int k = 0; k < nt; k++)
-			seen |= ts[k] == s[i].threshold;
-		if (!seen && nt < 32 && strcmp(s[i].method, "ref"))
-			ts[nt++] = s[i].threshold;
-	}
-	qsort(ts, (size_t)nt, sizeof *ts, cmpd);
 	snprintf(path, sizeof path, "%s/table1.md", dir);
 	if ((rc = tl_atomic_open(&md, path, err, err_size)))
 		return rc;
-	f = md.f;
-	{
-		fprintf(f, "Shader invocations, reduction against the baseline (%%), per method and threshold T (cf. paper Table 1)\n\n| method |");
-		for (int k = 0; k < nt; k++)
-			fprintf(f, " T = %g |", ts[k]);
-		fprintf(f, "\n|---|");
-		for (int k = 0; k < nt; k++)
-			fprintf(f, "---|");
-		fprintf(f, "\n");
-		for (size_t i = 0; i < n; i++) {
-			int first = 1;
-			for (size_t j = 0; j < i; j++)
-				first &= strcmp(s[j].method, s[i].method) != 0;
-			if (!first || !strcmp(s[i].method, "ref"))
-				continue;
-			fprintf(f, "| %s |", s[i].method);
-			for (int k = 0; k < nt; k++) {
-				double v = NAN;
-				for (size_t j = 0; j < n; j++)
-					if (!strcmp(s[j].method, s[i].method) && s[j].threshold == ts[k])
-						v = s[j].invocation_reduction;
-				if (isfinite(v))
-					fprintf(f, " %.1f |", 100 * v);
-				else
-					fprintf(f, " – |");
-			}
-			fprintf(f, "\n");
-		}
-	}
+	write_table1(md.f, s, n);
 	return tl_atomic_commit(&md, err, err_size);
 }
 
@@ -220,10 +268,11 @@ int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err
 	FILE *f = mtr_plot_begin(&plot, path, err, err_size);
 	if (!f)
 		return TL_ERR_OUTPUT;
-	/* Per-T summaries: reuse and invocation reduction against T, one line per method (from runs.csv). */
+	/* Per-T summaries: reduction, reuse and speedup against T, one line per method with a threshold (runs.csv). */
+	int M = csv_column("method"), T = csv_column("T");
 	char methods[2048] = "";
 	for (size_t i = 0; i < n; i++) {
-		int first = strcmp(s[i].method, "ref") != 0;
+		int first = isfinite(s[i].threshold);
 		for (size_t j = 0; j < i; j++)
 			first &= strcmp(s[j].method, s[i].method) != 0;
 		if (first && strlen(methods) + strlen(s[i].method) + 2 < sizeof methods) {
@@ -235,17 +284,18 @@ int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err
 		"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10'\nset grid\n"
 		"set key outside right top\nset logscale x 2\nset xlabel 'threshold T (code values)'\n"
 		"methods = '%s'\n"
-		"set output '%s/reduction.png'\nset title 'shader invocations: reduction against the baseline'\n"
+		"set output '%s/reduction.png'\nset title 'shaded samples: reduction against the baseline'\n"
 		"set ylabel 'reduction (%%)'\n"
-		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):9 every ::1 with linespoints title m\n"
+		"plot for [m in methods] '%s/runs.csv' using (strcol(%d) eq m ? $%d : 1/0):%d every ::1 with linespoints title m\n"
 		"set output '%s/reuse.png'\nset title 'shading reuse'\nset ylabel 'reuse (%%)'\n"
-		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):7 every ::1 with linespoints title m\n"
+		"plot for [m in methods] '%s/runs.csv' using (strcol(%d) eq m ? $%d : 1/0):%d every ::1 with linespoints title m\n"
 		"set output '%s/speedup.png'\nset title 'speedup against ref (median GPU frame time)'\nset ylabel 'speedup (x)'\n"
-		"plot for [m in methods] '%s/runs.csv' using (strcol(4) eq m ? $5 : 1/0):11 every ::1 with linespoints title m\n",
-		methods, dir, dir, dir, dir, dir, dir);
+		"plot for [m in methods] '%s/runs.csv' using (strcol(%d) eq m ? $%d : 1/0):%d every ::1 with linespoints title m\n",
+		methods, dir, dir, M, T, csv_column("reduction_percent"), dir, dir, M, T, csv_column("reuse_percent"), dir, dir,
+		M, T, csv_column("speedup_vs_ref"));
 	if (!methods[0]) {
 		tl_atomic_abort(&plot.file);
-		return tl_error(err, err_size, TL_ERR_UNSUPPORTED, "no non-ref runs: per-T plots skipped");
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED, "no runs of a method with a threshold: per-T plots skipped");
 	}
 	return mtr_plot_end(&plot, err, err_size);
 }

@@ -1,5 +1,5 @@
 /* metrics_runs.h — shading statistics of runs from their stats.csv and manifest.json (DESIGN sections 5, 6):
- * reuse, shader-invocation reduction against a baseline run (paper Table 1), speedup against `ref`
+ * reuse, reduction of shaded samples against a baseline variant (paper Table 1), speedup against `ref`
  * (paper Fig. 12), and late / early / on-time / unchanged tallies when a run's stats.csv has those columns
  * (paper Figs. 7, 9). */
 #ifndef TASLAB_METRICS_RUNS_H
@@ -13,28 +13,39 @@ extern "C" {
 
 typedef struct mtr_run_summary {
 	char path[1024];
-	char method[32], scene[64], camera[64];
-	double threshold;
+	char method[32], variant[64], scene[64], camera[64], camera_motion[16];
+	double threshold;           /* T, NAN when the method has none */
+	unsigned period;            /* N, 0 when the method has none */
+	unsigned width, height, first_frame;
 	size_t frames;
+	double visible_samples;     /* sums over the frames */
+	double shaded_samples;      /* the methods' own counters: Table 1 "shader invocations" (DESIGN section 5) */
+	double allocated_samples;   /* atlas methods; NAN otherwise */
 	double reuse_mean;          /* mean of reuse_fraction over frames (0..1) */
-	double invocations;         /* sum of fs_invocations + cs_invocations; NAN when the device had none */
-	double invocation_reduction;/* 1 - invocations / baseline invocations; NAN without a baseline */
+	double reduction;           /* 1 - shaded / baseline's shaded; NAN without a matching baseline run */
+	char baseline[64];          /* the baseline run's variant ("" without one) */
+	double fs_invocations;      /* sum of the device's fragment-invocation statistic (NAN if none): not shading */
 	double gpu_ms_median;       /* median gpu_ms_total; NAN without timestamps */
-	double speedup_vs_ref;      /* ref median / this median; NAN without a ref run */
-	double late, early, on_time, unchanged; /* column sums, NAN when absent */
+	double speedup_vs_ref;      /* ref median / this median; NAN without a matching ref run */
+	double reused_samples;      /* sum; NAN when absent */
+	double late_samples;        /* --truth: sum; NAN when absent */
+	double late, early, on_time, unchanged; /* analysis tallies: column sums, NAN when absent */
 } mtr_run_summary;
 
-/* Summarises `n` runs. `baseline` indexes the run invocation reductions are relative to (-1: the first
- * run whose method is ref, if any). Speedups are relative to the first `ref` run with the same scene,
- * camera and frame size. */
-int mtr_runs_summarise(const char *const *runs, size_t n, int baseline, mtr_run_summary *out, char *err, size_t err_size);
+/* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: "ref"; Table 1 of the paper
+ * reduces against SA, so atlas methods pass "sa") and speedups against the `ref` run, both with the same scene,
+ * camera path, first frame, frame count and size. Runs without such a partner get NAN. */
+int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, mtr_run_summary *out, char *err,
+		       size_t err_size);
 
-/* Writes DIR/runs.csv, DIR/runs.json and DIR/table1.md (invocation reduction in the paper's Table 1 layout:
- * one row per method, one column per T). */
+/* Writes DIR/runs.csv (one row per run, columns as mtr_run_summary), DIR/runs.json and DIR/table1.md (the
+ * paper's Table 1 layout per scene and camera path: variant, shaded samples per frame, reduction, reuse,
+ * speedup). */
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
 
-/* Draws DIR/reduction.png, reuse.png and speedup.png against T, one line per method (gnuplot, from
- * DIR/runs.csv written by mtr_runs_write). Returns -1 with a note when gnuplot is missing or nothing to draw. */
+/* Draws DIR/reduction.png, reuse.png and speedup.png against T, one line per method with a threshold (gnuplot,
+ * from DIR/runs.csv written by mtr_runs_write). Returns non-zero with a note when gnuplot is missing or nothing
+ * to draw. */
 int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
 
 #ifdef __cplusplus
