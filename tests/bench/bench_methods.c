@@ -1,0 +1,138 @@
+/* bench_methods.c — the reuse methods side by side in one process (scripts/bench-methods; not a test).
+ * One renderer per variant over the same scene, camera path and size; frame f is rendered by every variant in
+ * turn before frame f + 1, so machine noise at any moment hits all variants alike, and each renderer still sees
+ * consecutive frames (its cache stays valid). Writes one CSV row per variant and frame:
+ *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,gpu_ms_<pass>... (the variant's own passes)
+ *
+ *   bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
+ * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
+ *        force=tarc@8,force-reshade */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+
+#define MAX_VARIANTS 16
+
+typedef struct bench_variant {
+	char label[64];
+	method_config mc;
+	render *r;
+} bench_variant;
+
+static int parse_variant(const char *arg, bench_variant *v)
+{
+	char err[512], buf[512];
+	snprintf(buf, sizeof buf, "%s", arg);
+	char *eq = strchr(buf, '=');
+	if (!eq) {
+		fprintf(stderr, "bench_methods: '%s': expected LABEL=VARIANT[,OPTION[=VALUE]]...\n", arg);
+		return 1;
+	}
+	*eq = 0;
+	snprintf(v->label, sizeof v->label, "%s", buf);
+	char *save = NULL, *tok = strtok_r(eq + 1, ",", &save);
+	if (!tok || method_config_parse_variant(&v->mc, tok, err, sizeof err)) {
+		fprintf(stderr, "bench_methods: %s: %s\n", arg, tok ? err : "no variant");
+		return 1;
+	}
+	while ((tok = strtok_r(NULL, ",", &save))) {
+		char *ov = strchr(tok, '=');
+		if (ov)
+			*ov++ = 0;
+		if (method_config_set(&v->mc, tok, ov ? ov : "true", err, sizeof err)) {
+			fprintf(stderr, "bench_methods: %s: %s\n", arg, err);
+			return 1;
+		}
+	}
+	if (method_config_check(&v->mc, err, sizeof err)) {
+		fprintf(stderr, "bench_methods: %s: %s\n", arg, err);
+		return 1;
+	}
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	if (argc < 7) {
+		fprintf(stderr, "usage: bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPT[=V]]...\n");
+		return 2;
+	}
+	char err[1024];
+	unsigned w, h, first, end;
+	if (sscanf(argv[3], "%ux%u", &w, &h) != 2 || sscanf(argv[4], "%u:%u", &first, &end) != 2 || end <= first) {
+		fprintf(stderr, "bench_methods: bad size '%s' or frames '%s'\n", argv[3], argv[4]);
+		return 2;
+	}
+	int nv = argc - 6;
+	if (nv > MAX_VARIANTS) {
+		fprintf(stderr, "bench_methods: at most %d variants\n", MAX_VARIANTS);
+		return 2;
+	}
+	bench_variant v[MAX_VARIANTS];
+	memset(v, 0, sizeof v);
+	for (int i = 0; i < nv; i++)
+		if (parse_variant(argv[6 + i], &v[i]))
+			return 2;
+	scene *s = NULL;
+	if (scene_load(argv[1], &s, err, sizeof err)) {
+		fprintf(stderr, "bench_methods: %s\n", err);
+		return 1;
+	}
+	int cam = -1;
+	for (size_t i = 0; i < s->camera_count; i++)
+		if (!strcmp(s->cameras[i].name, argv[2]))
+			cam = (int)i;
+	if (cam < 0) {
+		fprintf(stderr, "bench_methods: %s has no camera path '%s'\n", argv[1], argv[2]);
+		return 1;
+	}
+	vkdev *dev = NULL;
+	vkdev_desc dd = {.device = getenv("TASLAB_DEVICE") ? getenv("TASLAB_DEVICE") : "lavapipe"};
+	if (vkdev_create(&dd, &dev, err, sizeof err)) {
+		fprintf(stderr, "bench_methods: %s\n", err);
+		return 1;
+	}
+	for (int i = 0; i < nv; i++) {
+		render_desc rd = {.scene = s, .camera = cam, .width = w, .height = h, .method = &v[i].mc};
+		if (render_create(dev, &rd, &v[i].r, err, sizeof err)) {
+			fprintf(stderr, "bench_methods: %s: %s\n", v[i].label, err);
+			return 1;
+		}
+	}
+	FILE *out = fopen(argv[5], "w");
+	if (!out) {
+		perror(argv[5]);
+		return 1;
+	}
+	int rc = 0;
+	for (unsigned f = first; f < end && !rc; f++) {
+		for (int i = 0; i < nv; i++) {
+			frame_image img;
+			frame_stats st;
+			if (render_frame(v[i].r, f, &img, &st, err, sizeof err)) {
+				fprintf(stderr, "bench_methods: %s frame %u: %s\n", v[i].label, f, err);
+				rc = 1;
+				break;
+			}
+			fprintf(out, "%s,%u,%lld,%lld,%lld,%lld,%lld,%.4f", v[i].label, f, (long long)st.visible_samples,
+				(long long)st.shaded_samples, (long long)st.reused_samples, (long long)st.new_units,
+				(long long)st.late_samples, st.gpu_ms_total);
+			for (uint32_t p = 0; p < st.pass_count; p++)
+				fprintf(out, ",%s=%.4f", st.pass_names[p], st.gpu_ms[p]);
+			fputc('\n', out);
+		}
+		fflush(out);
+		if ((f - first + 1) % 10 == 0)
+			fprintf(stderr, "bench_methods: %s %s: %u/%u frames\n", s->name, argv[2], f - first + 1, end - first);
+	}
+	fclose(out);
+	for (int i = 0; i < nv; i++)
+		render_destroy(&v[i].r);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+	return rc;
+}
