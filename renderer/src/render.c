@@ -168,6 +168,15 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 	if (r->ts_pool)
 		vkCmdResetQueryPool(cmd, r->ts_pool, 0, FRAME_MAX_PASSES + 1);
 	r->ts_count = 0;
+	if (r->method->record_pre) {
+		r->method->record_pre(r, cmd, frame);
+		if ((res = render_cmd_submit_wait(r)))
+			return render_vk_error(err, err_size, "frame submission (before the CPU step)", res);
+		if ((rc = r->method->cpu_step(r, frame, err, err_size)))
+			return rc;
+		if ((res = render_cmd_begin(r)))
+			return render_vk_error(err, err_size, "command buffer", res);
+	}
 	r->method->record(r, cmd, frame);
 	if ((res = render_cmd_submit_wait(r)))
 		return render_vk_error(err, err_size, "frame submission", res);

@@ -206,8 +206,15 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 			{{-h.x, -h.y, h.z}, {s.x, 0, 0}, {0, s.y, 0}, {0, 0, 1}},
 			{{h.x, -h.y, -h.z}, {-s.x, 0, 0}, {0, s.y, 0}, {0, 0, -1}},
 		};
-		for (int i = 0; i < 6; i++)
-			b_patch(&b, quad_fn, &f[i], 2, 2, tlm_v3_length(f[i].eu) * uvs, tlm_v3_length(f[i].ev) * uvs);
+		/* 2 x 2 quads per face; with `segments`, quads of side max(size) / segments (large walls subdivided
+		 * so that the shading atlas can size their patches, [TAS] sec. 7.4) */
+		float cell = fmaxf(s.x, fmaxf(s.y, s.z)) / (float)(d->segments > 0 ? d->segments : 1);
+		for (int i = 0; i < 6; i++) {
+			float lu = tlm_v3_length(f[i].eu), lv = tlm_v3_length(f[i].ev);
+			int nu = d->segments > 0 ? (int)fmaxf(1.0f, ceilf(lu / cell - 1e-4f)) : 2;
+			int nv = d->segments > 0 ? (int)fmaxf(1.0f, ceilf(lv / cell - 1e-4f)) : 2;
+			b_patch(&b, quad_fn, &f[i], nu, nv, lu * uvs, lv * uvs);
+		}
 	} else if (!strcmp(d->kind, "sphere")) {
 		if (!(d->radius > 0)) {
 			snprintf(why, why_size, "sphere radius must be positive");

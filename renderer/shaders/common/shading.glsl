@@ -189,6 +189,16 @@ vec3 shade_lights(uint slot, Surface s)
 	return sum + ambient + s.emissive;
 }
 
+// Texture lookups of the material: implicit derivatives in fragment shaders; compute shaders (the shading atlas)
+// define TL_EXPLICIT_GRADIENTS and set tl_duv_dx / tl_duv_dy (screen-space derivatives of uv) first: in a compute
+// shader texture() silently samples mip 0 (TAS-METHODS section 8.4).
+#ifdef TL_EXPLICIT_GRADIENTS
+vec2 tl_duv_dx, tl_duv_dy;
+#define TL_TEX(sampler, coord) textureGrad(sampler, coord, tl_duv_dx, tl_duv_dy)
+#else
+#define TL_TEX(sampler, coord) texture(sampler, coord)
+#endif
+
 // Material evaluation at a surface point given in object space, with the object's transform at `slot`.
 Surface surface_at(uint slot, uint object, vec3 p_obj, vec3 n_obj, vec4 t_obj, vec2 uv, bool front_facing)
 {
@@ -203,19 +213,19 @@ Surface surface_at(uint slot, uint object, vec3 p_obj, vec3 n_obj, vec4 t_obj, v
 	}
 	vec4 base = m.base_color;
 	if (m.tex0.x >= 0)
-		base *= texture(color_textures, vec3(uv, float(m.tex0.x)));
+		base *= TL_TEX(color_textures, vec3(uv, float(m.tex0.x)));
 	s.base_color = base.rgb;
 	s.alpha = base.a;
 	s.metallic = m.mr_occ_cutoff.x;
 	s.roughness = m.mr_occ_cutoff.y;
 	if (m.tex0.y >= 0) {
-		vec4 mr = texture(data_textures, vec3(uv, float(m.tex0.y)));
+		vec4 mr = TL_TEX(data_textures, vec3(uv, float(m.tex0.y)));
 		s.roughness *= mr.g;
 		s.metallic *= mr.b;
 	}
 	s.roughness = clamp(s.roughness, 0.03, 1.0);
 	if (m.tex0.z >= 0) {
-		vec3 tn = texture(data_textures, vec3(uv, float(m.tex0.z))).xyz * 2.0 - 1.0;
+		vec3 tn = TL_TEX(data_textures, vec3(uv, float(m.tex0.z))).xyz * 2.0 - 1.0;
 		tn.xy *= m.emissive_normal_scale.w;
 		t = normalize(t - n * dot(n, t));
 		vec3 b = cross(n, t) * t_obj.w;
@@ -224,10 +234,10 @@ Surface surface_at(uint slot, uint object, vec3 p_obj, vec3 n_obj, vec4 t_obj, v
 	s.normal = n;
 	s.occlusion = 1.0;
 	if (m.tex1.x >= 0)
-		s.occlusion = 1.0 + m.mr_occ_cutoff.z * (texture(data_textures, vec3(uv, float(m.tex1.x))).r - 1.0);
+		s.occlusion = 1.0 + m.mr_occ_cutoff.z * (TL_TEX(data_textures, vec3(uv, float(m.tex1.x))).r - 1.0);
 	s.emissive = m.emissive_normal_scale.rgb;
 	if (m.tex0.w >= 0)
-		s.emissive *= texture(color_textures, vec3(uv, float(m.tex0.w))).rgb;
+		s.emissive *= TL_TEX(color_textures, vec3(uv, float(m.tex0.w))).rgb;
 	return s;
 }
 

@@ -68,7 +68,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	VkPipelineVertexInputStateCreateInfo vi = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO,
 		.pVertexBindingDescriptions = &bind,
-		.vertexBindingDescriptionCount = pd->fullscreen ? 0u : 1u,
+		.vertexBindingDescriptionCount = pd->fullscreen || !nattr ? 0u : 1u,
 		.vertexAttributeDescriptionCount = pd->fullscreen ? 0u : nattr,
 		.pVertexAttributeDescriptions = attrs,
 	};
@@ -129,7 +129,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 3u,
 		.pDynamicStates = dyn,
 	};
-	VkFormat cfmt = VK_FORMAT_R16G16B16A16_SFLOAT;
+	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.colorAttachmentCount = pd->color ? 1u : 0u,

@@ -31,6 +31,12 @@ typedef struct render_method {
 	/* Before recording frame `frame`: update state slots and plan their shadow maps (may allocate and
 	 * update descriptors, which is why it runs outside the command buffer). */
 	int (*prepare)(render *r, uint32_t frame, char *err, size_t err_size);
+	/* Methods with a CPU step inside the frame (the atlas allocation, TAS-METHODS section 8.8): record_pre
+	 * records the passes before it into `cmd`, which is submitted and waited for; then cpu_step runs; then
+	 * `record` records the rest into a fresh command buffer. Timestamps run on across both (render_ts before each
+	 * pass, the interval spanning the CPU step being a pass of its own). NULL: one command buffer. */
+	void (*record_pre)(render *r, VkCommandBuffer cmd, uint32_t frame);
+	int (*cpu_step)(render *r, uint32_t frame, char *err, size_t err_size);
 	/* Records the frame into `cmd`; must call render_ts() once before each pass and once at the end. */
 	void (*record)(render *r, VkCommandBuffer cmd, uint32_t frame);
 	/* Fills the method-specific statistics after the frame completed. */
@@ -46,6 +52,9 @@ extern const render_method render_method_ref;
 extern const render_method render_method_tfr;
 extern const render_method render_method_rrc;
 extern const render_method render_method_tarc;
+extern const render_method render_method_sa;
+extern const render_method render_method_sau;
+extern const render_method render_method_tasa;
 
 /* ---- the render object ---- */
 
@@ -169,6 +178,7 @@ typedef struct render_pipe_desc {
 	int stencil;           /* RENDER_STENCIL_* */
 	int fullscreen;        /* common/fullscreen.vert, no vertex input, no culling state */
 	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
+	VkFormat color_format; /* 0: the HDR target's RGBA16F */
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
 	VkDescriptorSetLayout method_set; /* optional set 1 */
 } render_pipe_desc;

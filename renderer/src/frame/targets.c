@@ -29,7 +29,7 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 2, .pBindings = db};
 	CHECK_VK(vkCreateDescriptorSetLayout(d, &dl, NULL, &r->display_set_layout));
 	VkDescriptorPoolSize ps[3] = {
-		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 32},
+		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 64},
 		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 64},
 		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 64},
 	};
@@ -116,7 +116,8 @@ int render_targets_create(render *r, char *err, size_t err_size)
 				    VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, false, "depth", &r->depth));
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 				    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-				    VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT, false, "hdr", &r->hdr));
+				    VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
+				    false, "hdr", &r->hdr));
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R8G8B8A8_UNORM,
 				    VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
 				    false, "display", &r->display));

@@ -13,14 +13,14 @@ static const render_method *const implemented[] = {
 	&render_method_tfr,
 	&render_method_rrc,
 	&render_method_tarc,
+	&render_method_sa,
+	&render_method_sau,
+	&render_method_tasa,
 };
 
-static const method_info planned_sa = {.name = "sa", .summary = "shading atlas, visible blocks shaded every frame"};
-static const method_info planned_sau = {.name = "sau", .summary = "shading atlas with uniform temporal upsampling"};
-static const method_info planned_tasa = {.name = "tasa", .summary = "temporally adaptive shading atlas (paper sec. 6.2)"};
-
 static const method_info *const all[] = {
-	&render_method_ref.info, &render_method_tfr.info, &render_method_rrc.info, &render_method_tarc.info, &planned_sa, &planned_sau, &planned_tasa,
+	&render_method_ref.info, &render_method_tfr.info, &render_method_rrc.info, &render_method_tarc.info,
+	&render_method_sa.info,	 &render_method_sau.info, &render_method_tasa.info,
 };
 
 const method_info *const *method_list(size_t *count)

@@ -1,0 +1,39 @@
+/* sa.c — `sa`: the shading atlas, every visible block shaded every frame (DESIGN section 4; [TAS] sec. 4.3,
+ * "combines the shading atlas [SAS] with the rendering pipeline of texel shading"; TAS-METHODS section 4). The
+ * baseline of the atlas methods: Table 1 reductions are against it. */
+#include "atlas.h"
+
+#include <stddef.h>
+
+typedef struct sa_options {
+	float scale, density;
+	uint32_t lmax;
+} sa_options;
+
+static const method_option sa_option_table[] = {ATLAS_OPTIONS(sa_options)};
+
+static int sa_init(render *r, char *err, size_t err_size)
+{
+	const sa_options *o = (const sa_options *)r->config.values.bytes;
+	atlas_variant v = {.kind = ATLAS_SA, .scale = o->scale, .density = o->density, .lmax = o->lmax};
+	return atlas_init(r, &v, err, err_size);
+}
+
+const render_method render_method_sa = {
+	.info = {.name = "sa",
+		 .summary = "shading atlas: visible blocks shaded every frame (paper sec. 4.3)",
+		 .available = true,
+		 .options = sa_option_table,
+		 .option_count = sizeof sa_option_table / sizeof sa_option_table[0],
+		 .options_size = sizeof(sa_options)},
+	.pass_names = atlas_pass_names,
+	.pass_count = ATLAS_PASS_COUNT,
+	.state_ring = 1,
+	.init = sa_init,
+	.prepare = atlas_prepare,
+	.record_pre = atlas_record_pre,
+	.cpu_step = atlas_cpu_step,
+	.record = atlas_record,
+	.collect = atlas_collect,
+	.finish = atlas_finish,
+};
