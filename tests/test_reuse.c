@@ -31,135 +31,7 @@
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
-/* ---- rendering a clip in memory ---- */
-
-typedef struct clip {
-	uint32_t n, w, h;
-	uint8_t **disp;   /* RGBA8 */
-	uint16_t **hdr;   /* RGBA half */
-	uint8_t **dec;    /* frame_decision per pixel, NULL without decisions */
-	frame_stats *st;
-} clip;
-
-static scene *load(const char *name)
-{
-	char path[4096], err[1024];
-	scene *s = NULL;
-	if (strchr(name, '/'))
-		snprintf(path, sizeof path, "%s/%s", TASLAB_SOURCE_DIR, name);
-	else
-		snprintf(path, sizeof path, "%s/tests/data/%s.json", TASLAB_SOURCE_DIR, name);
-	if (scene_load(path, &s, err, sizeof err))
-		fail_msg("%s", err);
-	return s;
-}
-
-static vkdev *device(void)
-{
-	char err[1024];
-	vkdev *dev = NULL;
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
-	if (vkdev_create(&d, &dev, err, sizeof err))
-		fail_msg("%s", err);
-	return dev;
-}
-
-static int camera_index(const scene *s, const char *name)
-{
-	for (size_t i = 0; i < s->camera_count; i++)
-		if (!strcmp(s->cameras[i].name, name))
-			return (int)i;
-	fail_msg("no camera %s", name);
-	return -1;
-}
-
-/* Renders frames [0, n) of `variant` with extra options ("name=value", NULL-terminated). */
-static clip render_clip(vkdev *dev, const scene *s, int camera, const char *variant, const char *const *opts,
-			const colour *col, uint32_t w, uint32_t h, uint32_t n, bool decisions)
-{
-	char err[1024];
-	method_config mc;
-	if (method_config_parse_variant(&mc, variant, err, sizeof err))
-		fail_msg("%s: %s", variant, err);
-	for (size_t i = 0; opts && opts[i]; i++) {
-		char name[64];
-		const char *eq = strchr(opts[i], '=');
-		snprintf(name, sizeof name, "%.*s", eq ? (int)(eq - opts[i]) : (int)strlen(opts[i]), opts[i]);
-		if (method_config_set(&mc, name, eq ? eq + 1 : "true", err, sizeof err))
-			fail_msg("%s: %s", variant, err);
-	}
-	if (method_config_check(&mc, err, sizeof err))
-		fail_msg("%s: %s", variant, err);
-	render *r = NULL;
-	render_desc d = {.scene = s, .camera = camera, .width = w, .height = h, .method = &mc, .colour = col,
-			 .decisions = decisions};
-	if (render_create(dev, &d, &r, err, sizeof err))
-		fail_msg("%s: %s", variant, err);
-	clip c = {.n = n, .w = w, .h = h};
-	c.disp = calloc(n, sizeof *c.disp);
-	c.hdr = calloc(n, sizeof *c.hdr);
-	c.dec = calloc(n, sizeof *c.dec);
-	c.st = calloc(n, sizeof *c.st);
-	size_t px = (size_t)w * h;
-	for (uint32_t f = 0; f < n; f++) {
-		frame_image img;
-		if (render_frame(r, f, &img, &c.st[f], err, sizeof err))
-			fail_msg("%s frame %u: %s", variant, f, err);
-		c.disp[f] = malloc(px * 4);
-		c.hdr[f] = malloc(px * 8);
-		memcpy(c.disp[f], img.display_rgba, px * 4);
-		memcpy(c.hdr[f], img.hdr_rgba_half, px * 8);
-		if (decisions) {
-			assert_non_null(img.decisions);
-			c.dec[f] = malloc(px);
-			memcpy(c.dec[f], img.decisions, px);
-		} else {
-			assert_null(img.decisions);
-		}
-	}
-	render_destroy(&r);
-	assert_int_equal(vkdev_validation_messages(dev), 0);
-	return c;
-}
-
-static void clip_free(clip *c)
-{
-	for (uint32_t f = 0; f < c->n; f++) {
-		free(c->disp[f]);
-		free(c->hdr[f]);
-		free(c->dec[f]);
-	}
-	free(c->disp);
-	free(c->hdr);
-	free(c->dec);
-	free(c->st);
-	memset(c, 0, sizeof *c);
-}
-
-static int max_diff(const uint8_t *a, const uint8_t *b, size_t pixels)
-{
-	int m = 0;
-	for (size_t i = 0; i < pixels * 4; i++) {
-		if (i % 4 == 3)
-			continue;
-		int d = abs((int)a[i] - (int)b[i]);
-		m = d > m ? d : m;
-	}
-	return m;
-}
-
-static void assert_same_frames(const clip *a, const clip *b, bool hdr)
-{
-	size_t px = (size_t)a->w * a->h;
-	for (uint32_t f = 0; f < a->n; f++) {
-		if (memcmp(a->disp[f], b->disp[f], px * 4))
-			fail_msg("frame %u: PNG pixels differ (max %d code values)", f, max_diff(a->disp[f], b->disp[f], px));
-		if (hdr && memcmp(a->hdr[f], b->hdr[f], px * 8))
-			fail_msg("frame %u: EXR (half) pixels differ", f);
-	}
-}
-
-static int64_t count_dec(const clip *c, uint32_t f, frame_decision d)
+static int64_t count_dec(const tu_clip *c, uint32_t f, frame_decision d)
 {
 	int64_t k = 0;
 	for (size_t i = 0; i < (size_t)c->w * c->h; i++)
@@ -167,16 +39,8 @@ static int64_t count_dec(const clip *c, uint32_t f, frame_decision d)
 	return k;
 }
 
-static double extra(const frame_stats *st, const char *name)
-{
-	for (uint32_t e = 0; e < st->extra_count; e++)
-		if (!strcmp(st->extra_names[e], name))
-			return st->extra[e];
-	return NAN;
-}
-
 /* Stats invariants of every pixel method (TAS-METHODS 9 (a), (b)); no BLEND objects in the test scenes. */
-static void assert_invariants(const clip *c, const char *what)
+static void assert_invariants(const tu_clip *c, const char *what)
 {
 	for (uint32_t f = 0; f < c->n; f++) {
 		const frame_stats *s = &c->st[f];
@@ -206,20 +70,20 @@ static void assert_invariants(const clip *c, const char *what)
 static void test_rrc1_equals_ref(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_shadow");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_shadow");
+	vkdev *dev = tu_lavapipe();
 	enum { N = 6, W = 96, H = 64 };
-	clip ref = render_clip(dev, s, 0, "ref", NULL, NULL, W, H, N, false);
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, N, false);
 	const char *nearest[] = {"resample=nearest", NULL};
 	for (int k = 0; k < 2; k++) {
-		clip r1 = render_clip(dev, s, 0, "rrc/1", k ? nearest : NULL, NULL, W, H, N, true);
-		assert_same_frames(&ref, &r1, true);
+		tu_clip r1 = tu_render_clip(dev, s, 0, "rrc/1", k ? nearest : NULL, NULL, W, H, N, true);
+		tu_assert_same_frames(&ref, &r1, true);
 		assert_invariants(&r1, "rrc/1");
 		for (uint32_t f = 0; f < N; f++)
 			assert_int_equal(r1.st[f].shaded_samples, r1.st[f].visible_samples);
-		clip_free(&r1);
+		tu_clip_free(&r1);
 	}
-	clip_free(&ref);
+	tu_clip_free(&ref);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -230,19 +94,19 @@ static void test_rrc1_equals_ref(void **state)
 static void test_rrc_static_schedule(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_static");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_static");
+	vkdev *dev = tu_lavapipe();
 	enum { F = 9, W = 88, H = 40 };
-	clip ref = render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
 	const char *nearest[] = {"resample=nearest", NULL};
 	const char *variants[] = {"rrc/2", "rrc/4", "rrc/8"};
 	uint32_t tiles_x = (W + 15) / 16;
 	for (int v = 0; v < 3; v++)
 		for (int k = 0; k < 2; k++) {
 			uint32_t period = 2u << v;
-			clip c = render_clip(dev, s, 0, variants[v], k ? nearest : NULL, NULL, W, H, F, true);
+			tu_clip c = tu_render_clip(dev, s, 0, variants[v], k ? nearest : NULL, NULL, W, H, F, true);
 			int64_t refreshed = 0;
-			assert_same_frames(&ref, &c, true);
+			tu_assert_same_frames(&ref, &c, true);
 			assert_invariants(&c, variants[v]);
 			for (uint32_t f = 0; f < F; f++) {
 				int64_t due = 0;
@@ -268,9 +132,9 @@ static void test_rrc_static_schedule(void **state)
 				}
 			}
 			assert_true(refreshed > 0);
-			clip_free(&c);
+			tu_clip_free(&c);
 		}
-	clip_free(&ref);
+	tu_clip_free(&ref);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -280,20 +144,20 @@ static void test_rrc_static_schedule(void **state)
 static void test_moving_camera(void **state)
 {
 	(void)state;
-	scene *s = load("scenes/calm.json");
-	vkdev *dev = device();
-	int cam = camera_index(s, "walk");
+	scene *s = tu_load_scene("scenes/calm.json");
+	vkdev *dev = tu_lavapipe();
+	int cam = tu_camera_index(s, "walk");
 	enum { N = 8, W = 80, H = 48 };
 	size_t px = (size_t)W * H;
-	clip ref = render_clip(dev, s, cam, "ref", NULL, NULL, W, H, N, false);
-	clip tfr = render_clip(dev, s, cam, "tfr@8", NULL, NULL, W, H, N, false);
+	tu_clip ref = tu_render_clip(dev, s, cam, "ref", NULL, NULL, W, H, N, false);
+	tu_clip tfr = tu_render_clip(dev, s, cam, "tfr@8", NULL, NULL, W, H, N, false);
 	const char *nearest[] = {"resample=nearest", NULL};
-	clip rrcn = render_clip(dev, s, cam, "rrc/4", nearest, NULL, W, H, N, true);
-	clip rrc = render_clip(dev, s, cam, "rrc/4", NULL, NULL, W, H, N, true);
+	tu_clip rrcn = tu_render_clip(dev, s, cam, "rrc/4", nearest, NULL, W, H, N, true);
+	tu_clip rrc = tu_render_clip(dev, s, cam, "rrc/4", NULL, NULL, W, H, N, true);
 	const char *truth[] = {"truth", NULL};
-	clip tarc = render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
-	clip tarc2 = render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
-	clip oracle = render_clip(dev, s, cam, "tarc-oracle@8", truth, NULL, W, H, N, true);
+	tu_clip tarc = tu_render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
+	tu_clip tarc2 = tu_render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
+	tu_clip oracle = tu_render_clip(dev, s, cam, "tarc-oracle@8", truth, NULL, W, H, N, true);
 	assert_invariants(&rrcn, "rrc/4 nearest");
 	assert_invariants(&rrc, "rrc/4");
 	assert_invariants(&tarc, "tarc@8");
@@ -312,12 +176,12 @@ static void test_moving_camera(void **state)
 		/* bilinear misses only where all four taps fail: never more than nearest */
 		assert_true(rrc.st[f].new_units <= rrcn.st[f].new_units);
 		/* T3 under motion: the oracle shows C' only within T of the truth */
-		int d = max_diff(oracle.disp[f], ref.disp[f], px);
+		int d = tu_max_diff(oracle.disp[f], ref.disp[f], px);
 		if (d > 9)
 			fail_msg("tarc-oracle@8 frame %u: %d code values from ref (bound T + 1 = 9)", f, d);
 		assert_int_equal(oracle.st[f].late_samples, 0);
 		assert_true(tarc.st[f].late_samples >= 0 && tarc.st[f].late_samples <= tarc.st[f].reused_samples);
-		double forced = extra(&tarc.st[f], "forced_samples");
+		double forced = tu_extra(&tarc.st[f], "forced_samples");
 		assert_true(forced >= (double)tarc.st[f].new_units && forced <= (double)tarc.st[f].shaded_samples);
 		reused += oracle.st[f].reused_samples;
 		/* determinism: same inputs, same bytes and counts */
@@ -331,9 +195,9 @@ static void test_moving_camera(void **state)
 	assert_true(reused > 0);  /* and the oracle reuses */
 	print_message("calm/walk %ux%u, %u frames: misses after frame 0 %lld; oracle reused %lld\n", W, H, N,
 		      (long long)misses, (long long)reused);
-	clip *all[] = {&ref, &tfr, &rrcn, &rrc, &tarc, &tarc2, &oracle};
+	tu_clip *all[] = {&ref, &tfr, &rrcn, &rrc, &tarc, &tarc2, &oracle};
 	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
-		clip_free(all[i]);
+		tu_clip_free(all[i]);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -344,32 +208,32 @@ static void test_moving_camera(void **state)
 static void test_tarc_static(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_static");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_static");
+	vkdev *dev = tu_lavapipe();
 	enum { F = 6, W = 96, H = 64 };
-	clip ref = render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
 	const char *variants[] = {"tarc@2", "tarc@8", "tarc@64", "tarc@8"};
 	const char *nearest[] = {"resample=nearest", NULL};
 	for (int v = 0; v < 4; v++) {
-		clip c = render_clip(dev, s, 0, variants[v], v == 3 ? nearest : NULL, NULL, W, H, F, true);
-		assert_same_frames(&ref, &c, true);
+		tu_clip c = tu_render_clip(dev, s, 0, variants[v], v == 3 ? nearest : NULL, NULL, W, H, F, true);
+		tu_assert_same_frames(&ref, &c, true);
 		assert_invariants(&c, variants[v]);
 		for (uint32_t f = 0; f < F; f++) {
 			int64_t vis = c.st[f].visible_samples;
 			frame_decision want = f == 0 ? FRAME_DECISION_NEW : f == 1 ? FRAME_DECISION_SECOND : FRAME_DECISION_REUSED;
 			assert_int_equal(count_dec(&c, f, want), vis);
 			assert_int_equal(c.st[f].shaded_samples, f < 2 ? vis : 0);
-			assert_true(extra(&c.st[f], "forced_samples") == (f < 2 ? (double)vis : 0.0));
+			assert_true(tu_extra(&c.st[f], "forced_samples") == (f < 2 ? (double)vis : 0.0));
 		}
-		clip_free(&c);
+		tu_clip_free(&c);
 	}
 	/* the oracle on a static scene reuses everything after frame 0 (C' = truth exactly) */
-	clip o = render_clip(dev, s, 0, "tarc-oracle@0", NULL, NULL, W, H, F, true);
-	assert_same_frames(&ref, &o, true);
+	tu_clip o = tu_render_clip(dev, s, 0, "tarc-oracle@0", NULL, NULL, W, H, F, true);
+	tu_assert_same_frames(&ref, &o, true);
 	for (uint32_t f = 1; f < F; f++)
 		assert_int_equal(o.st[f].reused_samples, o.st[f].visible_samples);
-	clip_free(&o);
-	clip_free(&ref);
+	tu_clip_free(&o);
+	tu_clip_free(&ref);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -380,10 +244,10 @@ static void test_tarc_static(void **state)
 static void test_tarc_forced_only(void **state)
 {
 	(void)state;
-	scene *s = load("reuse_slide");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("reuse_slide");
+	vkdev *dev = tu_lavapipe();
 	enum { F = 16, W = 96, H = 64 };
-	clip c = render_clip(dev, s, 0, "tarc@255", NULL, NULL, W, H, F, true);
+	tu_clip c = tu_render_clip(dev, s, 0, "tarc@255", NULL, NULL, W, H, F, true);
 	assert_invariants(&c, "tarc@255");
 	int64_t second_total = 0;
 	for (uint32_t f = 1; f < F; f++) {
@@ -391,7 +255,7 @@ static void test_tarc_forced_only(void **state)
 		assert_int_equal(count_dec(&c, f, FRAME_DECISION_PREDICTED), 0);
 		assert_int_equal(count_dec(&c, f, FRAME_DECISION_SCHEDULED), 0);
 		assert_int_equal(c.st[f].shaded_samples, nw + sec);
-		assert_true(extra(&c.st[f], "forced_samples") == (double)(nw + sec));
+		assert_true(tu_extra(&c.st[f], "forced_samples") == (double)(nw + sec));
 		second_total += sec;
 		/* every second-frame sample was new a frame earlier, within a pixel */
 		for (int y = 0; y < H; y++)
@@ -411,7 +275,7 @@ static void test_tarc_forced_only(void **state)
 			}
 	}
 	assert_true(second_total > (int64_t)(F - 2) * 8); /* the box uncovers floor every frame */
-	clip_free(&c);
+	tu_clip_free(&c);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -441,28 +305,6 @@ static void filter_8x8_9x9(const float *v, uint32_t w, uint32_t h, float *out)
 	free(l1);
 }
 
-/* A raw OCIO config: display values = scene-linear values (clamped), so shading linear in time gives display
- * values linear in time (as test_tfr). */
-static colour *raw_colour(void)
-{
-	const char *dir = tu_tmpdir("reuse_raw_ocio");
-	char path[4096], err[1024];
-	snprintf(path, sizeof path, "%s/raw.ocio", dir);
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs("ocio_profile_version: 2\n"
-	      "roles:\n  default: raw\n  scene_linear: raw\n"
-	      "displays:\n  linear:\n    - !<View> {name: Raw, colorspace: raw}\n"
-	      "colorspaces:\n  - !<ColorSpace>\n    name: raw\n    isdata: false\n",
-	      f);
-	fclose(f);
-	colour *c = NULL;
-	colour_desc cd = {.config_path = path, .display = "linear", .view = "Raw"};
-	if (colour_create(&cd, &c, err, sizeof err))
-		fail_msg("%s", err);
-	return c;
-}
-
 static float half_to_float(uint16_t h)
 {
 	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
@@ -488,13 +330,13 @@ static float raw_maxrgb(const uint16_t *a, const uint16_t *b)
 static void test_tarc_linear_ramp(void **state)
 {
 	(void)state;
-	scene *s = load("tarc_ramp");
-	vkdev *dev = device();
-	colour *col = raw_colour();
+	scene *s = tu_load_scene("tarc_ramp");
+	vkdev *dev = tu_lavapipe();
+	colour *col = tu_raw_colour();
 	enum { F = 40, W = 128, H = 96 }; /* the floor covers the whole frame */
 	size_t px = (size_t)W * H;
 	uint32_t tw = (W + 7) / 8;
-	clip ref = render_clip(dev, s, 0, "ref", NULL, col, W, H, F, false);
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, col, W, H, F, false);
 	/* the true per-frame change of each pixel, over the whole clip */
 	float *g = calloc(px, sizeof *g), *filt = calloc(px, sizeof *filt);
 	for (size_t i = 0; i < px; i++)
@@ -503,7 +345,7 @@ static void test_tarc_linear_ramp(void **state)
 	const char *variants[] = {"tarc@4", "tarc@8"};
 	const float Ts[] = {4, 8};
 	for (int v = 0; v < 2; v++) {
-		clip c = render_clip(dev, s, 0, variants[v], NULL, col, W, H, F, true);
+		tu_clip c = tu_render_clip(dev, s, 0, variants[v], NULL, col, W, H, F, true);
 		assert_invariants(&c, variants[v]);
 		int64_t intervals = 0, off = 0;
 		for (uint32_t y = 0; y < H; y++)
@@ -536,11 +378,11 @@ static void test_tarc_linear_ramp(void **state)
 			      (long long)off);
 		assert_true(intervals >= (int64_t)px * 2); /* at least two reshades per pixel after frame 1 */
 		assert_int_equal(off, 0);
-		clip_free(&c);
+		tu_clip_free(&c);
 	}
 	free(g);
 	free(filt);
-	clip_free(&ref);
+	tu_clip_free(&ref);
 	colour_destroy(&col);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
@@ -551,14 +393,14 @@ static void test_tarc_linear_ramp(void **state)
 static void test_tarc_footprint_and_oracle(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_shadow");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_shadow");
+	vkdev *dev = tu_lavapipe();
 	enum { F = 16, W = 256, H = 64 };
 	size_t px = (size_t)W * H;
 	int tw = (W + 7) / 8, th = (H + 7) / 8;
-	clip ref = render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, F, false);
 	const char *truth[] = {"truth", NULL};
-	clip c = render_clip(dev, s, 0, "tarc@8", truth, NULL, W, H, F, true);
+	tu_clip c = tu_render_clip(dev, s, 0, "tarc@8", truth, NULL, W, H, F, true);
 	assert_invariants(&c, "tarc@8");
 	/* tiles whose true shading changed between two consecutive frames up to t */
 	bool *changed = calloc((size_t)tw * th, 1);
@@ -591,13 +433,13 @@ static void test_tarc_footprint_and_oracle(void **state)
 	assert_true(predicted > 0);
 	assert_true(far_reused > 0);
 	free(changed);
-	clip_free(&c);
+	tu_clip_free(&c);
 
-	clip o = render_clip(dev, s, 0, "tarc-oracle@8", truth, NULL, W, H, F, true);
-	clip o0 = render_clip(dev, s, 0, "tarc-oracle@0", NULL, NULL, W, H, F, true);
+	tu_clip o = tu_render_clip(dev, s, 0, "tarc-oracle@8", truth, NULL, W, H, F, true);
+	tu_clip o0 = tu_render_clip(dev, s, 0, "tarc-oracle@0", NULL, NULL, W, H, F, true);
 	int64_t o_reused = 0;
 	for (uint32_t f = 0; f < F; f++) {
-		int d = max_diff(o.disp[f], ref.disp[f], px);
+		int d = tu_max_diff(o.disp[f], ref.disp[f], px);
 		if (d > 9)
 			fail_msg("tarc-oracle@8 frame %u: %d code values from ref (bound T + 1 = 9)", f, d);
 		assert_int_equal(o.st[f].late_samples, 0);
@@ -605,10 +447,10 @@ static void test_tarc_footprint_and_oracle(void **state)
 		assert_int_equal(count_dec(&o, f, FRAME_DECISION_SECOND), 0); /* no two-frame rule */
 	}
 	assert_true(o_reused > 0);
-	assert_same_frames(&ref, &o0, false);
-	clip_free(&o);
-	clip_free(&o0);
-	clip_free(&ref);
+	tu_assert_same_frames(&ref, &o0, false);
+	tu_clip_free(&o);
+	tu_clip_free(&o0);
+	tu_clip_free(&ref);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -619,13 +461,13 @@ static void test_truth(void **state)
 {
 	(void)state;
 	char err[1024];
-	scene *s = load("tfr_shadow");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_shadow");
+	vkdev *dev = tu_lavapipe();
 	enum { F = 8, W = 64, H = 48 };
 	const char *truth[] = {"truth", NULL};
-	clip t = render_clip(dev, s, 0, "tfr@8", truth, NULL, W, H, F, false);
-	clip r = render_clip(dev, s, 0, "rrc/4", truth, NULL, W, H, F, false);
-	clip plain = render_clip(dev, s, 0, "rrc/4", NULL, NULL, W, H, F, false);
+	tu_clip t = tu_render_clip(dev, s, 0, "tfr@8", truth, NULL, W, H, F, false);
+	tu_clip r = tu_render_clip(dev, s, 0, "rrc/4", truth, NULL, W, H, F, false);
+	tu_clip plain = tu_render_clip(dev, s, 0, "rrc/4", NULL, NULL, W, H, F, false);
 	int64_t r_late = 0, r_reused = 0;
 	for (uint32_t f = 0; f < F; f++) {
 		assert_int_equal(t.st[f].late_samples, 0);
@@ -638,9 +480,9 @@ static void test_truth(void **state)
 	}
 	print_message("rrc/4 on a moving shadow: %lld of %lld reused samples late (T = 8)\n", (long long)r_late,
 		      (long long)r_reused);
-	clip_free(&t);
-	clip_free(&r);
-	clip_free(&plain);
+	tu_clip_free(&t);
+	tu_clip_free(&r);
+	tu_clip_free(&plain);
 	method_config mc;
 	assert_int_equal(method_config_init(&mc, "ref", err, sizeof err), TL_OK);
 	assert_int_not_equal(method_config_set(&mc, "truth", "true", err, sizeof err), TL_OK);

@@ -24,26 +24,6 @@
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
-static scene *load(const char *name)
-{
-	char path[4096], err[1024];
-	scene *s = NULL;
-	snprintf(path, sizeof path, "%s/tests/data/%s.json", TASLAB_SOURCE_DIR, name);
-	if (scene_load(path, &s, err, sizeof err))
-		fail_msg("%s", err);
-	return s;
-}
-
-static vkdev *device(void)
-{
-	char err[1024];
-	vkdev *dev = NULL;
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
-	if (vkdev_create(&d, &dev, err, sizeof err))
-		fail_msg("%s", err);
-	return dev;
-}
-
 /* Renders frames [0, n) with a method; keeps the display images and stats. */
 static void render_frames(vkdev *dev, const scene *s, const char *method, float T, uint32_t max_age, uint32_t w,
 			  uint32_t h, uint32_t n, uint8_t **frames, frame_stats *stats)
@@ -90,8 +70,8 @@ static int max_diff(const uint8_t *a, const uint8_t *b, size_t pixels)
 static void test_tfr_static_equals_ref_and_ages(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_static");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_static");
+	vkdev *dev = tu_lavapipe();
 	enum { N = 8, W = 96, H = 64 };
 	uint8_t *ref[N], *tfr[N], *tk[N];
 	frame_stats rs[N], ts[N], ks[N];
@@ -121,8 +101,8 @@ static void run_analysis(const char *scene_name, const colour *col, uint32_t fra
 			 uint32_t w, uint32_t h, bool predictors, analyze_result *out)
 {
 	char err[1024];
-	scene *s = load(scene_name);
-	vkdev *dev = device();
+	scene *s = tu_load_scene(scene_name);
+	vkdev *dev = tu_lavapipe();
 	analyze *a = NULL;
 	analyze_desc d = {.scene = s, .camera = 0, .width = w, .height = h, .thresholds = T, .threshold_count = nT,
 			  .predictors = predictors, .colour = col};
@@ -153,32 +133,10 @@ static void test_analysis_static(void **state)
 	}
 }
 
-/* A raw OCIO config: display values = scene-linear values (clamped), so shading that is linear in time
- * gives display values linear in time. */
-static colour *raw_colour(void)
-{
-	const char *dir = tu_tmpdir("tfr_raw_ocio");
-	char path[4096], err[1024];
-	snprintf(path, sizeof path, "%s/raw.ocio", dir);
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs("ocio_profile_version: 2\n"
-	      "roles:\n  default: raw\n  scene_linear: raw\n"
-	      "displays:\n  linear:\n    - !<View> {name: Raw, colorspace: raw}\n"
-	      "colorspaces:\n  - !<ColorSpace>\n    name: raw\n    isdata: false\n",
-	      f);
-	fclose(f);
-	colour *c = NULL;
-	colour_desc cd = {.config_path = path, .display = "linear", .view = "Raw"};
-	if (colour_create(&cd, &c, err, sizeof err))
-		fail_msg("%s", err);
-	return c;
-}
-
 static void test_analysis_linear_ramp_on_time(void **state)
 {
 	(void)state;
-	colour *col = raw_colour();
+	colour *col = tu_raw_colour();
 	const float T[] = {2, 4, 8};
 	analyze_result r;
 	run_analysis("tfr_ramp", col, 60, T, 3, 64, 48, true, &r);
@@ -247,8 +205,8 @@ static void test_analysis_moving_shadow(void **state)
 static void test_tfr_moving_shadow_within_T(void **state)
 {
 	(void)state;
-	scene *s = load("tfr_shadow");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_shadow");
+	vkdev *dev = tu_lavapipe();
 	enum { N = 24, W = 96, H = 64 };
 	uint8_t *ref[N], *tfr[N];
 	frame_stats rs[N], ts[N];
@@ -309,8 +267,8 @@ static void test_bad_input(void **state)
 	assert_false(tu_file_exists(path));
 
 	/* The library refuses the same (errors as values). */
-	scene *s = load("tfr_static");
-	vkdev *dev = device();
+	scene *s = tu_load_scene("tfr_static");
+	vkdev *dev = tu_lavapipe();
 	render *r = NULL;
 	method_config mc;
 	assert_int_equal(method_config_init(&mc, "tfr", err, sizeof err), TL_OK);

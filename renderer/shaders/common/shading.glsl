@@ -194,7 +194,11 @@ vec3 shade_lights(uint slot, Surface s)
 // shader texture() silently samples mip 0 (TAS-METHODS section 8.4).
 #ifdef TL_EXPLICIT_GRADIENTS
 vec2 tl_duv_dx, tl_duv_dy;
+#ifdef TL_TEXTURE_LOD0 // ablation (atlas --texture-lod0): what texture() silently does in a compute shader
+#define TL_TEX(sampler, coord) textureLod(sampler, coord, 0.0)
+#else
 #define TL_TEX(sampler, coord) textureGrad(sampler, coord, tl_duv_dx, tl_duv_dy)
+#endif
 #else
 #define TL_TEX(sampler, coord) texture(sampler, coord)
 #endif

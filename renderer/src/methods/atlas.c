@@ -258,9 +258,10 @@ static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)
 	free(fs);
 	if (rc)
 		return rc;
-	char defs[128];
-	snprintf(defs, sizeof defs, "%s%s%s", s->v.kind == ATLAS_TASA && !s->v.oracle ? "#define TASA 1\n" : "",
-		 s->v.oracle ? "#define ORACLE 1\n" : "", s->v.truth ? "#define TRUTH 1\n" : "");
+	char defs[160];
+	snprintf(defs, sizeof defs, "%s%s%s%s", s->v.kind == ATLAS_TASA && !s->v.oracle ? "#define TASA 1\n" : "",
+		 s->v.oracle ? "#define ORACLE 1\n" : "", s->v.truth ? "#define TRUTH 1\n" : "",
+		 s->v.lod0 ? "#define TL_TEXTURE_LOD0 1\n" : "");
 	if ((rc = make_compute(r, s, "atlas/visible.comp.in", defs, &s->visible_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/shade.comp.in", defs, &s->shade_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/resolve.comp.in", defs, &s->resolve_pipe, err, err_size)))
@@ -344,16 +345,16 @@ static void plan_levels(render *r, atlas_state *s)
 		const uint32_t *c = s->patches.corners + 4 * (size_t)mp;
 		bool single = c[3] == ATLAS_SINGLE;
 		tlm_mat4 mvp = tlm_mat4_mul(vp, r->world[o]);
-		float clip[4][4] = {{0}};
+		float clip[16] = {0};
 		tlm_vec3 w[4];
 		for (int k = 0; k < (single ? 3 : 4); k++) {
 			const float *pos = m->vertices[c[k]].position;
 			w[k] = tlm_mat4_mul_point(r->world[o], tlm_v3(pos[0], pos[1], pos[2]));
 			for (int row = 0; row < 4; row++)
-				clip[k][row] = mvp.m[row] * pos[0] + mvp.m[4 + row] * pos[1] + mvp.m[8 + row] * pos[2] + mvp.m[12 + row];
+				clip[4 * k + row] = mvp.m[row] * pos[0] + mvp.m[4 + row] * pos[1] + mvp.m[8 + row] * pos[2] + mvp.m[12 + row];
 		}
 		float lu, lv;
-		atlas_edge_lengths((const float(*)[4])clip, single, r->desc.width, r->desc.height, &lu, &lv);
+		atlas_edge_lengths(clip, single, r->desc.width, r->desc.height, &lu, &lv);
 		bool cu, cv;
 		q->want_lw = (uint8_t)atlas_level(lu, s->rho, s->v.lmax, q->allocated ? q->lw : 0, &cu);
 		q->want_lh = (uint8_t)atlas_level(lv, s->rho, s->v.lmax, q->allocated ? q->lh : 0, &cv);

@@ -19,6 +19,7 @@ typedef struct atlas_variant {
 	float scale;       /* atlas texels = scale x output pixels */
 	float density;     /* texels per pixel per axis before the round-up; 0: sqrt(scale / 8) */
 	uint32_t lmax;     /* largest block side, log2 */
+	bool lod0;         /* ablation: textures sampled at mip 0 instead of with explicit gradients */
 } atlas_variant;
 
 int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size);
@@ -33,13 +34,15 @@ void atlas_finish(render *r);
 extern const char *const atlas_pass_names[ATLAS_PASS_COUNT];
 
 /* The options every atlas method has (method_option entries for an options struct T with fields scale, density,
- * lmax; DESIGN section 4 --atlas-scale). */
+ * lmax, lod0; DESIGN section 4 --atlas-scale). */
 #define ATLAS_OPTIONS(T)                                                                                           \
 	{.name = "atlas-scale", .arg = "S", .help = "atlas texels = S x output pixels (4: the paper's 8 MPx at 1080p)",  \
-	 .type = METHOD_OPT_FLOAT, .offset = offsetof(T, scale), .def = 4, .min = 0.25, .max = 16},                   \
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(T, scale), .def = 4, .min = 0.25, .max = 64},                   \
 	{.name = "atlas-density", .arg = "RHO", .help = "texels per pixel per axis before the power-of-two round-up (0: sqrt(S / 8))", \
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(T, density), .def = 0, .min = 0, .max = 4},                     \
 	{.name = "max-block", .arg = "L", .help = "largest block side 2^L texels (larger patches are clamped)",       \
-	 .type = METHOD_OPT_UINT, .offset = offsetof(T, lmax), .def = 8, .min = 1, .max = 12}
+	 .type = METHOD_OPT_UINT, .offset = offsetof(T, lmax), .def = 8, .min = 1, .max = 12},                       \
+	{.name = "texture-lod0", .help = "ablation: sample textures at mip 0, as texture() does in a compute shader",   \
+	 .type = METHOD_OPT_BOOL, .offset = offsetof(T, lod0)}
 
 #endif

@@ -226,8 +226,9 @@ static float edge_px(const float *p, const float *q, uint32_t w, uint32_t h)
 	return sqrtf(dx * dx + dy * dy);
 }
 
-void atlas_edge_lengths(const float c[4][4], bool single, uint32_t width, uint32_t height, float *lu, float *lv)
+void atlas_edge_lengths(const float *clip, bool single, uint32_t width, uint32_t height, float *lu, float *lv)
 {
+	const float *c[4] = {clip, clip + 4, clip + 8, clip + 12};
 	*lu = edge_px(c[1], c[0], width, height);
 	*lv = edge_px(c[2], c[0], width, height);
 	if (!single) {

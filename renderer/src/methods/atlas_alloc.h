@@ -35,8 +35,8 @@ void atlas_patches_free(atlas_patches *p);
 
 /* ---- block sizes ---- */
 /* Lengths in pixels of the patch's u and v edges (Lu = max(|a1-a0|, |b0-a2|), Lv = max(|a2-a0|, |b0-a1|);
- * singles: the two legs) from the corners in clip space (x, y, z, w), clipped to w >= 1e-5 (the near side). */
-void atlas_edge_lengths(const float clip[4][4], bool single, uint32_t width, uint32_t height, float *lu, float *lv);
+ * singles: the two legs) from the corners in clip space (x, y, z, w of a0, a1, a2, b0), clipped to w >= 1e-5 (the near side). */
+void atlas_edge_lengths(const float *clip, bool single, uint32_t width, uint32_t height, float *lu, float *lv);
 /* log2 size of a side of length L pixels at density rho texels per pixel: clamp(ceil(log2(rho L + 1)), 1, lmax)
  * with hysteresis around the current level `cur` (0: none): kept while log2(rho L + 1) lies in
  * (cur - 1.25, cur + 0.25]. *clamped is set when the unclamped level exceeds lmax. */

@@ -8,6 +8,7 @@
 typedef struct sa_options {
 	float scale, density;
 	uint32_t lmax;
+	bool lod0;
 } sa_options;
 
 static const method_option sa_option_table[] = {ATLAS_OPTIONS(sa_options)};
@@ -15,7 +16,7 @@ static const method_option sa_option_table[] = {ATLAS_OPTIONS(sa_options)};
 static int sa_init(render *r, char *err, size_t err_size)
 {
 	const sa_options *o = (const sa_options *)r->config.values.bytes;
-	atlas_variant v = {.kind = ATLAS_SA, .scale = o->scale, .density = o->density, .lmax = o->lmax};
+	atlas_variant v = {.kind = ATLAS_SA, .scale = o->scale, .density = o->density, .lmax = o->lmax, .lod0 = o->lod0};
 	return atlas_init(r, &v, err, err_size);
 }
 

@@ -10,6 +10,7 @@ typedef struct sau_options {
 	uint32_t period;
 	float scale, density;
 	uint32_t lmax;
+	bool lod0;
 	bool truth;
 	float truth_threshold;
 } sau_options;
@@ -32,7 +33,7 @@ static int sau_init(render *r, char *err, size_t err_size)
 {
 	const sau_options *o = (const sau_options *)r->config.values.bytes;
 	atlas_variant v = {.kind = ATLAS_SAU, .period = o->period, .scale = o->scale, .density = o->density,
-			   .lmax = o->lmax, .truth = o->truth, .threshold = o->truth_threshold};
+			   .lmax = o->lmax, .lod0 = o->lod0, .truth = o->truth, .threshold = o->truth_threshold};
 	return atlas_init(r, &v, err, err_size);
 }
 

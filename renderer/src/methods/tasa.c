@@ -14,6 +14,7 @@ typedef struct tasa_options {
 	bool oracle;
 	float scale, density;
 	uint32_t lmax;
+	bool lod0;
 	bool truth, force_reshade;
 } tasa_options;
 
@@ -45,7 +46,7 @@ static int tasa_init(render *r, char *err, size_t err_size)
 {
 	const tasa_options *o = (const tasa_options *)r->config.values.bytes;
 	atlas_variant v = {.kind = ATLAS_TASA, .oracle = o->oracle, .threshold = o->threshold, .scale = o->scale,
-			   .density = o->density, .lmax = o->lmax, .truth = o->truth, .force = o->force_reshade};
+			   .density = o->density, .lmax = o->lmax, .lod0 = o->lod0, .truth = o->truth, .force = o->force_reshade};
 	return atlas_init(r, &v, err, err_size);
 }
 

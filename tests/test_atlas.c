@@ -1,0 +1,412 @@
+/* test_atlas.c — the shading-atlas methods sa, sau and tasa (with tasa-oracle) and their allocator, on lavapipe with
+ * the validation layer (any message fails): the acceptance checks of TAS-METHODS section 9 that follow from the
+ * definitions (DESIGN section 4; [TAS] secs. 4.3, 5.1, 6.2, 7.1):
+ *  S1  sa reuses nothing: shaded = allocated, every block every frame;
+ *  S2  sa converges to ref as the texel density rises (smooth, untextured scene): mean max-RGB strictly decreasing
+ *      for densities 1, 2, 4, and p99 at density 4 within 2 code values;
+ *  S3  no bleeding: a grid of unlit quads with distinct emissive colours resolves every covered pixel to exactly its
+ *      quad's colour (bilinear lookups never leave a block);
+ *  S5  allocator: random allocations and frees never overlap, stay inside the atlas, count their texels, take the
+ *      lowest address first and give the same addresses for the same sequence;
+ *  S6  static scene: no (re)allocation after frame 0;
+ *  S7  explicit texture gradients beat mip 0 against ref on a textured scene;
+ *  U1  sau/1 equals sa; U2 static scene: sau/N shades every block at t mod N = 0 and none otherwise, frames equal sa;
+ *  A1  static scene: tasa shades every block in frames 0 and 1, none after, frames equal sa bit for bit;
+ *  A3  oracle: no late texel (--truth), frames within T + 2 of sa; T = 0 equals sa;
+ *  (d) allocated samples, visible and new units identical across sa, sau, tasa and the oracle on a moving scene;
+ *  determinism; every built-in scene renders with each method; bad input. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_vk.h"
+
+#include "../renderer/src/methods/atlas_alloc.h"
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+
+static double mean_diff(const tu_clip *a, const tu_clip *b, double *p99)
+{
+	size_t px = (size_t)a->w * a->h, hist[256] = {0}, n = 0;
+	double sum = 0;
+	for (uint32_t f = 0; f < a->n; f++)
+		for (size_t i = 0; i < px; i++) {
+			int m = 0;
+			for (int c = 0; c < 3; c++) {
+				int d = abs((int)a->disp[f][i * 4 + c] - (int)b->disp[f][i * 4 + c]);
+				m = d > m ? d : m;
+			}
+			hist[m]++, n++, sum += m;
+		}
+	size_t acc = 0;
+	*p99 = 0;
+	for (int v = 0; v < 256; v++) {
+		acc += hist[v];
+		if (acc * 100 >= n * 99) {
+			*p99 = v;
+			break;
+		}
+	}
+	return sum / (double)n;
+}
+
+/* S1, S6, A1, U1, U2 on a static scene (tfr_static: textured floor, a box, a shadow-casting sun). */
+static void test_static_scene(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("tfr_static");
+	vkdev *dev = tu_lavapipe();
+	enum { F = 6, W = 96, H = 64 };
+	tu_clip sa = tu_render_clip(dev, s, 0, "sa", NULL, NULL, W, H, F, false);
+	for (uint32_t f = 0; f < F; f++) {
+		const frame_stats *st = &sa.st[f];
+		assert_true(st->allocated_samples > 0 && st->visible_units > 0);
+		assert_int_equal(st->shaded_samples, st->allocated_samples); /* S1 */
+		assert_int_equal(st->shaded_units, st->visible_units);
+		assert_int_equal(st->reused_samples, 0);
+		assert_int_equal(st->new_units, f == 0 ? st->visible_units : 0); /* S6 */
+		assert_int_equal(st->allocated_samples, sa.st[0].allocated_samples);
+		assert_true(tu_extra(st, "atlas_overflow") == 0);
+	}
+	/* U1 */
+	tu_clip sau1 = tu_render_clip(dev, s, 0, "sau/1", NULL, NULL, W, H, F, false);
+	tu_assert_same_frames(&sa, &sau1, true);
+	tu_clip_free(&sau1);
+	/* U2 */
+	const char *periods[] = {"sau/2", "sau/4"};
+	for (int k = 0; k < 2; k++) {
+		uint32_t N = 2u << k;
+		tu_clip c = tu_render_clip(dev, s, 0, periods[k], NULL, NULL, W, H, F, false);
+		tu_assert_same_frames(&sa, &c, true);
+		for (uint32_t f = 0; f < F; f++)
+			assert_int_equal(c.st[f].shaded_units, f % N == 0 ? c.st[f].visible_units : 0);
+		tu_clip_free(&c);
+	}
+	/* A1, any T */
+	const char *variants[] = {"tasa@2", "tasa@32"};
+	for (int k = 0; k < 2; k++) {
+		tu_clip c = tu_render_clip(dev, s, 0, variants[k], NULL, NULL, W, H, F, false);
+		tu_assert_same_frames(&sa, &c, true);
+		for (uint32_t f = 0; f < F; f++) {
+			assert_int_equal(c.st[f].shaded_units, f < 2 ? c.st[f].visible_units : 0);
+			assert_int_equal(c.st[f].allocated_samples, sa.st[f].allocated_samples);
+		}
+		tu_clip_free(&c);
+	}
+	tu_clip_free(&sa);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* S3: constant colours per block; every covered pixel shows exactly its quad's emissive colour, as in ref. */
+static void test_no_bleeding(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("atlas_grid");
+	vkdev *dev = tu_lavapipe();
+	enum { W = 128, H = 96 };
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, 1, false);
+	const char *dens[] = {"atlas-density=0.5", NULL};
+	for (int k = 0; k < 2; k++) {
+		tu_clip sa = tu_render_clip(dev, s, 0, "sa", k ? dens : NULL, NULL, W, H, 1, false);
+		size_t covered = 0;
+		for (size_t i = 0; i < (size_t)W * H; i++) {
+			const uint16_t *a = ref.hdr[0] + i * 4, *b = sa.hdr[0] + i * 4;
+			assert_int_equal(a[3] != 0, b[3] != 0); /* the same coverage */
+			covered += a[3] != 0;
+			/* the same colour; lavapipe's colour-attachment output and imageStore may round a float to half
+			 * differently, so within one unit in the last place (bleeding would bring another quad's colour
+			 * or the sky) */
+			for (int k = 0; k < 3; k++)
+				if (abs((int)a[k] - (int)b[k]) > 1)
+					fail_msg("pixel (%zu,%zu): sa %04x %04x %04x, ref %04x %04x %04x", i % W, i / W, b[0], b[1],
+						 b[2], a[0], a[1], a[2]);
+		}
+		assert_true(covered > (size_t)W * H / 8);
+		tu_clip_free(&sa);
+	}
+	tu_clip_free(&ref);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* S2: convergence with the density; S7: explicit gradients against mip 0 on the textured floor. */
+static void test_convergence_and_gradients(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("atlas_smooth");
+	vkdev *dev = tu_lavapipe();
+	enum { W = 96, H = 64 };
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, 1, false);
+	const char *d1[] = {"atlas-density=1", "atlas-scale=64", NULL}, *d2[] = {"atlas-density=2", "atlas-scale=64", NULL},
+		   *d4[] = {"atlas-density=4", "atlas-scale=64", NULL};
+	const char *const *dens[3] = {d1, d2, d4};
+	double mean[3], p99[3];
+	for (int k = 0; k < 3; k++) {
+		tu_clip sa = tu_render_clip(dev, s, 0, "sa", dens[k], NULL, W, H, 1, false);
+		mean[k] = mean_diff(&ref, &sa, &p99[k]);
+		print_message("density %d: mean max-RGB %.4f, p99 %.0f\n", 1 << k, mean[k], p99[k]);
+		tu_clip_free(&sa);
+	}
+	assert_true(mean[1] < mean[0] && mean[2] < mean[1]);
+	assert_true(p99[2] <= 2);
+	tu_clip_free(&ref);
+	scene_destroy(&s);
+
+	s = tu_load_scene("tfr_static");
+	ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, 1, false);
+	const char *lod0[] = {"texture-lod0", NULL};
+	tu_clip grad = tu_render_clip(dev, s, 0, "sa", NULL, NULL, W, H, 1, false);
+	tu_clip mip0 = tu_render_clip(dev, s, 0, "sa", lod0, NULL, W, H, 1, false);
+	double pg, pm, mg = mean_diff(&ref, &grad, &pg), mm = mean_diff(&ref, &mip0, &pm);
+	print_message("textured floor vs ref: explicit gradients mean %.3f p99 %.0f; mip 0 mean %.3f p99 %.0f\n", mg, pg,
+		      mm, pm);
+	assert_true(mg < mm);
+	tu_clip_free(&ref);
+	tu_clip_free(&grad);
+	tu_clip_free(&mip0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* A3, (d), determinism on a moving shadow and a moving box. */
+static void test_moving(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("tfr_shadow");
+	vkdev *dev = tu_lavapipe();
+	enum { F = 10, W = 96, H = 64 };
+	size_t px = (size_t)W * H;
+	const char *truth[] = {"truth", NULL};
+	tu_clip sa = tu_render_clip(dev, s, 0, "sa", NULL, NULL, W, H, F, false);
+	tu_clip sau = tu_render_clip(dev, s, 0, "sau/4", truth, NULL, W, H, F, false);
+	tu_clip tasa = tu_render_clip(dev, s, 0, "tasa@8", truth, NULL, W, H, F, false);
+	tu_clip tasa2 = tu_render_clip(dev, s, 0, "tasa@8", truth, NULL, W, H, F, false);
+	tu_clip oracle = tu_render_clip(dev, s, 0, "tasa-oracle@8", truth, NULL, W, H, F, false);
+	tu_clip oracle0 = tu_render_clip(dev, s, 0, "tasa-oracle@0", NULL, NULL, W, H, F, false);
+	int64_t reused = 0, shaded = 0;
+	for (uint32_t f = 0; f < F; f++) {
+		const tu_clip *all[] = {&sau, &tasa, &oracle};
+		for (int k = 0; k < 3; k++) {
+			assert_int_equal(all[k]->st[f].allocated_samples, sa.st[f].allocated_samples);
+			assert_int_equal(all[k]->st[f].visible_units, sa.st[f].visible_units);
+			assert_int_equal(all[k]->st[f].new_units, sa.st[f].new_units);
+			assert_int_equal(all[k]->st[f].visible_samples, sa.st[f].visible_samples);
+			assert_int_equal(all[k]->st[f].shaded_samples + all[k]->st[f].reused_samples,
+					 all[k]->st[f].allocated_samples);
+			assert_true(all[k]->st[f].new_units <= all[k]->st[f].shaded_units);
+		}
+		int d = tu_max_diff(oracle.disp[f], sa.disp[f], px);
+		if (d > 10)
+			fail_msg("tasa-oracle@8 frame %u: %d code values from sa (bound T + 2)", f, d);
+		assert_int_equal(oracle.st[f].late_samples, 0);
+		assert_true(tasa.st[f].late_samples >= 0 && tasa.st[f].late_samples <= tasa.st[f].reused_samples);
+		assert_true(sau.st[f].late_samples >= 0);
+		reused += oracle.st[f].reused_samples + tasa.st[f].reused_samples;
+		shaded += tasa.st[f].shaded_samples;
+		assert_memory_equal(tasa.disp[f], tasa2.disp[f], px * 4);
+		assert_memory_equal(tasa.hdr[f], tasa2.hdr[f], px * 8);
+		assert_int_equal(tasa.st[f].shaded_samples, tasa2.st[f].shaded_samples);
+	}
+	assert_true(reused > 0 && shaded > 0);
+	tu_assert_same_frames(&sa, &oracle0, false);
+	tu_clip *all[] = {&sa, &sau, &tasa, &tasa2, &oracle, &oracle0};
+	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+		tu_clip_free(all[i]);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* Every built-in scene renders with every atlas method (two frames, a moving path). */
+static void test_builtin_scenes(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	const char *scenes[] = {"scenes/calm.json", "scenes/moderate.json", "scenes/dynamic.json", "scenes/turntable.json"};
+	const char *variants[] = {"sa", "sau/2", "tasa@8", "tasa-oracle@8"};
+	for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
+		scene *s = tu_load_scene(scenes[i]);
+		int cam = (int)s->camera_count - 1;
+		for (size_t k = 0; k < sizeof variants / sizeof variants[0]; k++) {
+			/* at 64x36 the patch count, not the pixel count, sizes the atlas: every visible patch takes 2x2
+			 * texels at least */
+			const char *opts[] = {"atlas-scale=32", NULL};
+			tu_clip c = tu_render_clip(dev, s, cam, variants[k], opts, NULL, 64, 36, 2, false);
+			assert_true(c.st[1].allocated_samples > 0);
+			assert_true(tu_extra(&c.st[1], "cpu_ms_alloc") >= 0);
+			tu_clip_free(&c);
+		}
+		scene_destroy(&s);
+	}
+	vkdev_destroy(&dev);
+}
+
+/* S5: the allocator on its own. */
+static void test_allocator(void **state)
+{
+	(void)state;
+	char err[256];
+	enum { AW = 256, AH = 128, N = 4000 };
+	atlas_alloc *a = NULL;
+	assert_int_equal(atlas_alloc_create(AW, AH, &a, err, sizeof err), TL_OK);
+	static uint16_t owner[AH][AW];
+	memset(owner, 0, sizeof owner);
+	struct {
+		uint32_t x, y, lw, lh;
+		bool live;
+	} blk[N];
+	uint64_t used = 0;
+	uint32_t rng = 12345, first_x = 0, first_y = 0;
+	for (int i = 0; i < N; i++) {
+		rng = rng * 1664525u + 1013904223u;
+		blk[i].lw = 1 + (rng >> 8) % 5;
+		blk[i].lh = 1 + (rng >> 16) % 5;
+		blk[i].live = atlas_alloc_block(a, blk[i].lw, blk[i].lh, &blk[i].x, &blk[i].y);
+		if (i == 0) {
+			assert_true(blk[0].live && blk[0].x == 0 && blk[0].y == 0); /* lowest address first */
+			first_x = blk[0].x, first_y = blk[0].y;
+		}
+		if (blk[i].live) {
+			uint32_t w = 1u << blk[i].lw, h = 1u << blk[i].lh;
+			assert_true(blk[i].x + w <= AW && blk[i].y + h <= AH);
+			assert_int_equal(blk[i].x % w, 0); /* aligned: buddies */
+			for (uint32_t y = 0; y < h; y++)
+				for (uint32_t x = 0; x < w; x++) {
+					if (owner[blk[i].y + y][blk[i].x + x])
+						fail_msg("block %d overlaps block %d", i, owner[blk[i].y + y][blk[i].x + x] - 1);
+					owner[blk[i].y + y][blk[i].x + x] = (uint16_t)(i + 1);
+				}
+			used += (uint64_t)w * h;
+		}
+		/* free a pseudo-random earlier block now and then */
+		if ((rng >> 4) % 3 == 0) {
+			int j = (int)((rng >> 12) % (uint32_t)(i + 1));
+			if (blk[j].live) {
+				atlas_alloc_free(a, blk[j].x, blk[j].y, blk[j].lw, blk[j].lh);
+				uint32_t w = 1u << blk[j].lw, h = 1u << blk[j].lh;
+				for (uint32_t y = 0; y < h; y++)
+					for (uint32_t x = 0; x < w; x++)
+						owner[blk[j].y + y][blk[j].x + x] = 0;
+				used -= (uint64_t)w * h;
+				blk[j].live = false;
+			}
+		}
+		assert_int_equal(atlas_alloc_used(a), used);
+		assert_true(used <= (uint64_t)AW * AH);
+	}
+	(void)first_x, (void)first_y;
+	/* the same sequence gives the same addresses (determinism) */
+	atlas_alloc *b = NULL, *c = NULL;
+	assert_int_equal(atlas_alloc_create(AW, AH, &b, err, sizeof err), TL_OK);
+	assert_int_equal(atlas_alloc_create(AW, AH, &c, err, sizeof err), TL_OK);
+	for (uint32_t i = 0; i < 200; i++) {
+		uint32_t x1 = 0, y1 = 0, x2 = 0, y2 = 0;
+		bool ok1 = atlas_alloc_block(b, 1 + i % 4, 1 + i % 3, &x1, &y1);
+		bool ok2 = atlas_alloc_block(c, 1 + i % 4, 1 + i % 3, &x2, &y2);
+		assert_true(ok1 == ok2 && x1 == x2 && y1 == y2);
+		if (ok1 && i % 5 == 0) {
+			atlas_alloc_free(b, x1, y1, 1 + i % 4, 1 + i % 3);
+			atlas_alloc_free(c, x2, y2, 1 + i % 4, 1 + i % 3);
+		}
+	}
+	atlas_alloc_destroy(&b);
+	atlas_alloc_destroy(&c);
+	/* freeing everything returns every texel */
+	for (int i = 0; i < N; i++)
+		if (blk[i].live)
+			atlas_alloc_free(a, blk[i].x, blk[i].y, blk[i].lw, blk[i].lh);
+	assert_int_equal(atlas_alloc_used(a), 0);
+	uint32_t x, y;
+	assert_true(atlas_alloc_block(a, 8, 7, &x, &y) && x == 0 && y == 0); /* the whole atlas again */
+	assert_false(atlas_alloc_block(a, 1, 1, &x, &y));
+	atlas_alloc_destroy(&a);
+	assert_int_equal(atlas_alloc_create(100, 64, &a, err, sizeof err), TL_ERR_ARG);
+	assert_null(a);
+}
+
+/* Patches of the procedural meshes: quads pair up; levels with hysteresis. */
+static void test_patches_and_levels(void **state)
+{
+	(void)state;
+	char err[256];
+	scene *s = tu_load_scene("tfr_static");
+	atlas_patches p;
+	assert_int_equal(atlas_patches_build(s, &p, err, sizeof err), TL_OK);
+	assert_int_equal(p.paired * 2, p.tri_total); /* planes and boxes are quads: every triangle paired */
+	assert_int_equal(p.patch_total, p.paired);
+	for (size_t t = 0; t < p.tri_total; t++)
+		assert_true((p.tri_info[t] >> 3) < p.patch_total);
+	atlas_patches_free(&p);
+	scene_destroy(&s);
+	bool cl;
+	assert_int_equal(atlas_level(7.0f, 1.0f, 8, 0, &cl), 3);      /* log2(8) = 3 */
+	assert_int_equal(atlas_level(8.0f, 1.0f, 8, 0, &cl), 4);      /* log2(9) > 3 */
+	assert_int_equal(atlas_level(8.0f, 1.0f, 8, 3, &cl), 3);      /* kept: log2(9) = 3.17 <= 3.25 */
+	assert_int_equal(atlas_level(3.5f, 1.0f, 8, 3, &cl), 3);      /* kept: log2(4.5) = 2.17 > 1.75 */
+	assert_int_equal(atlas_level(2.0f, 1.0f, 8, 3, &cl), 2);      /* log2(3) = 1.58: down */
+	assert_int_equal(atlas_level(1000.0f, 1.0f, 8, 0, &cl), 8);
+	assert_true(cl);
+	assert_int_equal(atlas_level(0.0f, 1.0f, 8, 0, &cl), 1); /* at least 2 texels */
+	float c[4][4] = {{-1, -1, 0, 1}, {1, -1, 0, 1}, {-1, 1, 0, 1}, {1, 1, 0, 1}}, lu, lv;
+	atlas_edge_lengths(&c[0][0], false, 100, 50, &lu, &lv);
+	assert_true(fabsf(lu - 100) < 1e-4f && fabsf(lv - 50) < 1e-4f);
+	c[0][3] = -1; /* a corner behind the eye: clipped, finite */
+	atlas_edge_lengths(&c[0][0], false, 100, 50, &lu, &lv);
+	assert_true(isfinite(lu) && isfinite(lv));
+}
+
+static void expect_cli_error(const char *args, const char *needle)
+{
+	char cmd[8192], out[8192];
+	snprintf(cmd, sizeof cmd, "%s %s", TASLAB_BINARY, args);
+	int st = tu_run(cmd, out, sizeof out);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
+		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
+}
+
+static void test_bad_input(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("atlas_bad");
+	char base[4096], args[8192], path[4096];
+	snprintf(base, sizeof base, "render --scene %s/tests/data/tfr_static.json --size 32x32 --frames 0:2 --out %s/r",
+		 TASLAB_SOURCE_DIR, dir);
+	static const struct {
+		const char *opts, *needle;
+	} cases[] = {
+		{"--method sa --atlas-scale 0", "--atlas-scale"},
+		{"--method sau --period 3", "--period 3"},
+		{"--method tasa --threshold 0", "T > 0"},
+		{"--method tasa@0", "T > 0"},
+		{"--method sa --oracle", "--oracle"},
+		{"--method tasa-oracle@8 --force-reshade", "--force-reshade"},
+		{"--method sa --decisions", "no reuse decisions"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		snprintf(args, sizeof args, "%s %s", base, cases[i].opts);
+		expect_cli_error(args, cases[i].needle);
+	}
+	snprintf(path, sizeof path, "%s/r", dir);
+	assert_false(tu_file_exists(path));
+	/* an atlas too small for what is visible: one line, no complete run */
+	snprintf(args, sizeof args,
+		 "render --scene %s/scenes/calm.json --size 96x54 --frames 0:1 --method sa --atlas-scale 0.25 "
+		 "--atlas-density 4 --quiet --out %s/small",
+		 TASLAB_SOURCE_DIR, dir);
+	expect_cli_error(args, "atlas");
+	snprintf(path, sizeof path, "%s/small/manifest.json", dir);
+	assert_false(tu_file_exists(path));
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_allocator),	  cmocka_unit_test(test_patches_and_levels),
+		cmocka_unit_test(test_bad_input),	  cmocka_unit_test(test_static_scene),
+		cmocka_unit_test(test_no_bleeding),	  cmocka_unit_test(test_convergence_and_gradients),
+		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_builtin_scenes),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
