@@ -104,7 +104,10 @@ static void test_render_options(void **state)
 	PARSE_BAD("render", "not an option of rrc", "render", "--scene", "s", "--method", "rrc", "--oracle");
 	PARSE_BAD("render", "no reuse decisions", "render", "--scene", "s", "--method", "tfr@8", "--decisions");
 	PARSE_BAD("render", "magic", "render", "--scene", "s", "--method", "magic");
-	PARSE_BAD("render", "not implemented", "render", "--scene", "s", "--method", "tasa");
+	PARSE_OK("render", "render", "--scene", "s", "--method", "tasa@16", "--atlas-scale", "8", "--truth");
+	assert_true(method_config_threshold(&o->config) == 16 && method_config_number(&o->config, "atlas-scale") == 8);
+	PARSE_BAD("render", "--atlas-scale", "render", "--scene", "s", "--method", "sa", "--atlas-scale", "0");
+	PARSE_BAD("render", "not an option of sa", "render", "--scene", "s", "--method", "sa", "--threshold", "8");
 	PARSE_BAD("render", "--scene", "render", "--size", "96x54");
 	PARSE_BAD("render", "needs a value", "render", "--scene");
 	PARSE_BAD("render", "--colour", "render", "--scene", "s", "--colour");

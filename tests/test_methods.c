@@ -29,7 +29,8 @@ static void test_registry(void **state)
 			assert_true(o->type == METHOD_OPT_BOOL || o->type == METHOD_OPT_CHOICE || o->min <= o->def || isnan(o->def));
 		}
 	}
-	assert_true(method_find("ref")->available && method_find("tfr")->available);
+	for (size_t i = 0; i < sizeof design / sizeof design[0]; i++) /* every method of DESIGN section 4 is in */
+		assert_true(method_find(design[i])->available);
 	assert_null(method_find("magic"));
 }
 
@@ -63,6 +64,10 @@ static void test_variants(void **state)
 	expect_variant("tarc@8", "tarc@8", "tarc", "tarc-T8", 8, 0);
 	expect_variant("tarc-oracle@8", "tarc-oracle@8", "tarc-oracle", "tarc-oracle-T8", 8, 0);
 	expect_variant("tarc-oracle@0", "tarc-oracle@0", "tarc-oracle", "tarc-oracle-T0", 0, 0);
+	expect_variant("sa", "sa", "sa", "sa", NAN, 0);
+	expect_variant("sau/8", "sau/8", "sau", "sau-N8", NAN, 8);
+	expect_variant("tasa@16", "tasa@16", "tasa", "tasa-T16", 16, 0);
+	expect_variant("tasa-oracle@8", "tasa-oracle@8", "tasa-oracle", "tasa-oracle-T8", 8, 0);
 	char err[256];
 	method_config c;
 	struct {
@@ -73,7 +78,9 @@ static void test_variants(void **state)
 		{"tfr@x", "not a number"},	  {"tfr@0", "out of range"},
 		{"tfr@8@9", "once"},		  {"tfr-oracle@8", "no '-oracle' form"},
 		{"magic@8", "unknown method"},	  {"", "empty"},
-		{"tasa@8", "not implemented"},	  {"tfr/4", "takes no '/'"},
+		{"sa@8", "takes no '@'"},	  {"tfr/4", "takes no '/'"},
+		{"sau", "sau/4"},		  {"tasa", "tasa@8"},
+		{"tasa@0", "T > 0"},		  {"sa-oracle", "no '-oracle' form"},
 		{"rrc", "rrc/4"},		  {"rrc/3", "3"},
 		{"rrc/16", "one of 1, 2, 4, 8"},	  {"rrc-oracle/4", "no '-oracle' form"},
 		{"tarc", "tarc@8"},		  {"tarc@0", "T > 0"},

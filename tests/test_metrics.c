@@ -816,6 +816,25 @@ static void test_runs_summary(void **state)
 	assert_non_null(strstr(rcsv, ",reused_samples,late_samples,late_percent,late,early,on_time,unchanged\n"));
 	assert_non_null(strstr(rcsv, ",225,3,1.3333,3,4,10,100\n")); /* late_percent = 3 / 225 */
 	free(rcsv);
+	/* An atlas method reduces against sa when an sa run of the same clip is there (Table 1), else against ref. */
+	char sa_run[4096], tasa_run[4096];
+	snprintf(sa_run, sizeof sa_run, "%s/sa", base);
+	snprintf(tasa_run, sizeof tasa_run, "%s/tasa", base);
+	snprintf(csv, sizeof csv, "%s\n0,0,100,200,1,1,,0,,,1,1\n1,0,100,200,1,1,,0,,,1,1\n2,0,100,200,1,1,,0,,,1,1\n", hdr);
+	make_run(sa_run, "sa", 0, "[8, 8]", csv);
+	snprintf(csv, sizeof csv, "%s\n0,0,100,200,1,1,,0,,,1,1\n1,0,100,50,1,1,,0,,,1,1\n2,0,100,50,1,1,,0,,,1,1\n", hdr);
+	make_run(tasa_run, "tasa", 8, "[8, 8]", csv);
+	const char *atlas_runs[3] = {tasa_run, ref, sa_run};
+	mtr_run_summary sa3[3];
+	if (mtr_runs_summarise(atlas_runs, 3, NULL, sa3, err, sizeof err))
+		fail_msg("%s", err);
+	assert_string_equal(sa3[0].baseline, "sa");
+	assert_float_equal(sa3[0].reduction, 0.5, 1e-12); /* 1 - 300 / 600 */
+	assert_string_equal(sa3[2].baseline, "sa");
+	if (mtr_runs_summarise(atlas_runs, 2, NULL, sa3, err, sizeof err)) /* no sa run: against ref */
+		fail_msg("%s", err);
+	assert_string_equal(sa3[0].baseline, "ref");
+	assert_float_equal(sa3[0].reduction, 0.0, 1e-12);
 	/* Another baseline variant: reductions against it. */
 	if (mtr_runs_summarise(runs, 3, "tas", s, err, sizeof err))
 		fail_msg("%s", err);

@@ -129,8 +129,8 @@ static const cli_opt runs_options[] = {
 	 .help = "output folder",
 	 .type = CLI_STRING, .offset = offsetof(metrics_runs_opts, out)},
 	{.name = "baseline", .arg = "VARIANT",
-	 .help = "the variant reductions are relative to, per scene, camera path, frames and size (default ref; "
-		 "the paper's Table 1 uses sa)",
+	 .help = "the variant reductions are relative to, per scene, camera path, frames and size (default: sa for "
+		 "sa/sau/tasa runs when an sa run is given, as the paper's Table 1; ref otherwise)",
 	 .type = CLI_STRING, .offset = offsetof(metrics_runs_opts, baseline)},
 	{0},
 };

@@ -109,8 +109,6 @@ static bool same_clip(const mtr_run_summary *a, const mtr_run_summary *b)
 int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, mtr_run_summary *out, char *err,
 		       size_t err_size)
 {
-	if (!baseline)
-		baseline = "ref";
 	for (size_t i = 0; i < n; i++) {
 		int rc = summarise_one(runs[i], &out[i], err, err_size);
 		if (rc)
@@ -118,12 +116,19 @@ int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, 
 	}
 	for (size_t i = 0; i < n; i++) {
 		out[i].reduction = out[i].speedup_vs_ref = NAN;
+		/* default baseline: sa for the atlas methods when its run is there (Table 1 is "reduction to SA"), else ref */
+		const char *base = baseline ? baseline : "ref";
+		bool atlas = !strcmp(out[i].method, "sa") || !strcmp(out[i].method, "sau") || !strncmp(out[i].method, "tasa", 4);
+		if (!baseline && atlas)
+			for (size_t r = 0; r < n; r++)
+				if (same_clip(&out[r], &out[i]) && !strcmp(out[r].variant, "sa"))
+					base = "sa";
 		for (size_t r = 0; r < n; r++) {
 			if (!same_clip(&out[r], &out[i]))
 				continue;
-			if (!isfinite(out[i].reduction) && !strcmp(out[r].variant, baseline) && out[r].shaded_samples > 0) {
+			if (!isfinite(out[i].reduction) && !strcmp(out[r].variant, base) && out[r].shaded_samples > 0) {
 				out[i].reduction = 1.0 - out[i].shaded_samples / out[r].shaded_samples;
-				snprintf(out[i].baseline, sizeof out[i].baseline, "%s", baseline);
+				snprintf(out[i].baseline, sizeof out[i].baseline, "%s", base);
 			}
 			if (!isfinite(out[i].speedup_vs_ref) && !strcmp(out[r].method, "ref"))
 				out[i].speedup_vs_ref = out[r].gpu_ms_median / out[i].gpu_ms_median;

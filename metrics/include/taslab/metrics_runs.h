@@ -32,9 +32,10 @@ typedef struct mtr_run_summary {
 	double late, early, on_time, unchanged; /* analysis tallies: column sums, NAN when absent */
 } mtr_run_summary;
 
-/* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: "ref"; Table 1 of the paper
- * reduces against SA, so atlas methods pass "sa") and speedups against the `ref` run, both with the same scene,
- * camera path, first frame, frame count and size. Runs without such a partner get NAN. */
+/* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: "sa" for the atlas methods sa,
+ * sau, tasa when an sa run is there — Table 1 of the paper reduces against SA — else "ref") and speedups against the
+ * `ref` run, both with the same scene, camera path, first frame, frame count and size. Runs without such a partner
+ * get NAN. */
 int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, mtr_run_summary *out, char *err,
 		       size_t err_size);
 
