@@ -230,8 +230,11 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 		cyl_ctx c = {d->radius, d->height};
 		b_patch(&b, cyl_fn, &c, seg, 1, 2.0f * uvs, uvs);
 		disk_ctx top = {d->radius, 0.5f * d->height, 1.0f}, bot = {d->radius, -0.5f * d->height, -1.0f};
-		b_patch(&b, disk_fn, &top, seg, 1, uvs, uvs);
-		b_patch(&b, disk_fn, &bot, seg, 1, uvs, uvs);
+		/* caps: triangle fans, or with `rings` concentric rings (a large cap's slices would otherwise be long
+		 * slivers, which the shading atlas must give large blocks) */
+		int cap_rings = d->rings > 0 ? d->rings : 1;
+		b_patch(&b, disk_fn, &top, seg, cap_rings, uvs, uvs);
+		b_patch(&b, disk_fn, &bot, seg, cap_rings, uvs, uvs);
 	} else if (!strcmp(d->kind, "torus")) {
 		if (!(d->radius > 0 && d->tube_radius > 0 && d->tube_radius < d->radius)) {
 			snprintf(why, why_size, "torus needs 0 < tube_radius < radius");

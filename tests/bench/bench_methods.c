@@ -2,7 +2,9 @@
  * One renderer per variant over the same scene, camera path and size; frame f is rendered by every variant in
  * turn before frame f + 1, so machine noise at any moment hits all variants alike, and each renderer still sees
  * consecutive frames (its cache stays valid). Writes one CSV row per variant and frame:
- *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,gpu_ms_<pass>... (the variant's own passes)
+ *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,allocated,q_mean=M,q_p99=P,<pass>=MS...
+ * q_mean / q_p99: mean and 99th percentile of the max-RGB difference of the display frame against the first
+ * variant's (the reference) in the same frame.
  *
  *   bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
  * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
@@ -109,7 +111,9 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	int rc = 0;
-	for (unsigned f = first; f < end && !rc; f++) {
+	size_t px = (size_t)w * h;
+	uint8_t *first_disp = malloc(px * 4);
+	for (unsigned f = first; f < end && !rc && first_disp; f++) {
 		for (int i = 0; i < nv; i++) {
 			frame_image img;
 			frame_stats st;
@@ -118,9 +122,28 @@ int main(int argc, char **argv)
 				rc = 1;
 				break;
 			}
-			fprintf(out, "%s,%u,%lld,%lld,%lld,%lld,%lld,%.4f", v[i].label, f, (long long)st.visible_samples,
-				(long long)st.shaded_samples, (long long)st.reused_samples, (long long)st.new_units,
-				(long long)st.late_samples, st.gpu_ms_total);
+			size_t hist[256] = {0};
+			double sum = 0;
+			if (i == 0)
+				memcpy(first_disp, img.display_rgba, px * 4);
+			for (size_t k = 0; k < px; k++) {
+				int m = 0;
+				for (int c = 0; c < 3; c++) {
+					int d = abs((int)img.display_rgba[k * 4 + c] - (int)first_disp[k * 4 + c]);
+					m = d > m ? d : m;
+				}
+				hist[m]++, sum += m;
+			}
+			int p99 = 0;
+			for (size_t acc = 0; p99 < 255 && (acc += hist[p99]) * 100 < px * 99;)
+				p99++;
+			fprintf(out, "%s,%u,%lld,%lld,%lld,%lld,%lld,%.4f,%lld,q_mean=%.4f,q_p99=%d", v[i].label, f,
+				(long long)st.visible_samples, (long long)st.shaded_samples, (long long)st.reused_samples,
+				(long long)st.new_units, (long long)st.late_samples, st.gpu_ms_total,
+				(long long)st.allocated_samples, sum / (double)px, p99);
+			for (uint32_t e = 0; e < st.extra_count; e++)
+				if (!strcmp(st.extra_names[e], "cpu_ms_alloc"))
+					fprintf(out, ",cpu_ms_alloc=%.4f", st.extra[e]);
 			for (uint32_t p = 0; p < st.pass_count; p++)
 				fprintf(out, ",%s=%.4f", st.pass_names[p], st.gpu_ms[p]);
 			fputc('\n', out);
@@ -130,6 +153,7 @@ int main(int argc, char **argv)
 			fprintf(stderr, "bench_methods: %s %s: %u/%u frames\n", s->name, argv[2], f - first + 1, end - first);
 	}
 	fclose(out);
+	free(first_disp);
 	for (int i = 0; i < nv; i++)
 		render_destroy(&v[i].r);
 	vkdev_destroy(&dev);
