@@ -11,7 +11,11 @@
  *    (test_private_db_and_admin), RFC 7233 ranges and RFC 7230 framing (test_range, test_framing), per-client
  *    connection limit and idle timeout (test_connection_limit), new studies built aside and never overwriting
  *    (test_create_refuses), import rules and CSV formulas (test_import_rules, test_export_formulas), the links'
- *    base (test_links_served_url), one-line server messages and the page text (test_serve_messages). */
+ *    base (test_links_served_url), one-line server messages and the page text (test_serve_messages);
+ *  - variants with a period (DESIGN section 4): rrc/4, rrc/8 and tarc@8 stay distinct conditions through design,
+ *    answers, export, import and tally (test_period_conditions); design's T/period rule on pairs.json
+ *    (test_design_period_rule; import's in test_import_rules); studies made before the period column
+ *    (test_old_study_schema). */
 #define _DEFAULT_SOURCE /* usleep, struct timeval */
 #include <arpa/inet.h>
 #include <errno.h>
@@ -31,6 +35,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "taslab/pairs.h"
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
 #include "test_util.h"
@@ -194,12 +199,12 @@ static void test_tally_vs_r(void **state)
 			for (int c = 0; c < 2; c++) {
 				char k[64];
 				snprintf(k, sizeof k, "%s/%s", scenes[sc], cams[c]);
-				const char *ours[4] = {"tfr", Ts[t], scenes[sc], cams[c]};
+				const char *ours[5] = {"tfr", Ts[t], "", scenes[sc], cams[c]}; /* tfr has no period */
 				const char *kinds[4] = {"Q", "Q_lo", "Q_hi", "jnd"};
-				int cols[4] = {5, 6, 7, 11};
+				int cols[4] = {6, 7, 8, 12};
 				for (int q = 0; q < 4; q++) {
 					const char *rk[3] = {kinds[q], Ts[t], k};
-					double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 4, cols[q]);
+					double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 5, cols[q]);
 					if (!(fabs(want - got) <= 1e-6))
 						fail_msg("%s T=%s %s: ours %.9g, R %.9g", kinds[q], Ts[t], k, got, want);
 					checked++;
@@ -209,14 +214,14 @@ static void test_tally_vs_r(void **state)
 	const char *effects[3] = {"camera", "scene", "camera:scene"};
 	for (int t = 0; t < 2; t++)
 		for (int e = 0; e < 3; e++) {
-			const char *ours[3] = {"tfr", Ts[t], effects[e]};
+			const char *ours[4] = {"tfr", Ts[t], "", effects[e]};
 			const char *kinds[6] = {"df1", "df2", "F", "p", "p_gg", "epsilon_gg"};
-			int cols[6] = {3, 4, 5, 6, 7, 8};
+			int cols[6] = {4, 5, 6, 7, 8, 9};
 			for (int q = 0; q < 6; q++) {
 				const char *rk[3] = {kinds[q], Ts[t], effects[e]};
-				double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 3, cols[q]);
+				double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 4, cols[q]);
 				if (isnan(want) && e == 0 && q >= 4) /* camera has 2 levels: sphericity holds, epsilon 1 */
-					want = q == 4 ? csv_lookup(p, ours, 3, 6) : 1.0;
+					want = q == 4 ? csv_lookup(p, ours, 4, 7) : 1.0;
 				double tol = q == 5 ? 1e-4 : 1e-6 * fmax(1.0, fabs(want));
 				if (!(fabs(want - got) <= tol))
 					fail_msg("%s T=%s %s: ours %.9g, R %.9g", kinds[q], Ts[t], effects[e], got, want);
@@ -225,9 +230,9 @@ static void test_tally_vs_r(void **state)
 		}
 	fprintf(stderr, "%d statistics checked against R\n", checked);
 	/* Pooled rows exist, and the other outputs are there. */
-	const char *pooled[4] = {"tfr", "8", "all", "all"};
+	const char *pooled[5] = {"tfr", "8", "", "all", "all"};
 	snprintf(p, sizeof p, "%s/conditions.csv", res);
-	assert_false(isnan(csv_lookup(p, pooled, 4, 5)));
+	assert_false(isnan(csv_lookup(p, pooled, 5, 6)));
 	const char *files[5] = {"posthoc.csv", "observers.csv", "jod.csv", "tables.md", "conditions.json"};
 	for (int i = 0; i < 5; i++) {
 		snprintf(p, sizeof p, "%s/%s", res, files[i]);
@@ -258,11 +263,11 @@ static void test_import_export(void **state)
 			line += *c == '\n';
 		char row[256];
 		if (i == 0)
-			snprintf(row, sizeof row, "P03,5,moderate,walk,moving,tfr,8,0,1,-1,900"); /* rating contradicts answer */
+			snprintf(row, sizeof row, "P03,5,moderate,walk,moving,tfr,8,,0,1,-1,900"); /* rating contradicts answer */
 		else if (i == 1)
-			snprintf(row, sizeof row, "P07,2,moderate,still,sideways,tfr,8,1,0,0,900");
+			snprintf(row, sizeof row, "P07,2,moderate,still,sideways,tfr,8,,1,0,0,900");
 		else
-			snprintf(row, sizeof row, "P10,11,dynamic,walk,moving,tfr,16,0,3,3,900");
+			snprintf(row, sizeof row, "P10,11,dynamic,walk,moving,tfr,16,,0,3,3,900");
 		FILE *f = fopen(bad, "w");
 		fprintf(f, "%.*s%s%s", (int)(at - copy), copy, row, lineend);
 		fclose(f);
@@ -288,10 +293,10 @@ static void test_import_export(void **state)
 	assert_int_equal(sty_export_pwcmp(s, exp, err, sizeof err), 0);
 	char *pw = tu_read_file(exp, NULL);
 	assert_true(strncmp(pw, "observer,scene,condition_A,condition_B,selected_A\n", 50) == 0);
-	int ties = 0; /* rows whose rating (10th field) is 0 */
+	int ties = 0; /* rows whose rating (11th field) is 0 */
 	for (const char *line = strchr(src, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
 		const char *f = line + 1;
-		for (int k = 0; k < 9; k++)
+		for (int k = 0; k < 10; k++)
 			f = strchr(f, ',') + 1;
 		ties += f[0] == '0' && f[1] == ',';
 	}
@@ -1003,7 +1008,8 @@ static void test_create_refuses(void **state)
 	assert_int_equal(dir_entries(dbs), 2); /* a.db, b.db-wal */
 }
 
-/* Issue 12.6: T exactly for methods with a threshold; text cells that a spreadsheet would run are refused. */
+/* Issue 12.6: T exactly for methods with a threshold, period exactly for methods with a period (DESIGN section 4);
+ * text cells that a spreadsheet would run are refused. */
 static void test_import_rules(void **state)
 {
 	(void)state;
@@ -1011,27 +1017,41 @@ static void test_import_rules(void **state)
 	char db[4096], csv[4096], err[1024];
 	snprintf(csv, sizeof csv, "%s/r.csv", dir);
 	const char *rows[][2] = {
-		{"P1,0,calm,still,stationary,tfr,,1,1,-1,5", "needs a threshold"},
-		{"P1,0,calm,still,stationary,tarc-oracle,,1,1,-1,5", "needs a threshold"},
-		{"P1,0,calm,still,stationary,tasa,,1,1,-1,5", "needs a threshold"},
-		{"P1,0,calm,still,stationary,ref,8,1,1,-1,5", "has no threshold"},
-		{"P1,0,calm,still,stationary,sau,4,1,1,-1,5", "has no threshold"},
-		{"P1,0,calm,still,stationary,warp,8,1,1,-1,5", "is not one of"},
-		{"P1,0,calm,still,stationary,tfr,300,1,1,-1,5", "T '300'"},
-		{"P1,0,calm,still,stationary,tfr, 8,1,1,-1,5", "T ' 8'"},
-		{"=HYPERLINK(\"http://x\"),0,calm,still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"P1,0,=1+1,still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"P1,0,calm,+still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"P1,0,calm,-still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"@P1,0,calm,still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"\tP1,0,calm,still,stationary,tfr,8,1,1,-1,5", "formula"},
-		{"P1,+0,calm,still,stationary,tfr,8,1,1,-1,5", "trial"},
-		{"P1,0,calm,still,stationary,tfr,8,1, 1,-1,5", "answer"},
+		{"P1,0,calm,still,stationary,tfr,,,1,1,-1,5", "needs a threshold"},
+		{"P1,0,calm,still,stationary,tarc-oracle,,,1,1,-1,5", "needs a threshold"},
+		{"P1,0,calm,still,stationary,tasa,,,1,1,-1,5", "needs a threshold"},
+		{"P1,0,calm,still,stationary,ref,8,,1,1,-1,5", "has no threshold"},
+		{"P1,0,calm,still,stationary,sau,4,,1,1,-1,5", "has no threshold"},
+		{"P1,0,calm,still,stationary,rrc,4,4,1,1,-1,5", "has no threshold"},
+		{"P1,0,calm,still,stationary,rrc,,,1,1,-1,5", "method rrc needs a period"},
+		{"P1,0,calm,still,stationary,sau,,,1,1,-1,5", "method sau needs a period"},
+		{"P1,0,calm,still,stationary,tarc,8,4,1,1,-1,5", "method tarc has no period"},
+		{"P1,0,calm,still,stationary,tfr,8,8,1,1,-1,5", "method tfr has no period"},
+		{"P1,0,calm,still,stationary,sa,,2,1,1,-1,5", "method sa has no period"},
+		{"P1,0,calm,still,stationary,ref,,1,1,1,-1,5", "method ref has no period"},
+		{"P1,0,calm,still,stationary,rrc,,3,1,1,-1,5", "period '3'"},
+		{"P1,0,calm,still,stationary,rrc,,16,1,1,-1,5", "period '16'"},
+		{"P1,0,calm,still,stationary,rrc,,0,1,1,-1,5", "period '0'"},
+		{"P1,0,calm,still,stationary,rrc,,-4,1,1,-1,5", "period '-4'"},
+		{"P1,0,calm,still,stationary,rrc,, 4,1,1,-1,5", "period ' 4'"},
+		{"P1,0,calm,still,stationary,rrc,,4.0,1,1,-1,5", "period '4.0'"},
+		{"P1,0,calm,still,stationary,rrc,,4,1,1,-1", "expected 12 columns"},
+		{"P1,0,calm,still,stationary,warp,8,,1,1,-1,5", "is not one of"},
+		{"P1,0,calm,still,stationary,tfr,300,,1,1,-1,5", "T '300'"},
+		{"P1,0,calm,still,stationary,tfr, 8,,1,1,-1,5", "T ' 8'"},
+		{"=HYPERLINK(\"http://x\"),0,calm,still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"P1,0,=1+1,still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"P1,0,calm,+still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"P1,0,calm,-still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"@P1,0,calm,still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"\tP1,0,calm,still,stationary,tfr,8,,1,1,-1,5", "formula"},
+		{"P1,+0,calm,still,stationary,tfr,8,,1,1,-1,5", "trial"},
+		{"P1,0,calm,still,stationary,tfr,8,,1, 1,-1,5", "answer"},
 	};
 	for (size_t i = 0; i < sizeof rows / sizeof *rows; i++) {
 		FILE *f = fopen(csv, "w");
-		fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms\n"
-			   "P0,0,calm,still,stationary,tfr,8,1,1,-1,5\n%s\n", rows[i][0]);
+		fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n"
+			   "P0,0,calm,still,stationary,tfr,8,,1,1,-1,5\n%s\n", rows[i][0]);
 		fclose(f);
 		snprintf(db, sizeof db, "%s/s%zu.db", dir, i);
 		sty *s = created(db);
@@ -1041,19 +1061,55 @@ static void test_import_rules(void **state)
 			fail_msg("row '%s': rc %d, message '%s' (expected '%s')", rows[i][0], rc, err, rows[i][1]);
 		sty_close(&s);
 	}
-	/* Methods without a threshold with an empty T, and with a threshold with one, import. */
+	/* Files in the DESIGN section 7 layout without the period column (from before it) still import; as they
+	 * cannot say a period, their rrc and sau rows are refused. */
+	const char *old_header = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms\n";
+	const char *old_rows[][2] = {
+		{"P1,0,calm,still,stationary,rrc,,1,1,-1,5", "method rrc needs a period"},
+		{"P1,0,calm,still,stationary,sau,,1,1,-1,5", "method sau needs a period"},
+		{"P1,0,calm,still,stationary,tfr,,1,1,-1,5", "needs a threshold"},
+		{"P1,0,calm,still,stationary,tfr,8,,1,1,-1,5", "expected 11 columns"},
+	};
+	for (size_t i = 0; i < sizeof old_rows / sizeof *old_rows; i++) {
+		FILE *f = fopen(csv, "w");
+		fprintf(f, "%sP0,0,calm,still,stationary,tfr,8,1,1,-1,5\n%s\n", old_header, old_rows[i][0]);
+		fclose(f);
+		snprintf(db, sizeof db, "%s/o%zu.db", dir, i);
+		sty *s = created(db);
+		size_t n;
+		int rc = sty_import_long(s, csv, &n, err, sizeof err);
+		if (!rc || !strstr(err, old_rows[i][1]) || !strstr(err, "r.csv:3:"))
+			fail_msg("old-layout row '%s': rc %d, message '%s' (expected '%s')", old_rows[i][0], rc, err, old_rows[i][1]);
+		sty_close(&s);
+	}
 	FILE *f = fopen(csv, "w");
-	fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms\n"
-		   "P0,0,calm,still,stationary,tfr,8,1,1,-1,5\nP0,1,calm,still,stationary,sau,,0,1,1,\n"
-		   "P0,2,calm,still,stationary,tasa-oracle,16,0,-2,-2,86400000\n");
+	fprintf(f, "%sP0,0,calm,still,stationary,tfr,8,1,1,-1,5\nP0,1,calm,still,stationary,sa,,0,1,1,\n", old_header);
 	fclose(f);
-	snprintf(db, sizeof db, "%s/good.db", dir);
+	snprintf(db, sizeof db, "%s/old.db", dir);
 	sty *s = created(db);
 	size_t n;
 	if (sty_import_long(s, csv, &n, err, sizeof err))
 		fail_msg("%s", err);
-	assert_int_equal(n, 3);
+	assert_int_equal(n, 2);
 	sty_close(&s);
+	/* Every method with T and period as it has them imports, and rrc/4, rrc/8 stay two conditions. */
+	f = fopen(csv, "w");
+	fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n"
+		   "P0,0,calm,still,stationary,tfr,8,,1,1,-1,5\nP0,1,calm,still,stationary,sau,,1,0,1,1,\n"
+		   "P0,2,calm,still,stationary,tasa-oracle,16,,0,-2,-2,86400000\nP0,3,calm,still,stationary,rrc,,4,0,1,1,7\n"
+		   "P0,4,calm,still,stationary,rrc,,8,0,1,1,7\nP0,5,calm,still,stationary,sau,,2,0,1,1,7\n"
+		   "P0,6,calm,still,stationary,sa,,,0,1,1,7\nP0,7,calm,still,stationary,ref,,,0,1,1,7\n");
+	fclose(f);
+	snprintf(db, sizeof db, "%s/good.db", dir);
+	s = created(db);
+	if (sty_import_long(s, csv, &n, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(n, 8);
+	commit(s);
+	sty_close(&s);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions"), 8);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE method = 'rrc' AND T IS NULL AND period IN (4, 8)"), 2);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE period IS NOT NULL AND method NOT IN ('rrc', 'sau')"), 0);
 }
 
 /* Issue 12.6: names from a design (pairs.json) that a spreadsheet would run are neutralised on export. */
@@ -1188,6 +1244,368 @@ static void test_serve_messages(void **state)
 	sty_close(&s);
 }
 
+/* ------------------------------------------------------------------ variants with a period (DESIGN section 4) */
+
+/* The variants of the period tests: rrc/4 and rrc/8 differ only by period, tarc@8 has a threshold. `base` is the
+ * reference-relative rating the simulated participants give (plus 0 or 1, see period_rating). */
+static const struct {
+	const char *id, *method, *variant;
+	double T;
+	uint32_t period;
+	int base;
+} period_variants[3] = {
+	{"rrc-N4", "rrc", "rrc/4", NAN, 4, -1}, {"rrc-N8", "rrc", "rrc/8", NAN, 8, 1}, {"tarc-T8", "tarc", "tarc@8", 8, 0, 0}};
+
+/* Participant p's rating of variant v in set k: base + (p + k) % 2, so each participant's mean over the two sets is
+ * base + 0.5 (pooled Q: rrc/4 -0.5, rrc/8 1.5, tarc@8 0.5; rrc/4 and rrc/8 merged would give 0.5). */
+static int period_rating(int v, int p, int k) { return period_variants[v].base + (p + k) % 2; }
+
+/* Two sets of scene calm (path still: stationary, walk: moving), each with rrc/4, rrc/8 and tarc@8, written by the
+ * pairs.json writer `taslab pair` uses; small files as clips. */
+static void make_period_stimuli(const char *root)
+{
+	const char *sets[2][3] = {{"calm-still", "still", "stationary"}, {"calm-walk", "walk", "moving"}};
+	char p[4096], err[1024];
+	for (int k = 0; k < 2; k++) {
+		snprintf(p, sizeof p, "mkdir -p %s/%s/clips", root, sets[k][0]);
+		assert_int_equal(system(p), 0);
+		pairs_condition c[3];
+		memset(c, 0, sizeof c);
+		for (int v = 0; v <= 3; v++) {
+			const char *id = v < 3 ? period_variants[v].id : "ref";
+			snprintf(p, sizeof p, "%s/%s/clips/%s.webm", root, sets[k][0], id);
+			FILE *f = fopen(p, "w");
+			fprintf(f, "clip %s of %s", id, sets[k][0]);
+			fclose(f);
+			if (v == 3)
+				break;
+			snprintf(c[v].id, sizeof c[v].id, "%s", id);
+			snprintf(c[v].method, sizeof c[v].method, "%s", period_variants[v].method);
+			snprintf(c[v].variant, sizeof c[v].variant, "%s", period_variants[v].variant);
+			c[v].T = period_variants[v].T;
+			c[v].period = period_variants[v].period;
+			snprintf(c[v].clip, sizeof c[v].clip, "clips/%s.webm", id);
+		}
+		pairs_set set = {.fps = 60, .first_frame = 0, .last_frame = 59, .width = 16, .height = 16, .conditions = c,
+				 .count = 3};
+		snprintf(set.scene, sizeof set.scene, "calm");
+		snprintf(set.camera, sizeof set.camera, "%s", sets[k][1]);
+		snprintf(set.camera_motion, sizeof set.camera_motion, "%s", sets[k][2]);
+		snprintf(set.ref_clip, sizeof set.ref_clip, "clips/ref.webm");
+		snprintf(set.ref_run, sizeof set.ref_run, "runs/ref");
+		snprintf(p, sizeof p, "%s/%s/pairs.json", root, sets[k][0]);
+		if (pairs_write(p, &set, err, sizeof err))
+			fail_msg("%s", err);
+	}
+}
+
+/* Lines of `text` containing `needle`. */
+static int count_lines_with(const char *text, const char *needle)
+{
+	int n = 0;
+	for (const char *l = text; l && *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : NULL) {
+		const char *e = strchr(l, '\n'), *hit = strstr(l, needle);
+		n += hit && (!e || hit < e);
+	}
+	return n;
+}
+
+/* The first line of a file. */
+static void first_line(const char *path, char *line, size_t n)
+{
+	FILE *f = fopen(path, "r");
+	line[0] = 0;
+	if (f && fgets(line, (int)n, f))
+		line[strcspn(line, "\n")] = 0;
+	if (f)
+		fclose(f);
+}
+
+/* Checks a tally of the period study in `res`: one row per variant (rrc/4 and rrc/8 apart) in conditions.csv with
+ * the expected pooled Q, an ANOVA, post hoc and JOD row per variant, and period right after T in every CSV. */
+static void check_period_tally(const char *res)
+{
+	char p[4200], line[512];
+	const char *heads[6][2] = {
+		{"conditions.csv", "method,T,period,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd"},
+		{"anova.csv", "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg"},
+		{"posthoc.csv", "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni"},
+		{"jod.csv", "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants"},
+		{"fig3.csv", "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent"},
+		{"observers.csv", "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged"},
+	};
+	for (int i = 0; i < 6; i++) {
+		snprintf(p, sizeof p, "%s/%s", res, heads[i][0]);
+		first_line(p, line, sizeof line);
+		assert_string_equal(line, heads[i][1]);
+	}
+	const char *keys[3][3] = {{"rrc", "", "4"}, {"rrc", "", "8"}, {"tarc", "8", ""}};
+	for (int v = 0; v < 3; v++) {
+		const char *pooled[5] = {keys[v][0], keys[v][1], keys[v][2], "all", "all"};
+		const char *still[5] = {keys[v][0], keys[v][1], keys[v][2], "calm", "still"};
+		const char *effect[4] = {keys[v][0], keys[v][1], keys[v][2], "camera"};
+		snprintf(p, sizeof p, "%s/conditions.csv", res);
+		double Q = csv_lookup(p, pooled, 5, 6), n = csv_lookup(p, pooled, 5, 5);
+		if (!(fabs(Q - (period_variants[v].base + 0.5)) < 1e-9) || n != 8)
+			fail_msg("%s: pooled Q %g over %g ratings, expected %g over 8", period_variants[v].variant, Q, n,
+				 period_variants[v].base + 0.5);
+		assert_true(csv_lookup(p, still, 5, 5) == 4);
+		snprintf(p, sizeof p, "%s/anova.csv", res);
+		assert_true(csv_lookup(p, effect, 4, 4) == 1); /* df1 of Camera: its own ANOVA per variant */
+		snprintf(p, sizeof p, "%s/posthoc.csv", res);
+		assert_false(isnan(csv_lookup(p, effect, 4, 8)));
+		snprintf(p, sizeof p, "%s/jod.csv", res);
+		assert_false(isnan(csv_lookup(p, pooled, 5, 5)));
+	}
+	snprintf(p, sizeof p, "%s/conditions.csv", res);
+	char *csv = tu_read_file(p, NULL);
+	assert_int_equal(tu_count_lines(csv), 1 + 3 * 3); /* per variant: 2 sets + pooled */
+	free(csv);
+	snprintf(p, sizeof p, "%s/anova.csv", res);
+	csv = tu_read_file(p, NULL);
+	assert_int_equal(tu_count_lines(csv), 1 + 3);
+	free(csv);
+	snprintf(p, sizeof p, "%s/conditions.json", res);
+	csv = tu_read_file(p, NULL);
+	assert_non_null(strstr(csv, "\"period\": 4"));
+	assert_non_null(strstr(csv, "\"period\": 8"));
+	free(csv);
+}
+
+/* rrc/4, rrc/8 and tarc@8 in one set are distinct conditions from design through answers, export, import and
+ * tally (DESIGN section 4: T and period their own columns). */
+static void test_period_conditions(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_period");
+	char stim[4096], db[4096], db2[4096], err[1024], exp[4200], exp2[4200], pw[4200], res[4200], res2[4200];
+	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	snprintf(db, sizeof db, "%s/s.db", dir);
+	snprintf(db2, sizeof db2, "%s/imported.db", dir);
+	make_period_stimuli(stim);
+	/* Design: 3 variants x 2 sets, plus the 2 catch pairs; the period stored as given, NULL for the others. */
+	sty *s = created(db);
+	sty_design_desc d = {.stimuli = stim, .participants = 4, .seed = 11, .training = 1, .catch_trials = 2};
+	sty_design_summary sm;
+	if (sty_design(s, &d, &sm, err, sizeof err))
+		fail_msg("%s", err);
+	commit(s);
+	assert_int_equal(sm.conditions, 8);
+	assert_int_equal(sm.trials_per_participant, 1 + 6 + 2);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE method = 'rrc' AND T IS NULL AND period = 4"), 2);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE method = 'rrc' AND T IS NULL AND period = 8"), 2);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE method = 'tarc' AND T = 8 AND period IS NULL"), 2);
+	assert_int_equal(db_count(db, "SELECT count(*) FROM conditions WHERE method = 'ref' AND is_catch AND period IS NULL"), 2);
+	assert_int_equal(db_count(db, "SELECT count(DISTINCT method || '/' || ifnull(T, '') || '/' || ifnull(period, '') || '/'"
+				      " || camera) FROM conditions WHERE NOT is_catch"), 6);
+	/* Answers: the simulated participants tell the clips apart by what they serve (sty_clip_file). */
+	char **codes;
+	size_t n;
+	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), 0);
+	assert_int_equal(n, 4);
+	for (size_t pi = 0; pi < n; pi++) {
+		sty_trial t;
+		for (;;) {
+			assert_int_equal(sty_next_trial(s, codes[pi], &t, err, sizeof err), 0);
+			if (t.done)
+				break;
+			char a[4096], b[4096];
+			assert_int_equal(sty_clip_file(s, t.clip_a, a, sizeof a, err, sizeof err), 0);
+			assert_int_equal(sty_clip_file(s, t.clip_b, b, sizeof b, err, sizeof err), 0);
+			int ref_first = strstr(a, "/ref.webm") != NULL, answer = 0;
+			const char *test = ref_first ? b : a;
+			if (!strcmp(t.kind, "test")) {
+				int v = 0;
+				while (v < 3 && !strstr(test, period_variants[v].id))
+					v++;
+				assert_true(v < 3);
+				int r = period_rating(v, (int)pi, strstr(test, "calm-walk") != NULL);
+				answer = ref_first ? -r : r;
+			}
+			assert_int_equal(sty_answer(s, codes[pi], t.index, answer, 800, err, sizeof err), 0);
+		}
+	}
+	free_codes(codes, n);
+	/* Export: T and period in their own columns; 4 participants x 2 sets per variant. */
+	snprintf(exp, sizeof exp, "%s/ratings.csv", dir);
+	snprintf(pw, sizeof pw, "%s/pwcmp.csv", dir);
+	assert_int_equal(sty_export_long(s, exp, err, sizeof err), 0);
+	assert_int_equal(sty_export_pwcmp(s, pw, err, sizeof err), 0);
+	char *csv = tu_read_file(exp, NULL);
+	const char *head = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n";
+	assert_int_equal(strncmp(csv, head, strlen(head)), 0);
+	assert_int_equal(tu_count_lines(csv), 1 + 4 * 6);
+	assert_int_equal(count_lines_with(csv, ",rrc,,4,"), 8);
+	assert_int_equal(count_lines_with(csv, ",rrc,,8,"), 8);
+	assert_int_equal(count_lines_with(csv, ",tarc,8,,"), 8);
+	free(csv);
+	char *pwc = tu_read_file(pw, NULL);
+	assert_true(count_lines_with(pwc, ",rrc_N4,") + count_lines_with(pwc, ",rrc_N4\n") >= 8);
+	assert_true(count_lines_with(pwc, "rrc_N8,") >= 8);
+	assert_true(count_lines_with(pwc, "tarc_T8,") >= 8);
+	assert_int_equal(count_lines_with(pwc, ",rrc,"), 0);
+	free(pwc);
+	snprintf(res, sizeof res, "%s/tally", dir);
+	sty_tally_desc td = {.out = res, .bootstrap = 50, .seed = 1, .no_plot = true};
+	if (sty_tally(s, &td, err, sizeof err))
+		fail_msg("%s", err);
+	sty_close(&s);
+	check_period_tally(res);
+	/* Import of the export: the same conditions and the same bytes back, and the same statistics. */
+	s = created(db2);
+	size_t rows;
+	if (sty_import_long(s, exp, &rows, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(rows, 24);
+	commit(s);
+	assert_int_equal(db_count(db2, "SELECT count(*) FROM conditions"), 6);
+	assert_int_equal(db_count(db2, "SELECT count(DISTINCT ifnull(period, 0)) FROM conditions WHERE method = 'rrc'"), 2);
+	snprintf(exp2, sizeof exp2, "%s/ratings2.csv", dir);
+	assert_int_equal(sty_export_long(s, exp2, err, sizeof err), 0);
+	char *x1 = tu_read_file(exp, NULL), *x2 = tu_read_file(exp2, NULL);
+	assert_string_equal(x1, x2);
+	free(x1), free(x2);
+	snprintf(res2, sizeof res2, "%s/tally2", dir);
+	td.out = res2;
+	if (sty_tally(s, &td, err, sizeof err))
+		fail_msg("%s", err);
+	sty_close(&s);
+	check_period_tally(res2);
+	const char *same[2] = {"conditions.csv", "anova.csv"};
+	for (int i = 0; i < 2; i++) {
+		char pa[4300], pb[4300];
+		snprintf(pa, sizeof pa, "%s/%s", res, same[i]);
+		snprintf(pb, sizeof pb, "%s/%s", res2, same[i]);
+		x1 = tu_read_file(pa, NULL), x2 = tu_read_file(pb, NULL);
+		assert_string_equal(x1, x2);
+		free(x1), free(x2);
+	}
+}
+
+/* Design applies the import rule to pairs.json: period exactly for rrc and sau (1, 2, 4, 8), T exactly for the
+ * methods with a threshold. */
+static void test_design_period_rule(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_design_period");
+	const struct {
+		const char *method;
+		double T;
+		uint32_t period;
+		const char *why;
+	} bad[] = {
+		{"rrc", NAN, 0, "method rrc needs a period"},   {"sau", NAN, 0, "method sau needs a period"},
+		{"tarc", 8, 4, "method tarc has no period"},    {"tarc-oracle", 8, 8, "method tarc-oracle has no period"},
+		{"sa", NAN, 2, "method sa has no period"},      {"rrc", NAN, 3, "period 3 of method rrc"},
+		{"rrc", NAN, 16, "period 16 of method rrc"},    {"rrc", 8, 4, "method rrc has no threshold"},
+		{"tasa", NAN, 0, "method tasa needs a threshold"},
+	};
+	char err[1024];
+	for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+		char stim[4200], p[4300], db[4200];
+		snprintf(stim, sizeof stim, "%s/stim%zu", dir, i);
+		snprintf(p, sizeof p, "mkdir -p %s", stim);
+		assert_int_equal(system(p), 0);
+		const char *clips[2] = {"ref.webm", "x.webm"};
+		for (int c = 0; c < 2; c++) {
+			snprintf(p, sizeof p, "%s/%s", stim, clips[c]);
+			FILE *f = fopen(p, "w");
+			fputs("clip", f);
+			fclose(f);
+		}
+		pairs_condition c = {.T = bad[i].T, .period = bad[i].period};
+		snprintf(c.id, sizeof c.id, "cond%zu", i);
+		snprintf(c.method, sizeof c.method, "%s", bad[i].method);
+		snprintf(c.variant, sizeof c.variant, "%s", bad[i].method);
+		snprintf(c.clip, sizeof c.clip, "x.webm");
+		pairs_set set = {.fps = 60, .last_frame = 59, .width = 16, .height = 16, .conditions = &c, .count = 1};
+		snprintf(set.scene, sizeof set.scene, "calm");
+		snprintf(set.camera, sizeof set.camera, "still");
+		snprintf(set.camera_motion, sizeof set.camera_motion, "stationary");
+		snprintf(set.ref_clip, sizeof set.ref_clip, "ref.webm");
+		snprintf(set.ref_run, sizeof set.ref_run, "runs/ref");
+		snprintf(p, sizeof p, "%s/pairs.json", stim);
+		if (pairs_write(p, &set, err, sizeof err))
+			fail_msg("%s", err);
+		snprintf(db, sizeof db, "%s/s%zu.db", dir, i);
+		sty *s = created(db);
+		sty_design_desc d = {.stimuli = stim, .participants = 2, .seed = 1};
+		sty_design_summary sm;
+		int rc = sty_design(s, &d, &sm, err, sizeof err);
+		char id[32];
+		snprintf(id, sizeof id, "'cond%zu'", i);
+		if (rc != TL_ERR_INPUT || !strstr(err, bad[i].why) || !strstr(err, id) || strchr(err, '\n'))
+			fail_msg("%s T %g period %u: rc %d, '%s' (expected '%s')", bad[i].method, bad[i].T, bad[i].period, rc, err,
+				 bad[i].why);
+		sty_close(&s);
+		assert_false(tu_file_exists(db));
+	}
+}
+
+/* Studies made before the period column: opened, the column is added (NULL), and they work on; one holding rrc or
+ * sau conditions (period never stored) is refused with one line. */
+static void test_old_study_schema(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_old_schema");
+	char stim[4096], db[4096], err[1024], p[4200], cmd[16384];
+	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	make_stimuli(stim);
+	for (int with_rrc = 0; with_rrc < 2; with_rrc++) {
+		sty_design_summary sm;
+		char name[16];
+		snprintf(name, sizeof name, "old%d.db", with_rrc);
+		snprintf(db, sizeof db, "%s/%s", dir, name);
+		sty *s = designed(dir, name, 5, 2, &sm);
+		char **codes;
+		size_t n;
+		assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), 0);
+		sty_trial t;
+		for (int k = 0; k < 3; k++) {
+			assert_int_equal(sty_next_trial(s, codes[0], &t, err, sizeof err), 0);
+			assert_int_equal(sty_answer(s, codes[0], t.index, 1, 900, err, sizeof err), 0);
+		}
+		free_codes(codes, n);
+		sty_close(&s);
+		/* The conditions table as studies had it before: no period column (an rrc condition in the second). */
+		sqlite3 *h;
+		assert_int_equal(sqlite3_open(db, &h), SQLITE_OK);
+		char *msg = NULL;
+		const char *sql = with_rrc ? "ALTER TABLE conditions DROP COLUMN period; UPDATE conditions SET method = 'rrc', T = NULL"
+					     " WHERE id = (SELECT min(id) FROM conditions WHERE method = 'tfr')"
+					   : "ALTER TABLE conditions DROP COLUMN period";
+		if (sqlite3_exec(h, sql, NULL, NULL, &msg) != SQLITE_OK)
+			fail_msg("%s", msg);
+		sqlite3_close(h);
+		assert_int_equal(db_count(db, "SELECT count(*) FROM pragma_table_info('conditions') WHERE name = 'period'"), 0);
+		int rc = sty_open(db, &s, err, sizeof err);
+		if (with_rrc) {
+			assert_int_equal(rc, TL_ERR_INPUT);
+			assert_null(s);
+			if (!strstr(err, "without a period") || strchr(err, '\n'))
+				fail_msg("%s", err);
+			snprintf(cmd, sizeof cmd, "%s study export --db %s --out %s/x.csv", TASLAB_BINARY, db, dir);
+			assert_int_equal(tu_run(cmd, out, sizeof out), 2);
+			if (tu_count_lines(out) != 1 || !strstr(out, "without a period"))
+				fail_msg("expected one line, got:\n%s", out);
+			continue;
+		}
+		if (rc)
+			fail_msg("%s", err);
+		sty_close(&s);
+		assert_int_equal(db_count(db, "SELECT count(*) FROM pragma_table_info('conditions') WHERE name = 'period'"), 1);
+		snprintf(p, sizeof p, "%s/old.csv", dir);
+		snprintf(cmd, sizeof cmd, "%s study export --db %s --out %s && %s study tally --db %s --out %s/t --bootstrap 20",
+			 TASLAB_BINARY, db, p, TASLAB_BINARY, db, dir);
+		if (tu_run(cmd, out, sizeof out))
+			fail_msg("%s", out);
+		char *csv = tu_read_file(p, NULL);
+		const char *head = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,";
+		assert_int_equal(strncmp(csv, head, strlen(head)), 0);
+		free(csv);
+	}
+}
+
 static void test_crash_safety(void **state)
 {
 	(void)state;
@@ -1291,6 +1709,8 @@ int main(void)
 		cmocka_unit_test(test_range),      cmocka_unit_test(test_framing),       cmocka_unit_test(test_connection_limit),
 		cmocka_unit_test(test_create_refuses), cmocka_unit_test(test_import_rules), cmocka_unit_test(test_export_formulas),
 		cmocka_unit_test(test_links_served_url), cmocka_unit_test(test_serve_messages),
+		cmocka_unit_test(test_period_conditions), cmocka_unit_test(test_design_period_rule),
+		cmocka_unit_test(test_old_study_schema),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -96,11 +96,23 @@ static int diff_main(void *opts, cli_ctx *ctx)
 	int rc = mtr_diff_run(&d, &r, ctx->err, sizeof ctx->err);
 	if (rc)
 		return rc;
-	fprintf(stderr,
-		"taslab: %zu frame pairs in %.2f s (%.1f pairs/s): max-RGB mean %.3f, p99 %.3f, max %.0f; exceed_8 %.5f; "
-		"PSNR %.2f dB, SSIM %.5f, FLIP %.5f -> %s/frames.csv, summary.json\n",
-		r.frames, r.seconds, r.frames / r.seconds, r.pooled.mean, r.pooled.p99, r.pooled.max, r.pooled.exceed[2],
-		r.pooled.psnr, r.pooled.ssim, r.pooled.flip_mean, o->out);
+	/* One line: the pooled values of the metrics that were computed (the files hold everything). */
+	char line[512] = "";
+	size_t n = 0;
+	const mtr_frame_stats *p = &r.pooled;
+	if (!isnan(p->mean))
+		n += (size_t)snprintf(line + n, sizeof line - n, "; max-RGB mean %.3f, p99 %.3f, max %.0f, exceed_8 %.5f",
+				      p->mean, p->p99, p->max, p->exceed[2]);
+	if (n < sizeof line && !isnan(p->psnr))
+		n += (size_t)snprintf(line + n, sizeof line - n, "; PSNR %.2f dB", p->psnr);
+	if (n < sizeof line && !isnan(p->ssim))
+		n += (size_t)snprintf(line + n, sizeof line - n, "; SSIM %.5f", p->ssim);
+	if (n < sizeof line && !isnan(p->flicker_mean))
+		n += (size_t)snprintf(line + n, sizeof line - n, "; flicker %.3f", p->flicker_mean);
+	if (n < sizeof line && !isnan(p->flip_mean))
+		n += (size_t)snprintf(line + n, sizeof line - n, "; FLIP %.5f", p->flip_mean);
+	fprintf(stderr, "taslab: %zu frame pairs in %.2f s (%.1f pairs/s)%s -> %s/frames.csv, summary.json\n", r.frames,
+		r.seconds, r.frames / r.seconds, line, o->out);
 	return TL_OK;
 }
 

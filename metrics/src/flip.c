@@ -452,6 +452,9 @@ typedef struct {
 	uint32_t W, H;
 	const float *img[2]; /* ref, test */
 	float *map;          /* may be NULL */
+	mtr_flip_row_fn row_fn; /* may be NULL */
+	void *row_ctx;
+	int band;
 	uint32_t y0, y1;     /* band of output rows */
 	double sum;          /* sum of the band's error values */
 	int status;          /* 0 or negative */
@@ -784,6 +787,8 @@ static void *band_worker(void *arg)
 			job->sum += rs;
 			if (job->map)
 				memcpy(job->map + (size_t)y * W + x0, s.err, sw * sizeof(float));
+			if (job->row_fn)
+				job->row_fn(job->row_ctx, job->band, y, x0, s.err, sw);
 		}
 	}
 	job->status = 0;
@@ -798,6 +803,13 @@ done:
 
 int mtr_flip_compute(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb, const float *test_rgb,
                      float *map, int threads, double *mean, char *err, size_t err_size)
+{
+	return mtr_flip_compute_rows(f, width, height, ref_rgb, test_rgb, map, NULL, NULL, threads, mean, err, err_size);
+}
+
+int mtr_flip_compute_rows(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb,
+                          const float *test_rgb, float *map, mtr_flip_row_fn row_fn, void *row_ctx, int threads,
+                          double *mean, char *err, size_t err_size)
 {
 	if (!f || !ref_rgb || !test_rgb || !mean) {
 		set_err(err, err_size, "flip: NULL argument");
@@ -838,6 +850,9 @@ int mtr_flip_compute(const mtr_flip *f, uint32_t width, uint32_t height, const f
 		jobs[b].img[0] = ref_rgb;
 		jobs[b].img[1] = test_rgb;
 		jobs[b].map = map;
+		jobs[b].row_fn = row_fn;
+		jobs[b].row_ctx = row_ctx;
+		jobs[b].band = (int)b;
 		jobs[b].y0 = (uint32_t)((uint64_t)height * b / nb);
 		jobs[b].y1 = (uint32_t)((uint64_t)height * (b + 1) / nb);
 		jobs[b].status = -1;

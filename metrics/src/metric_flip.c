@@ -9,8 +9,8 @@
  * binned by the float's exponent and top 12 mantissa bits over [2^-16, 1] (65537 bins; values below 2^-16 share bin
  * 0). The weighted percentile is located exactly at bin level (the running sum of the bins' exact sums) and
  * reported as the mean value of its bin, so it is off by less than the bin width, 2^-12 (2.4e-4) times the value —
- * within the 1e-3 the reference comparison allows. Mean, min and max are exact. The histogram is filled by the row
- * bands in parallel, one histogram per band, summed at pooling.
+ * within the 1e-3 the reference comparison allows. Mean, min and max are exact. The histogram is filled on FLIP's
+ * worker threads as rows are computed (mtr_flip_compute_rows), one per band, so no error map is stored or re-read.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -31,15 +31,10 @@ typedef struct flip_hist {
 typedef struct flip_state {
 	double ppd; /* option */
 	mtr_flip *f;
-	float *map; /* own error map when the caller wants none */
-	size_t cap;
 	flip_hist *frame[MTR_MAX_THREADS]; /* per band, for the current frame */
 	flip_hist *clip;                   /* all frames so far */
 	float fmin, fmax;                  /* clip-wide */
-	const float *cur;                  /* the map being binned */
-	uint32_t width;
 	float bmin[MTR_MAX_THREADS], bmax[MTR_MAX_THREADS];
-	int oom;
 } flip_state;
 
 static inline uint32_t hist_bin(float v)
@@ -53,18 +48,15 @@ static inline uint32_t hist_bin(float v)
 	return (uint32_t)k;
 }
 
-static void bin_band(void *p, int band, uint32_t y0, uint32_t y1)
+/* Row consumer (mtr_flip_row_fn): bins the error values while FLIP's worker has them in cache. */
+static void bin_row(void *p, int band, uint32_t y, uint32_t x0, const float *err, size_t n)
 {
+	(void)y, (void)x0;
 	flip_state *s = p;
 	flip_hist *h = s->frame[band];
-	if (!h && !(h = s->frame[band] = calloc(1, sizeof *h))) {
-		s->oom = 1;
-		return;
-	}
-	float lo = INFINITY, hi = -INFINITY;
-	const float *m = s->cur + (size_t)y0 * s->width, *end = s->cur + (size_t)y1 * s->width;
-	for (; m < end; m++) {
-		const float v = *m;
+	float lo = s->bmin[band], hi = s->bmax[band];
+	for (size_t i = 0; i < n; i++) {
+		const float v = err[i];
 		const uint32_t k = hist_bin(v);
 		h->count[k]++;
 		h->sum[k] += v;
@@ -107,33 +99,21 @@ static int flip_compute(void *state, const mtr_pair *p, mtr_frame_stats *out, ch
 {
 	flip_state *s = state;
 	const uint32_t w = p->a->width, h = p->a->height;
-	const size_t n = (size_t)w * h;
-	float *map = p->flip_map;
-	if (!map) {
-		if (s->cap < n) {
-			free(s->map);
-			s->cap = 0;
-			if (!(s->map = malloc(n * sizeof *s->map)))
-				return tl_error(err, err_size, TL_ERR_NOMEM, "flip: out of memory");
-			s->cap = n;
-		}
-		map = s->map;
+	/* One histogram per band of FLIP's workers (at most nt bands), filled as the rows are computed. */
+	int nt = mtr_thread_count(p->threads, h);
+	for (int t = 0; t < nt; t++) {
+		if (!s->frame[t] && !(s->frame[t] = malloc(sizeof *s->frame[t])))
+			return tl_error(err, err_size, TL_ERR_NOMEM, "flip: out of memory");
+		memset(s->frame[t], 0, sizeof *s->frame[t]);
+		s->bmin[t] = INFINITY;
+		s->bmax[t] = -INFINITY;
 	}
 	double mean = 0;
-	int rc = mtr_flip_compute(s->f, w, h, p->a->rgb, p->b->rgb, map, p->threads, &mean, err, err_size);
+	int rc = mtr_flip_compute_rows(s->f, w, h, p->a->rgb, p->b->rgb, p->flip_map, bin_row, s, nt, &mean, err,
+				       err_size);
 	if (rc)
 		return rc;
 	/* Per-frame pooled statistics from this frame's histogram; the histogram then joins the clip's. */
-	int nt = mtr_thread_count(p->threads, h);
-	s->cur = map;
-	s->width = w;
-	s->oom = 0;
-	for (int t = 0; t < nt; t++)
-		if (s->frame[t])
-			memset(s->frame[t], 0, sizeof *s->frame[t]);
-	mtr_parallel_rows(h, nt, bin_band, s);
-	if (s->oom)
-		return tl_error(err, err_size, TL_ERR_NOMEM, "flip: out of memory");
 	for (int t = 1; t < nt; t++)
 		for (uint32_t k = 0; k < HIST_BINS; k++) {
 			s->frame[0]->count[k] += s->frame[t]->count[k];
@@ -179,7 +159,6 @@ static void flip_destroy(void *state)
 {
 	flip_state *s = state;
 	mtr_flip_destroy(&s->f);
-	free(s->map);
 	free(s->clip);
 	for (int t = 0; t < MTR_MAX_THREADS; t++)
 		free(s->frame[t]);

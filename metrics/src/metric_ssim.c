@@ -5,8 +5,9 @@
  * structural_similarity(gaussian_weights=True, use_sample_covariance=False, data_range=255, channel_axis=2)
  * within 1e-5 (tests/reference/ssim_reference.json).
  *
- * Speed: one sweep down each row band. Every input row is filtered horizontally once, for all 15 quantities at once
- * (a, b, a^2, b^2, ab for the three channels), into a ring of the last 11 rows; each output row is then the
+ * Speed: one sweep down each row band. Every input row is filtered horizontally once, for all 12 quantities at once
+ * (a, b, a^2 + b^2, ab for the three channels: eq. 13 needs the variances only as their sum), into a ring of the last
+ * 11 rows; each output row is then the
  * vertical filter of the ring followed by eq. 13. Both filters fold the symmetric window (6 multiplies for 11
  * taps) in branch-free loops over x that gcc vectorises; row sums of eq. 13 in 8 independent partial sums, then
  * double. Values are centred (v - 128) before the products, so the variances E[a^2] - E[a]^2 are differences of
@@ -22,7 +23,7 @@
 
 #define SSIM_R 5 /* 11x11 window */
 #define SSIM_N (2 * SSIM_R + 1)
-#define SSIM_Q 15 /* quantities filtered: 5 per channel */
+#define SSIM_Q 12 /* quantities filtered: 4 per channel */
 #define VW 8
 
 typedef struct ssim_ctx {
@@ -61,8 +62,8 @@ MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t
 	const uint32_t w = c->a->width, ow = w - 2 * SSIM_R;
 	const size_t owp = ((size_t)ow + VW - 1) / VW * VW;
 	float *ring = malloc((size_t)SSIM_N * SSIM_Q * owp * sizeof *ring);
-	float *in = malloc((size_t)5 * w * sizeof *in); /* one channel's a, b, a^2, b^2, ab of an input row */
-	float *v = malloc((size_t)5 * owp * sizeof *v); /* vertically filtered quantities of one channel */
+	float *in = malloc((size_t)4 * w * sizeof *in); /* one channel's a, b, a^2 + b^2, ab of an input row */
+	float *v = malloc((size_t)4 * owp * sizeof *v); /* vertically filtered quantities of one channel */
 	float *srow = malloc(owp * sizeof *srow);
 	if (!ring || !in || !v || !srow) {
 		free(ring), free(in), free(v), free(srow);
@@ -72,38 +73,38 @@ MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t
 	const float C1 = (0.01f * 255) * (0.01f * 255), C2 = (0.03f * 255) * (0.03f * 255);
 	double total = 0;
 	for (uint32_t r = y0; r < y1 + 2 * SSIM_R; r++) {
-		/* Horizontal pass of input row r into ring slot r mod 11, all 15 quantities. */
+		/* Horizontal pass of input row r into ring slot r mod 11, all 12 quantities. */
 		float *slot = ring + (size_t)(r % SSIM_N) * SSIM_Q * owp;
 		const float *ar = c->a->rgb + (size_t)r * w * 3, *br = c->b->rgb + (size_t)r * w * 3;
 		for (int ch = 0; ch < 3; ch++) {
-			float *ia = in, *ib = in + w, *iaa = in + 2 * (size_t)w, *ibb = in + 3 * (size_t)w, *iab = in + 4 * (size_t)w;
+			float *ia = in, *ib = in + w, *iss = in + 2 * (size_t)w, *iab = in + 3 * (size_t)w;
 			for (uint32_t x = 0; x < w; x++) {
 				float va = ar[3 * (size_t)x + ch] - 128.0f, vb = br[3 * (size_t)x + ch] - 128.0f;
 				ia[x] = va;
 				ib[x] = vb;
-				iaa[x] = va * va;
-				ibb[x] = vb * vb;
+				iss[x] = va * va + vb * vb;
 				iab[x] = va * vb;
 			}
-			for (int q = 0; q < 5; q++)
-				hfilter(in + (size_t)q * w, slot + (size_t)(5 * ch + q) * owp, ow, c->g);
+			for (int q = 0; q < 4; q++)
+				hfilter(in + (size_t)q * w, slot + (size_t)(4 * ch + q) * owp, ow, c->g);
 		}
 		if (r < y0 + 2 * SSIM_R)
 			continue;
 		/* Output row o = r - 2R: vertical pass over ring rows o..o+2R, then eq. 13 per channel. */
 		const uint32_t o = r - 2 * SSIM_R;
 		for (int ch = 0; ch < 3; ch++) {
-			for (int q = 0; q < 5; q++) {
+			for (int q = 0; q < 4; q++) {
 				float *rows[SSIM_N];
 				for (int k = 0; k < SSIM_N; k++)
-					rows[k] = ring + ((size_t)((o + (uint32_t)k) % SSIM_N) * SSIM_Q + (size_t)(5 * ch + q)) * owp;
+					rows[k] = ring + ((size_t)((o + (uint32_t)k) % SSIM_N) * SSIM_Q + (size_t)(4 * ch + q)) * owp;
 				vfilter(rows, v + (size_t)q * owp, ow, c->g);
 			}
-			const float *ma = v, *mb = v + owp, *eaa = v + 2 * owp, *ebb = v + 3 * owp, *eab = v + 4 * owp;
+			const float *ma = v, *mb = v + owp, *ess = v + 2 * owp, *eab = v + 3 * owp;
 			for (uint32_t x = 0; x < ow; x++) {
-				const float va = eaa[x] - ma[x] * ma[x], vb = ebb[x] - mb[x] * mb[x], cov = eab[x] - ma[x] * mb[x];
+				/* sigma_a^2 + sigma_b^2 = E[a^2 + b^2] - mu_a^2 - mu_b^2 (centred values) */
+				const float vsum = ess[x] - ma[x] * ma[x] - mb[x] * mb[x], cov = eab[x] - ma[x] * mb[x];
 				const float ua = ma[x] + 128.0f, ub = mb[x] + 128.0f;
-				srow[x] = ((2 * ua * ub + C1) * (2 * cov + C2)) / ((ua * ua + ub * ub + C1) * (va + vb + C2));
+				srow[x] = ((2 * ua * ub + C1) * (2 * cov + C2)) / ((ua * ua + ub * ub + C1) * (vsum + C2));
 			}
 			float acc[VW] = {0};
 			uint32_t x = 0;

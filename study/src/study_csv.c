@@ -2,6 +2,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,11 +12,14 @@
 #include "study_internal.h"
 #include "taslab/tl_fs.h"
 
-static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
+/* The long format: DESIGN section 7's columns with period right after T (DESIGN section 4: T and period their own
+ * columns). Import also reads files in the DESIGN section 7 layout without period (LONG_HEADER_NO_PERIOD). */
+static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms";
+static const char *LONG_HEADER_NO_PERIOD = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
 
 /* Query of every answered test trial, one row per answer, in participant / trial order. */
 static const char *ANSWERS_SQL =
-	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms"
+	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms, c.period"
 	" FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx"
 	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
 	" WHERE t.kind = 'test' ORDER BY p.id, t.idx";
@@ -88,6 +92,9 @@ int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 			CELL(st, 4, c4), CELL(st, 5, c5));
 		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
 			fprintf(f, "%g", sqlite3_column_double(st, 6));
+		fputc(',', f);
+		if (sqlite3_column_type(st, 10) != SQLITE_NULL)
+			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 10));
 		fprintf(f, ",%d,%d,%d,", ref_first, answer, ref_first ? -answer : answer);
 		if (sqlite3_column_type(st, 9) != SQLITE_NULL)
 			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 9));
@@ -107,11 +114,13 @@ int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 	FILE *f = out.f;
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
-		char cond[80], grp[160], obs[160], cgrp[340], ccond[180];
-		if (sqlite3_column_type(st, 6) != SQLITE_NULL)
-			snprintf(cond, sizeof cond, "%s_T%g", sqlite3_column_text(st, 5), sqlite3_column_double(st, 6));
-		else
-			snprintf(cond, sizeof cond, "%s", sqlite3_column_text(st, 5));
+		/* The condition's name: METHOD, then _T<T> and _N<period> as the method has them (tfr_T8, rrc_N4). */
+		char cond[96], grp[160], obs[160], cgrp[340], ccond[200];
+		int k = snprintf(cond, sizeof cond, "%s", sqlite3_column_text(st, 5));
+		if (sqlite3_column_type(st, 6) != SQLITE_NULL && k >= 0 && (size_t)k < sizeof cond)
+			k += snprintf(cond + k, sizeof cond - (size_t)k, "_T%g", sqlite3_column_double(st, 6));
+		if (sqlite3_column_type(st, 10) != SQLITE_NULL && k >= 0 && (size_t)k < sizeof cond)
+			snprintf(cond + k, sizeof cond - (size_t)k, "_N%lld", (long long)sqlite3_column_int64(st, 10));
 		snprintf(grp, sizeof grp, "%s/%s", sqlite3_column_text(st, 2), sqlite3_column_text(st, 3));
 		sty_csv_cell(cond, ccond, sizeof ccond);
 		sty_csv_cell(grp, cgrp, sizeof cgrp);
@@ -134,6 +143,7 @@ typedef struct row {
 	char participant[64], scene[64], camera[64], motion[16], method[32];
 	long trial;
 	double T; /* NAN: none */
+	long period; /* 0: none */
 	int ref_first, answer, rating;
 	long long rt_ms; /* -1: none */
 } row;
@@ -184,14 +194,21 @@ static int safe_name(const char *s, size_t max)
 	return 1;
 }
 
-static int parse_row(char *line, row *r, char *why, size_t why_size)
+/* One data row; `with_period`: the file has the period column (LONG_HEADER), else the DESIGN section 7 layout
+ * without it. A file without period reads as if it had the column, empty. */
+static int parse_row(char *line, bool with_period, row *r, char *why, size_t why_size)
 {
-	char *f[12];
-	int n = split(line, f, 11);
-	if (n != 11) {
-		snprintf(why, why_size, "expected 11 columns, found %d", n > 11 ? 12 : n);
+	static char none[1] = "";
+	char *c[13], *f[13];
+	int cols = with_period ? 12 : 11;
+	int n = split(line, c, cols);
+	if (n != cols) {
+		snprintf(why, why_size, "expected %d columns, found %d", cols, n > cols ? cols + 1 : n);
 		return -1;
 	}
+	/* f: the cells in the period layout (f[7] = period, "" when the file has none). */
+	for (int i = 0; i < 12; i++)
+		f[i] = i < 7 || with_period ? c[i] : i == 7 ? none : c[i - 1];
 	long v;
 	if (!safe_name(f[0], sizeof r->participant) || !safe_name(f[2], sizeof r->scene) ||
 	    !safe_name(f[3], sizeof r->camera) || !safe_name(f[5], sizeof r->method)) {
@@ -213,11 +230,8 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 		return -1;
 	}
 	snprintf(r->motion, sizeof r->motion, "%s", f[4]);
-	int has_T = sty_method_has_threshold(r->method);
-	if (has_T < 0) {
-		snprintf(why, why_size, "method '%s' is not one of ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle", r->method);
-		return -1;
-	}
+	if (sty_method_has_threshold(r->method) < 0) /* the message of the rule below, before T and period are read */
+		return sty_condition_rule(r->method, NAN, 0, why, why_size);
 	r->T = NAN;
 	if (f[6][0]) {
 		char *e;
@@ -228,23 +242,26 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 			return -1;
 		}
 	}
-	if (has_T != !isnan(r->T)) {
-		snprintf(why, why_size, has_T ? "method %s needs a threshold T" : "method %s has no threshold: leave T empty",
-			 r->method);
+	r->period = 0;
+	if (f[7][0] && (parse_long(f[7], 1, 8, &r->period) || !sty_period_valid(r->period))) {
+		snprintf(why, why_size, "period '%s' is not 1, 2, 4 or 8", f[7]);
 		return -1;
 	}
-	if (parse_long(f[7], 0, 1, &v)) {
-		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[7]);
+	/* T and period exactly as the method has them (the rule design applies to pairs.json). */
+	if (sty_condition_rule(r->method, r->T, r->period, why, why_size))
+		return -1;
+	if (parse_long(f[8], 0, 1, &v)) {
+		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[8]);
 		return -1;
 	}
 	r->ref_first = (int)v;
-	if (parse_long(f[8], -2, 2, &v)) {
-		snprintf(why, why_size, "answer '%s' is not an integer from -2 to 2", f[8]);
+	if (parse_long(f[9], -2, 2, &v)) {
+		snprintf(why, why_size, "answer '%s' is not an integer from -2 to 2", f[9]);
 		return -1;
 	}
 	r->answer = (int)v;
-	if (parse_long(f[9], -2, 2, &v)) {
-		snprintf(why, why_size, "rating '%s' is not an integer from -2 to 2", f[9]);
+	if (parse_long(f[10], -2, 2, &v)) {
+		snprintf(why, why_size, "rating '%s' is not an integer from -2 to 2", f[10]);
 		return -1;
 	}
 	r->rating = (int)v;
@@ -254,14 +271,21 @@ static int parse_row(char *line, row *r, char *why, size_t why_size)
 		return -1;
 	}
 	r->rt_ms = -1;
-	if (f[10][0]) {
-		if (parse_long(f[10], 0, STY_RT_MS_MAX, &v)) {
-			snprintf(why, why_size, "rt_ms '%s' is not a whole number of milliseconds", f[10]);
+	if (f[11][0]) {
+		if (parse_long(f[11], 0, STY_RT_MS_MAX, &v)) {
+			snprintf(why, why_size, "rt_ms '%s' is not a whole number of milliseconds", f[11]);
 			return -1;
 		}
 		r->rt_ms = v;
 	}
 	return 0;
+}
+
+/* Whether `line` is exactly `header` (then a line end or the end of the file). */
+static bool header_is(const char *line, const char *header)
+{
+	size_t n = strlen(header);
+	return !strncmp(line, header, n) && (line[n] == '\n' || line[n] == '\r' || !line[n]);
 }
 
 int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_t err_size)
@@ -285,9 +309,10 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	row *rows = NULL;
 	size_t n = 0, lineno = 1;
 	int rc = TL_ERR_ARG;
-	if (!fgets(line, sizeof line, f) || strncmp(line, LONG_HEADER, strlen(LONG_HEADER)) ||
-	    (line[strlen(LONG_HEADER)] != '\n' && line[strlen(LONG_HEADER)] != '\r' && line[strlen(LONG_HEADER)])) {
-		snprintf(err, err_size, "%s:1: the header must be exactly: %s", path, LONG_HEADER);
+	bool have = fgets(line, sizeof line, f) != NULL, with_period = have && header_is(line, LONG_HEADER);
+	if (!with_period && !(have && header_is(line, LONG_HEADER_NO_PERIOD))) {
+		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or, from before the period column, the same "
+			 "without period)", path, LONG_HEADER);
 		goto done;
 	}
 	/* Validate everything before touching the database. */
@@ -305,7 +330,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			goto done;
 		}
 		rows = nr;
-		if (parse_row(line, &rows[n], why, sizeof why)) {
+		if (parse_row(line, with_period, &rows[n], why, sizeof why)) {
 			snprintf(err, err_size, "%s:%zu: %s; nothing imported", path, lineno, why);
 			goto done;
 		}
@@ -327,10 +352,11 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	}
 	int ok = 1;
 	sqlite3_stmt *fc, *ic, *fp, *ip, *it, *ia;
-	sqlite3_prepare_v2(s->db, "SELECT id FROM conditions WHERE scene=? AND camera=? AND camera_motion=? AND method=? AND T IS ?",
+	sqlite3_prepare_v2(s->db, "SELECT id FROM conditions WHERE scene=? AND camera=? AND camera_motion=? AND method=? AND T IS ?"
+				  " AND period IS ?",
 			   -1, &fc, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch)"
-				  " VALUES(?,?,?,?,?,'','',0)", -1, &ic, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(scene, camera, camera_motion, method, T, period, ref_clip, test_clip,"
+				  " is_catch) VALUES(?,?,?,?,?,?,'','',0)", -1, &ic, NULL);
 	sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE label=?", -1, &fp, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO participants(code, label) VALUES(?, ?)", -1, &ip, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind) VALUES(?,?,?,?,'test')", -1,
@@ -346,6 +372,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 		sqlite3_bind_text(fc, 3, r->motion, -1, SQLITE_STATIC);
 		sqlite3_bind_text(fc, 4, r->method, -1, SQLITE_STATIC);
 		isnan(r->T) ? sqlite3_bind_null(fc, 5) : sqlite3_bind_double(fc, 5, r->T);
+		r->period ? sqlite3_bind_int64(fc, 6, r->period) : sqlite3_bind_null(fc, 6);
 		if (sqlite3_step(fc) == SQLITE_ROW)
 			cid = sqlite3_column_int64(fc, 0);
 		else {
@@ -355,6 +382,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			sqlite3_bind_text(ic, 3, r->motion, -1, SQLITE_STATIC);
 			sqlite3_bind_text(ic, 4, r->method, -1, SQLITE_STATIC);
 			isnan(r->T) ? sqlite3_bind_null(ic, 5) : sqlite3_bind_double(ic, 5, r->T);
+			r->period ? sqlite3_bind_int64(ic, 6, r->period) : sqlite3_bind_null(ic, 6);
 			ok = sqlite3_step(ic) == SQLITE_DONE;
 			cid = sqlite3_last_insert_rowid(s->db);
 		}

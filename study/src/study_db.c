@@ -23,7 +23,8 @@ static const char *SCHEMA =
 	"CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);"
 	"CREATE TABLE IF NOT EXISTS conditions(id INTEGER PRIMARY KEY, scene TEXT NOT NULL, camera TEXT NOT NULL,"
 	" camera_motion TEXT NOT NULL CHECK(camera_motion IN ('stationary','moving')), method TEXT NOT NULL,"
-	" T REAL, ref_clip TEXT NOT NULL, test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0);"
+	" T REAL, period INTEGER CHECK(period IS NULL OR period IN (1, 2, 4, 8)), ref_clip TEXT NOT NULL,"
+	" test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0);"
 	"CREATE TABLE IF NOT EXISTS participants(id INTEGER PRIMARY KEY, code TEXT NOT NULL UNIQUE, label TEXT NOT NULL);"
 	"CREATE TABLE IF NOT EXISTS trials(participant INTEGER NOT NULL REFERENCES participants(id),"
 	" idx INTEGER NOT NULL, condition INTEGER NOT NULL REFERENCES conditions(id), ref_first INTEGER NOT NULL,"
@@ -84,6 +85,55 @@ static int sqlite_special_name(const char *path)
 	return !*path || !strcmp(path, ":memory:") || !strncmp(path, "file:", 5);
 }
 
+/* Whether the conditions table has the period column. */
+static int has_period_column(sty *s)
+{
+	sqlite3_stmt *st;
+	int has = 0;
+	if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM pragma_table_info('conditions') WHERE name = 'period'", -1, &st,
+			       NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
+		has = sqlite3_column_int(st, 0) > 0;
+	sqlite3_finalize(st);
+	return has;
+}
+
+/* Brings a study made by an earlier taslab up to date. Studies made before conditions carried a period (method
+ * x T x scene x camera only) get the period column, NULL for every condition: right for every method but rrc
+ * and sau, whose period was never stored, so a study holding rrc or sau conditions without a period is refused
+ * (its rrc/4 and rrc/8 conditions could not be told apart). A study that is up to date is only read (so a
+ * read-only file still opens); the column is added in one transaction, so concurrent openers (a server and a
+ * tally) do not both add it. */
+static int upgrade(sty *s, char *err, size_t err_size)
+{
+	int rc = TL_OK, missing = 0;
+	if (!has_period_column(s)) {
+		if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK)
+			return sty_db_fail(s, err, err_size, "adding the period column");
+		if (!has_period_column(s) &&
+		    sqlite3_exec(s->db, "ALTER TABLE conditions ADD COLUMN period INTEGER"
+					" CHECK(period IS NULL OR period IN (1, 2, 4, 8))", NULL, NULL, NULL) != SQLITE_OK)
+			rc = sty_db_fail(s, err, err_size, "adding the period column");
+		if (rc || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+			if (!rc)
+				rc = sty_db_fail(s, err, err_size, "adding the period column");
+			sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
+			return rc;
+		}
+	}
+	sqlite3_stmt *st;
+	if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM conditions WHERE method IN ('rrc', 'sau') AND period IS NULL", -1,
+			       &st, NULL) != SQLITE_OK)
+		return sty_db_fail(s, err, err_size, "opening the study");
+	if (sqlite3_step(st) == SQLITE_ROW)
+		missing = sqlite3_column_int(st, 0);
+	sqlite3_finalize(st);
+	if (missing)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: %d rrc/sau condition(s) without a period (a study made before "
+				"taslab stored periods): set conditions.period with sqlite3, or make the study again", s->path,
+				missing);
+	return TL_OK;
+}
+
 /* Opens `file` (SQLite) for the study `s`, applies the pragmas and, when `init`, creates the schema, the admin
  * token and the markers; otherwise checks that it is a taslab study and brings the schema up to date. */
 static int db_connect(sty *s, const char *file, bool init, char *err, size_t err_size)
@@ -116,6 +166,11 @@ static int db_connect(sty *s, const char *file, bool init, char *err, size_t err
 		int rc = tl_error(err, err_size, TL_ERR_DB, "%s: cannot set up the study tables (%s)", s->path, msg ? msg : "?");
 		sqlite3_free(msg);
 		return rc;
+	}
+	if (!init) {
+		int rc = upgrade(s, err, err_size);
+		if (rc)
+			return rc;
 	}
 	if (init && (sty_random_hex(s->token) || meta_set(s, "admin_token", s->token) || meta_set(s, "taslab_study", "1")))
 		return tl_error(err, err_size, TL_ERR_DB, "%s: cannot initialise the study", s->path);
@@ -294,11 +349,43 @@ int sty_method_has_threshold(const char *method)
 	return -1;
 }
 
+int sty_method_has_period(const char *method)
+{
+	/* DESIGN section 4: --period N belongs to rrc and sau. */
+	if (sty_method_has_threshold(method) < 0)
+		return -1;
+	return !strcmp(method, "rrc") || !strcmp(method, "sau");
+}
+
+bool sty_period_valid(long period) { return period == 1 || period == 2 || period == 4 || period == 8; }
+
+int sty_condition_rule(const char *method, double T, long period, char *why, size_t why_size)
+{
+	int has_T = sty_method_has_threshold(method), has_N = sty_method_has_period(method);
+	if (has_T < 0 || has_N < 0)
+		snprintf(why, why_size, "method '%s' is not one of ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle "
+			 "(DESIGN section 4)", method);
+	else if (has_T && isnan(T))
+		snprintf(why, why_size, "method %s needs a threshold T", method);
+	else if (!has_T && !isnan(T))
+		snprintf(why, why_size, "method %s has no threshold T (leave T empty)", method);
+	else if (has_N && !period)
+		snprintf(why, why_size, "method %s needs a period (1, 2, 4 or 8)", method);
+	else if (!has_N && period)
+		snprintf(why, why_size, "method %s has no period (leave period empty)", method);
+	else if (has_N && !sty_period_valid(period))
+		snprintf(why, why_size, "period %ld of method %s is not 1, 2, 4 or 8", period, method);
+	else
+		return 0;
+	return -1;
+}
+
 /* ------------------------------------------------------------------ design */
 
 typedef struct cond {
 	char scene[64], camera[64], motion[16], method[32];
-	double T;
+	double T;        /* NAN: none */
+	uint32_t period; /* 0: none */
 	char ref_clip[512], test_clip[512];
 	int is_catch;
 } cond;
@@ -330,13 +417,12 @@ static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, c
 					file, clip);
 		}
 	}
+	/* The same rule as import: T and period exactly as the method has them (DESIGN section 4). */
 	for (size_t i = 0; i < set.count; i++) {
 		const pairs_condition *c = &set.conditions[i];
-		int has_T = sty_method_has_threshold(c->method);
-		if (has_T < 0 || has_T != !isnan(c->T)) {
-			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: condition '%s': %s", file, c->id,
-				      has_T < 0 ? "unknown method (DESIGN section 4 names: ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle)"
-				      : has_T ? "this method needs a threshold T" : "this method has no threshold T");
+		char why[160];
+		if (sty_condition_rule(c->method, c->T, (long)c->period, why, sizeof why)) {
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: condition '%s': %s", file, c->id, why);
 			pairs_free(&set);
 			return rc;
 		}
@@ -356,6 +442,7 @@ static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, c
 		snprintf(x->motion, sizeof x->motion, "%s", set.camera_motion);
 		snprintf(x->method, sizeof x->method, "%s", c->method);
 		x->T = c->T;
+		x->period = c->period;
 		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", set.ref_clip);
 		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", c->clip);
 		x->is_catch = !strcmp(c->method, "ref"); /* reference against itself */
@@ -446,6 +533,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 				cs[nc] = cs[i];
 				snprintf(cs[nc].method, sizeof cs[nc].method, "ref");
 				cs[nc].T = NAN;
+				cs[nc].period = 0;
 				snprintf(cs[nc].test_clip, sizeof cs[nc].test_clip, "%s", cs[i].ref_clip);
 				cs[nc].is_catch = 1;
 				nc++;
@@ -463,8 +551,8 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		goto done;
 	}
 	sqlite3_stmt *ic, *ip, *it;
-	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(id, scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch)"
-				  " VALUES(?,?,?,?,?,?,?,?,?)", -1, &ic, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(id, scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch,"
+				  " period) VALUES(?,?,?,?,?,?,?,?,?,?)", -1, &ic, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO participants(id, code, label) VALUES(?,?,?)", -1, &ip, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind, break_before)"
 				  " VALUES(?,?,?,?,?,?)", -1, &it, NULL);
@@ -483,6 +571,10 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		sqlite3_bind_text(ic, 7, cs[i].ref_clip, -1, SQLITE_STATIC);
 		sqlite3_bind_text(ic, 8, cs[i].test_clip, -1, SQLITE_STATIC);
 		sqlite3_bind_int(ic, 9, cs[i].is_catch);
+		if (cs[i].period)
+			sqlite3_bind_int64(ic, 10, cs[i].period);
+		else
+			sqlite3_bind_null(ic, 10);
 		ok = sqlite3_step(ic) == SQLITE_DONE;
 	}
 	/* Plan per participant: [training] then shuffled (test conditions + catch trials). */

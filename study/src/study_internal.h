@@ -22,6 +22,11 @@ struct sty {
 /* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);
 
+/* The DESIGN section 4 rule for a condition, shared by design (pairs.json) and import: a known method name, T
+ * (NAN: none) exactly when the method has a threshold, period (0: none) exactly when it has one, 1/2/4/8.
+ * Returns 0, or -1 with the reason in `why` ("method rrc needs a period (1, 2, 4 or 8)"). */
+int sty_condition_rule(const char *method, double T, long period, char *why, size_t why_size);
+
 /* 128 random bits from the kernel as 32 lowercase hex digits (codes, tokens, clip names must be unguessable). */
 int sty_random_hex(char out[33]);
 

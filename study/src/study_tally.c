@@ -2,8 +2,10 @@
  *
  * Per condition: Q = mean reference-relative rating with a 95% t interval over participants (each participant's
  * mean rating in that condition is one observation); p_ref = (n_ref + n_tie/2)/n over ratings with a Wilson
- * interval; JND from p_ref (metrics module). Rows per (method, T, scene, camera) and pooled (scene = camera = all).
- * Repeated-measures ANOVA per (method, T): factors Camera (motion class) x Scene, dependent variable each
+ * interval; JND from p_ref (metrics module). Rows per (method, T, period, scene, camera) and pooled (scene = camera =
+ * all). A variant is method x T x period (DESIGN section 4: rrc/4 and rrc/8 are two), and every grouping below is
+ * per variant; every CSV carries T and period in their own columns right after method.
+ * Repeated-measures ANOVA per variant (method, T, period): factors Camera (motion class) x Scene, dependent variable each
  * participant's mean rating per cell, participants with every cell only; Greenhouse-Geisser epsilon from the
  * covariance of orthonormal contrast scores. Post hoc: paired t tests between levels, Bonferroni-adjusted.
  * Observer screening: a participant whose answers on catch trials (identical clips) are "much better" (|a| = 2)
@@ -128,12 +130,28 @@ typedef struct obs {
 
 typedef struct condk {
 	char method[32], scene[64], camera[64], motion[16];
-	double T; /* NAN: none */
+	double T;        /* NAN: none */
+	uint32_t period; /* 0: none */
 } condk;
 
-static int same_mt(const condk *a, const condk *b)
+/* Same variant: method, T and period. */
+static int same_variant(const condk *a, const condk *b)
 {
-	return !strcmp(a->method, b->method) && ((isnan(a->T) && isnan(b->T)) || a->T == b->T);
+	return !strcmp(a->method, b->method) && ((isnan(a->T) && isnan(b->T)) || a->T == b->T) && a->period == b->period;
+}
+
+/* Variant order of the outputs: method, then T, then period (none first). */
+static int cmp_variant(const void *pa, const void *pb)
+{
+	const condk *a = pa, *b = pb;
+	int c = strcmp(a->method, b->method);
+	if (c)
+		return c;
+	if (isnan(a->T) != isnan(b->T))
+		return isnan(a->T) ? -1 : 1;
+	if (!isnan(a->T) && a->T != b->T)
+		return a->T < b->T ? -1 : 1;
+	return (a->period > b->period) - (a->period < b->period);
 }
 
 typedef struct data {
@@ -149,7 +167,7 @@ typedef struct data {
 static int find_cond(data *d, const condk *k)
 {
 	for (size_t i = 0; i < d->nc; i++)
-		if (same_mt(&d->c[i], k) && !strcmp(d->c[i].scene, k->scene) && !strcmp(d->c[i].camera, k->camera))
+		if (same_variant(&d->c[i], k) && !strcmp(d->c[i].scene, k->scene) && !strcmp(d->c[i].camera, k->camera))
 			return (int)i;
 	condk *nc = realloc(d->c, (d->nc + 1) * sizeof *nc);
 	if (!nc)
@@ -198,7 +216,7 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 	}
 	sqlite3_finalize(st);
 	if (sqlite3_prepare_v2(s->db,
-			       "SELECT a.participant, c.method, c.T, c.scene, c.camera, c.camera_motion, t.ref_first, a.answer"
+			       "SELECT a.participant, c.method, c.T, c.scene, c.camera, c.camera_motion, t.ref_first, a.answer, c.period"
 			       " FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx"
 			       " JOIN conditions c ON c.id = t.condition WHERE t.kind = 'test' ORDER BY a.participant, t.idx",
 			       -1, &st, NULL))
@@ -214,6 +232,7 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 		snprintf(k.scene, sizeof k.scene, "%s", sqlite3_column_text(st, 3));
 		snprintf(k.camera, sizeof k.camera, "%s", sqlite3_column_text(st, 4));
 		snprintf(k.motion, sizeof k.motion, "%s", sqlite3_column_text(st, 5));
+		k.period = sqlite3_column_type(st, 8) == SQLITE_NULL ? 0 : (uint32_t)sqlite3_column_int64(st, 8);
 		int ci = find_cond(d, &k);
 		obs *no = realloc(d->o, (d->n + 1) * sizeof *no);
 		if (ci < 0 || !no) {
@@ -237,14 +256,14 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 
 /* Selection of observations for a summary row. */
 typedef struct sel {
-	const condk *mt;        /* method and T */
+	const condk *mt;        /* the variant: method, T and period */
 	const char *scene, *camera, *motion; /* NULL: any */
 } sel;
 
 static int match(const data *d, const obs *o, const sel *s)
 {
 	const condk *c = &d->c[o->cond];
-	return same_mt(c, s->mt) && (!s->scene || !strcmp(c->scene, s->scene)) &&
+	return same_variant(c, s->mt) && (!s->scene || !strcmp(c->scene, s->scene)) &&
 	       (!s->camera || !strcmp(c->camera, s->camera)) && (!s->motion || !strcmp(c->motion, s->motion));
 }
 
@@ -335,14 +354,24 @@ static void T_str(const condk *c, char *buf, size_t n)
 		snprintf(buf, n, "%g", c->T);
 }
 
+static void period_str(const condk *c, char *buf, size_t n)
+{
+	if (!c->period)
+		buf[0] = 0;
+	else
+		snprintf(buf, n, "%u", c->period);
+}
+
+static json_t *period_json(const condk *c) { return c->period ? json_integer(c->period) : json_null(); }
+
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
-/* Distinct values of scene (field 0) or motion (field 1) among the conditions of one method/T. */
+/* Distinct values of scene (field 0) or motion (field 1) among the conditions of one variant. */
 static size_t levels(const data *d, const condk *mt, int field, char lv[][64], size_t max)
 {
 	size_t n = 0;
 	for (size_t i = 0; i < d->nc; i++) {
-		if (!same_mt(&d->c[i], mt))
+		if (!same_variant(&d->c[i], mt))
 			continue;
 		const char *v = field ? d->c[i].motion : d->c[i].scene;
 		int seen = 0;
@@ -404,13 +433,13 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 		free(d.o), free(d.c), free(d.flagged);
 		return rc;
 	}
-	/* Distinct method/T in first-seen order, then sorted by method and T. */
+	/* Distinct variants (method, T, period), sorted by method, T and period. */
 	condk *mts = NULL;
 	size_t nmt = 0;
 	for (size_t i = 0; i < d.nc; i++) {
 		int seen = 0;
 		for (size_t k = 0; k < nmt; k++)
-			seen |= same_mt(&mts[k], &d.c[i]);
+			seen |= same_variant(&mts[k], &d.c[i]);
 		if (!seen) {
 			condk *nm = realloc(mts, (nmt + 1) * sizeof *nm);
 			if (!nm) {
@@ -421,6 +450,8 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			mts[nmt++] = d.c[i];
 		}
 	}
+	if (nmt)
+		qsort(mts, nmt, sizeof *mts, cmp_variant);
 	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL;
 	const char *names[6] = {"conditions.csv", "anova.csv", "posthoc.csv", "jod.csv", "tables.md", "fig3.csv"};
 	FILE **files[6] = {&fc, &fa, &fp, &fj, &fmd, &ff};
@@ -433,14 +464,14 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	}
 	rc = TL_ERR_ARG;
 	json_t *jc = json_array(), *ja = json_array();
-	fprintf(fc, "method,T,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd\n");
-	fprintf(fa, "method,T,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
-	fprintf(fp, "method,T,factor,level_1,level_2,t,df,p,p_bonferroni\n");
-	fprintf(fj, "method,T,scene,camera,jod,jod_lo,jod_hi,participants\n");
-	fprintf(ff, "method,T,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
+	fprintf(fc, "method,T,period,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd\n");
+	fprintf(fa, "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
+	fprintf(fp, "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni\n");
+	fprintf(fj, "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants\n");
+	fprintf(ff, "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
 	char methods[1024] = "";
-	fprintf(fmd, "# Study results\n\n## Conditions\n\n| method | T | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
-		     "|---|---|---|---|---|---|---|---|\n");
+	fprintf(fmd, "# Study results\n\n## Conditions\n\n| method | T | period | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
+		     "|---|---|---|---|---|---|---|---|---|\n");
 	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
 	gsl_rng_set(rng, (unsigned long)(td->seed ? td->seed : 1));
 	uint32_t B = td->bootstrap ? td->bootstrap : 1000;
@@ -448,14 +479,17 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	int64_t *pids = calloc((size_t)d.max_pid + 1, sizeof *pids);
 	double *boot = calloc(B, sizeof *boot);
 	for (size_t m = 0; m < nmt; m++) {
-		char Ts[32], cm[80]; /* cm: the method as a CSV cell (sty_csv_cell: no spreadsheet formulas) */
+		/* cm: the method as a CSV cell (sty_csv_cell: no spreadsheet formulas); TP: the T and period cells. */
+		char Ts[32], Ps[16], TP[64], cm[80];
 		T_str(&mts[m], Ts, sizeof Ts);
+		period_str(&mts[m], Ps, sizeof Ps);
+		snprintf(TP, sizeof TP, "%s,%s", Ts, Ps);
 		sty_csv_cell(mts[m].method, cm, sizeof cm);
 		/* Rows: every (scene, camera) of this method/T, then pooled. */
 		for (size_t i = 0; i <= d.nc; i++) {
 			sel sl = {&mts[m], NULL, NULL, NULL};
 			if (i < d.nc) {
-				if (!same_mt(&d.c[i], &mts[m]))
+				if (!same_variant(&d.c[i], &mts[m]))
 					continue;
 				sl.scene = d.c[i].scene;
 				sl.camera = d.c[i].camera;
@@ -467,24 +501,25 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			char csc[160], cca[160];
 			sty_csv_cell(sc, csc, sizeof csc);
 			sty_csv_cell(ca, cca, sizeof cca);
-			fprintf(fc, "%s,%s,%s,%s,%zu,", cm, Ts, csc, cca, r.n);
+			fprintf(fc, "%s,%s,%s,%s,%zu,", cm, TP, csc, cca, r.n);
 			csv_num(fc, r.Q, "%.6f"), fputc(',', fc);
 			csv_num(fc, r.Q_lo, "%.6f"), fputc(',', fc);
 			csv_num(fc, r.Q_hi, "%.6f"), fputc(',', fc);
 			fprintf(fc, "%.6f,%.6f,%.6f,%.6f\n", r.j.p, r.j.p_lo, r.j.p_hi, r.j.jnd);
 			if (i == d.nc && !isnan(mts[m].T)) { /* pooled row: one point of the Fig. 3 plot */
-				fprintf(ff, "%s,%s,%.6f,", cm, Ts, r.Q);
+				fprintf(ff, "%s,%s,%.6f,", cm, TP, r.Q);
 				csv_num(ff, r.Q_lo, "%.6f"), fputc(',', ff);
 				csv_num(ff, r.Q_hi, "%.6f");
 				fprintf(ff, ",%.4f,%.4f,%.4f\n", 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi);
 				if (!strstr(methods, mts[m].method) && strlen(methods) + strlen(mts[m].method) + 2 < sizeof methods)
 					strcat(strcat(methods, methods[0] ? " " : ""), mts[m].method);
 			}
-			fprintf(fmd, "| %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", mts[m].method, Ts,
-				sc, ca, r.n, r.Q, r.Q_lo, r.Q_hi, 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi, r.j.jnd);
-			json_array_append_new(jc, json_pack("{s:s, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}", "method",
-							    mts[m].method, "T", isnan(mts[m].T) ? json_null() : json_real(mts[m].T),
-							    "scene", sc, "camera", ca, "n", (json_int_t)r.n, "Q", r.Q, "Q_lo",
+			fprintf(fmd, "| %s | %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", mts[m].method,
+				Ts, Ps, sc, ca, r.n, r.Q, r.Q_lo, r.Q_hi, 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi, r.j.jnd);
+			json_array_append_new(jc, json_pack("{s:s, s:o, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}",
+							    "method", mts[m].method, "T",
+							    isnan(mts[m].T) ? json_null() : json_real(mts[m].T), "period",
+							    period_json(&mts[m]), "scene", sc, "camera", ca, "n", (json_int_t)r.n, "Q", r.Q, "Q_lo",
 							    isfinite(r.Q_lo) ? json_real(r.Q_lo) : json_null(), "Q_hi",
 							    isfinite(r.Q_hi) ? json_real(r.Q_hi) : json_null(), "p_ref", r.j.p,
 							    "p_ref_lo", r.j.p_lo, "p_ref_hi", r.j.p_hi, "jnd", r.j.jnd));
@@ -512,7 +547,7 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 					bf[nb++] = (float)boot[b];
 			double lo = nb ? mtr_percentile(bf, nb, 2.5) : NAN, hi = nb ? mtr_percentile(bf, nb, 97.5) : NAN;
 			free(bf);
-			fprintf(fj, "%s,%s,%s,%s,%.6f,", cm, Ts, csc, cca, -r.j.jnd);
+			fprintf(fj, "%s,%s,%s,%s,%.6f,", cm, TP, csc, cca, -r.j.jnd);
 			csv_num(fj, lo, "%.6f"), fputc(',', fj);
 			csv_num(fj, hi, "%.6f");
 			fprintf(fj, ",%zu\n", np);
@@ -551,11 +586,12 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 			for (int e = 0; e < 3; e++) {
 				if (!(eff[e].df1 > 0))
 					continue; /* a factor with one level has no effect to test */
-				fprintf(fa, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", cm, Ts, enames[e], eff[e].df1, eff[e].df2,
+				fprintf(fa, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", cm, TP, enames[e], eff[e].df1, eff[e].df2,
 					eff[e].F, eff[e].p, eff[e].p_gg, eff[e].epsilon_gg);
-				json_array_append_new(ja, json_pack("{s:s, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}", "method",
-								    mts[m].method, "T",
-								    isnan(mts[m].T) ? json_null() : json_real(mts[m].T), "effect",
+				json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}",
+								    "method", mts[m].method, "T",
+								    isnan(mts[m].T) ? json_null() : json_real(mts[m].T), "period",
+								    period_json(&mts[m]), "effect",
 								    enames[e], "df1", eff[e].df1, "df2", eff[e].df2, "F", eff[e].F, "p",
 								    eff[e].p, "p_gg", eff[e].p_gg, "epsilon_gg", eff[e].epsilon_gg,
 								    "participants", (json_int_t)n));
@@ -577,7 +613,7 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 						double t, df, p;
 						paired_t(u, v, n, &t, &df, &p);
 						char l1c[160], l2c[160];
-						fprintf(fp, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", cm, Ts, f == 0 ? "camera" : "scene",
+						fprintf(fp, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", cm, TP, f == 0 ? "camera" : "scene",
 							sty_csv_cell(f == 0 ? mo_lv[l1] : sc_lv[l1], l1c, sizeof l1c),
 							sty_csv_cell(f == 0 ? mo_lv[l2] : sc_lv[l2], l2c, sizeof l2c), t, df, p,
 							fmin(1.0, p * ncmp));
@@ -630,8 +666,8 @@ close:
 				"set arrow from graph 0, second 75 to graph 1, second 75 nohead dt 2\n"
 				"set label '1 JND (p_ref = 75%%)' at graph 0.02, second 77\n"
 				"methods = '%s'\n"
-				"plot for [m in methods] '%s/fig3.csv' using (strcol(1) eq m ? $2 : 1/0):3:4:5 every ::1 with yerrorlines "
-				"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):6 every ::1 axes x1y2 "
+				"plot for [m in methods] '%s/fig3.csv' using (strcol(1) eq m ? $2 : 1/0):4:5:6 every ::1 with yerrorlines "
+				"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):7 every ::1 axes x1y2 "
 				"with linespoints dt 3 title 'p_ref '.m\n",
 				td->out, methods, td->out);
 			if (mtr_plot_end(&plot, note, sizeof note))

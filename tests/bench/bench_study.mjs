@@ -22,8 +22,9 @@ await Promise.all(codes.map(async (code, p) => {
 const secs = (performance.now() - t0) / 1000;
 lat.sort((a, b) => a - b);
 const q = f => lat[Math.min(lat.length - 1, Math.floor(f * lat.length))];
-const csv = await (await fetch(`${base}/admin/export.csv`,
-  {headers: {authorization: `Bearer ${token}`}})).text();
+const exp = await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } }); // never ?token=
+if (exp.status !== 200) throw new Error(`export: HTTP ${exp.status}`);
+const csv = await exp.text();
 const rows = csv.trim().split('\n').slice(1);
 const distinct = new Set(rows.map(r => r.split(',').slice(0, 2).join(','))).size;
 console.log(`${codes.length} participants, ${acked} answers acknowledged in ${secs.toFixed(2)} s: ${(acked / secs).toFixed(0)} answers/s`);

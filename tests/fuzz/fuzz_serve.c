@@ -57,8 +57,8 @@ static void write_file(const char *path, const char *text)
 		abort();
 }
 
-/* Two sets (stationary and moving) with tfr@8 and tfr@16, a study of 2 participants with training, catch trials
- * and breaks, the server (not listening), and the placeholders' values. */
+/* Two sets (stationary and moving) with tfr@8, tfr@16, rrc/4 and rrc/8 (variants with a period), a study of 2
+ * participants with training, catch trials and breaks, the server (not listening), and the placeholders' values. */
 static void setup(void)
 {
 	const char *base = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
@@ -73,8 +73,8 @@ static void setup(void)
 	for (int i = 0; i < 2; i++) {
 		snprintf(p, sizeof p, "%s/%s", stim, sets[i][0]);
 		mkdir(p, 0755);
-		const char *clips[3] = {"ref", "tfr8", "tfr16"};
-		for (int c = 0; c < 3; c++) {
+		const char *clips[5] = {"ref", "tfr8", "tfr16", "rrc4", "rrc8"};
+		for (int c = 0; c < 5; c++) {
 			snprintf(p, sizeof p, "%s/%s/%s.webm", stim, sets[i][0], clips[c]);
 			char text[128];
 			snprintf(text, sizeof text, "clip %s of %s: 0123456789abcdefghijklmnopqrstuvwxyz", clips[c], sets[i][0]);
@@ -85,7 +85,8 @@ static void setup(void)
 		snprintf(json, sizeof json,
 			 "{\"taslab_pairs\": 1, \"scene\": \"calm\", \"camera\": \"%s\", \"camera_motion\": \"%s\", \"fps\": 60,"
 			 " \"frames\": [0, 59], \"reference\": {\"clip\": \"ref.webm\"}, \"conditions\": ["
-			 "{\"method\": \"tfr\", \"T\": 8, \"clip\": \"tfr8.webm\"}, {\"method\": \"tfr\", \"T\": 16, \"clip\": \"tfr16.webm\"}]}",
+			 "{\"method\": \"tfr\", \"T\": 8, \"clip\": \"tfr8.webm\"}, {\"method\": \"tfr\", \"T\": 16, \"clip\": \"tfr16.webm\"},"
+			 " {\"method\": \"rrc\", \"period\": 4, \"clip\": \"rrc4.webm\"}, {\"method\": \"rrc\", \"period\": 8, \"clip\": \"rrc8.webm\"}]}",
 			 sets[i][0], sets[i][1]);
 		write_file(p, json);
 	}

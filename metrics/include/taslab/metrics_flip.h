@@ -44,6 +44,17 @@ void mtr_flip_destroy(mtr_flip **f);
 int mtr_flip_compute(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb, const float *test_rgb,
                      float *map, int threads, double *mean, char *err, size_t err_size);
 
+/* A consumer of the error values as they are computed: called on the worker threads with `n` values of row `y` from
+ * column `x0` (a row comes in pieces of at most 512 columns, in column order); `band` (0 .. threads-1) identifies the
+ * calling thread's band of rows, so a consumer can keep per-band state without locks. */
+typedef void (*mtr_flip_row_fn)(void *ctx, int band, uint32_t y, uint32_t x0, const float *err, size_t n);
+
+/* mtr_flip_compute that also hands every computed piece of a row to `row_fn` (may be NULL) while it is in cache;
+ * pooling statistics this way saves a pass over the map. At most `threads` bands (`threads` <= 0: all cores). */
+int mtr_flip_compute_rows(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb,
+                          const float *test_rgb, float *map, mtr_flip_row_fn row_fn, void *row_ctx, int threads,
+                          double *mean, char *err, size_t err_size);
+
 /* Pooled statistics of a FLIP map as the reference tool prints them. The weighted percentiles are weighted by the
  * error value itself: the values are sorted ascending and the first whose running sum exceeds p * (sum of all
  * values) is returned (0 for an all-zero map). */

@@ -6,6 +6,10 @@
  * relative to that folder. Participants never see those paths: each trial's two clips get random 128-bit names
  * (sty_next_trial), so the page cannot tell which clip is the reference (the study stays blind).
  * Every participant rates every condition against the reference of the same scene and camera path.
+ * A condition is method x T x period x scene x camera path (T and period as the method has them, DESIGN
+ * section 4: rrc/4 and rrc/8 are two conditions); the conditions table stores period NULL for "none".
+ * Studies made before the period column are brought up to date when opened (the column is added, NULL); one
+ * that holds rrc or sau conditions (whose period was never stored) is refused by sty_open.
  *
  * Rating convention (DESIGN section 7): the participant answers a in {-2..+2} for the clips as shown
  * (A first, B second; + = second clip better). The reference-relative rating is r = +a when the reference
@@ -36,7 +40,8 @@ typedef struct sty sty;
  * reaction time but a broken or hostile client. */
 #define STY_RT_MS_MAX 86400000
 
-/* Opens an existing study database: TL_ERR_INPUT when `path` is not an existing taslab study file. */
+/* Opens an existing study database: TL_ERR_INPUT when `path` is not an existing taslab study file, or is an
+ * older study whose rrc/sau conditions have no period. */
 int sty_open(const char *path, sty **out, char *err, size_t err_size);
 /* Starts a new study that will be stored at `path`. `path` must name a file: "", ":memory:" and "file:"
  * URIs are refused (TL_ERR_ARG: SQLite would keep them in memory or elsewhere). An existing `path` (or a
@@ -63,6 +68,10 @@ int sty_set_served_url(sty *s, const char *url, char *err, size_t err_size);
 /* Whether a method (DESIGN section 4 names, the variant's method name) has a threshold T: 1 for tfr, tarc,
  * tasa and their -oracle forms, 0 for ref, rrc, sa, sau, -1 for an unknown name. */
 int sty_method_has_threshold(const char *method);
+/* Whether a method has a period N (`--period`, variants rrc/4, sau/8): 1 for rrc and sau, 0 for the other
+ * DESIGN section 4 names, -1 for an unknown name. A period is 1, 2, 4 or 8 (sty_period_valid). */
+int sty_method_has_period(const char *method);
+bool sty_period_valid(long period);
 
 typedef struct sty_design_desc {
 	const char *stimuli;      /* folder with pairs.json sets (DIR/pairs.json and DIR/<set>/pairs.json) */
@@ -111,24 +120,30 @@ int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *er
  * (rt_ms = -1: not measured). */
 int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t rt_ms, char *err, size_t err_size);
 
-/* Long-format ratings CSV (DESIGN section 7):
- * participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms  (test trials only).
+/* Long-format ratings CSV (DESIGN section 7 plus the period column of DESIGN section 4, right after T):
+ * participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms  (test trials
+ * only; T and period empty where the method has none).
  * Text cells are written so that a spreadsheet cannot run them (OWASP "CSV injection"): a cell starting with
  * = + - @ TAB or CR gets a leading ', and a cell holding , " CR or LF is quoted (RFC 4180). The same holds for
  * every CSV the study module writes. */
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size);
 /* pwcmp layout (pw_scale_table defaults): observer,scene,condition_A,condition_B,selected_A — one row per
- * answer, condition names "ref" and METHOD_T<T>; a tie ("same") is written as two rows, one for each side. */
+ * answer, condition names "ref", METHOD_T<T> (tfr_T8, tarc-oracle_T8), METHOD_N<period> (rrc_N4) or METHOD
+ * (sa); a tie ("same") is written as two rows, one for each side. */
 int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size);
 /* Imports a long-format ratings file into a new study (sty_create; a study that holds participants is refused);
- * validates every row first and imports nothing if any row is bad (the message names the line). Rules beyond
- * the column types: method is a DESIGN section 4 name; T is given exactly for methods with a threshold (tfr,
- * tarc, tasa and -oracle forms; 0 < T <= 255) and empty for the others; text cells (participant, scene,
- * camera, method) may not start with = + - @ (spreadsheet formulas) nor hold quotes or control characters. */
+ * validates every row first and imports nothing if any row is bad (the message names the line). The header is
+ * the one sty_export_long writes, or the DESIGN section 7 header without period (files from before the period
+ * column: every period is then empty). Rules beyond the column types: method is a DESIGN section 4 name; T is
+ * given exactly for methods with a threshold (tfr, tarc, tasa and -oracle forms; 0 < T <= 255) and empty for
+ * the others; period is given exactly for rrc and sau (1, 2, 4 or 8) and empty for the others; text cells
+ * (participant, scene, camera, method) may not start with = + - @ (spreadsheet formulas) nor hold quotes or
+ * control characters. */
 int sty_import_long(sty *s, const char *path, size_t *rows, char *err, size_t err_size);
 
 /* Statistics into DIR: conditions.csv, anova.csv (DESIGN section 7), posthoc.csv, observers.csv, jod.csv,
- * tables as JSON and Markdown, and a Fig. 3 style plot (gnuplot). */
+ * tables as JSON and Markdown, and a Fig. 3 style plot (gnuplot). Every CSV with a method column has T and
+ * period columns right after it (DESIGN section 4); statistics are per method x T x period. */
 typedef struct sty_tally_desc {
 	const char *out;
 	bool keep_flagged;        /* keep observers flagged by the catch-trial screening */
