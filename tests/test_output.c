@@ -216,6 +216,24 @@ static void test_pairs(void **state)
 		assert_int_equal(pairs_read(p, &r, err, sizeof err), TL_ERR_INPUT);
 		assert_non_null(strstr(err, "relative"));
 	}
+	/* A period must be one of 1, 2, 4, 8 (or absent): negative or huge values are not folded into "none" or
+	 * truncated to 32 bits. */
+	snprintf(c[0].clip, sizeof c[0].clip, "clips/tfr-T8.webm");
+	const uint32_t bad_periods[] = {3, 16};
+	for (int i = 0; i < 2; i++) {
+		c[1].period = bad_periods[i];
+		assert_int_equal(pairs_write(p, &s, err, sizeof err), TL_OK);
+		assert_int_equal(pairs_read(p, &r, err, sizeof err), TL_ERR_INPUT);
+		assert_non_null(strstr(err, "period"));
+	}
+	char *text = tu_read_file(p, NULL), *at = strstr(text, "\"period\": 16");
+	assert_non_null(at);
+	FILE *f = fopen(p, "w");
+	fprintf(f, "%.*s\"period\": -4%s", (int)(at - text), text, at + strlen("\"period\": 16"));
+	fclose(f);
+	free(text);
+	assert_int_equal(pairs_read(p, &r, err, sizeof err), TL_ERR_INPUT);
+	assert_non_null(strstr(err, "period"));
 }
 
 int main(void)

@@ -103,7 +103,12 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 		get_str(c, "run", x->run, sizeof x->run, 1);
 		get_str(c, "inspect", x->inspect, sizeof x->inspect, 1);
 		x->T = json_is_number(T) ? json_number_value(T) : NAN;
-		x->period = json_is_integer(N) && json_integer_value(N) > 0 ? (uint32_t)json_integer_value(N) : 0;
+		json_int_t nv = json_is_integer(N) ? json_integer_value(N) : 0;
+		if (nv != 0 && nv != 1 && nv != 2 && nv != 4 && nv != 8) {
+			bad = "a condition's period is not 1, 2, 4 or 8";
+			break;
+		}
+		x->period = (uint32_t)nv;
 		if (get_str(c, "id", x->id, sizeof x->id, 0)) /* optional: the method and its values */
 			snprintf(x->id, sizeof x->id, isfinite(x->T) ? "%s-T%g" : "%s", x->method, x->T);
 		if (isfinite(x->T) && !(x->T >= 0 && x->T <= 255)) {
