@@ -1496,8 +1496,8 @@ static void test_design_period_rule(void **state)
 	} bad[] = {
 		{"rrc", NAN, 0, "method rrc needs a period"},   {"sau", NAN, 0, "method sau needs a period"},
 		{"tarc", 8, 4, "method tarc has no period"},    {"tarc-oracle", 8, 8, "method tarc-oracle has no period"},
-		{"sa", NAN, 2, "method sa has no period"},      {"rrc", NAN, 3, "period 3 of method rrc"},
-		{"rrc", NAN, 16, "period 16 of method rrc"},    {"rrc", 8, 4, "method rrc has no threshold"},
+		{"sa", NAN, 2, "method sa has no period"},      {"rrc", NAN, 3, "period 3 is not"},
+		{"rrc", NAN, 16, "period 16 is not"},    {"rrc", 8, 4, "method rrc has no threshold"},
 		{"tasa", NAN, 0, "method tasa needs a threshold"},
 	};
 	char err[1024];

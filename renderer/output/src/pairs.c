@@ -66,6 +66,7 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 	json_t *fr = json_object_get(j, "frames"), *sz = json_object_get(j, "size"), *ref = json_object_get(j, "reference");
 	json_t *conds = json_object_get(j, "conditions");
 	const char *bad = NULL;
+	char why[160];
 	if (get_str(j, "scene", s->scene, sizeof s->scene, 0) || get_str(j, "camera", s->camera, sizeof s->camera, 0) ||
 	    get_str(j, "camera_motion", s->camera_motion, sizeof s->camera_motion, 0))
 		bad = "scene, camera and camera_motion must be strings";
@@ -104,13 +105,14 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 		get_str(c, "inspect", x->inspect, sizeof x->inspect, 1);
 		x->T = json_is_number(T) ? json_number_value(T) : NAN;
 		json_int_t nv = json_is_integer(N) ? json_integer_value(N) : 0;
-		if (nv != 0 && nv != 1 && nv != 2 && nv != 4 && nv != 8) {
-			bad = "a condition's period is not 1, 2, 4 or 8";
-			break;
-		}
-		x->period = (uint32_t)nv;
+		x->period = nv > 0 && nv <= 8 ? (uint32_t)nv : 0;
 		if (get_str(c, "id", x->id, sizeof x->id, 0)) /* optional: the method and its values */
 			snprintf(x->id, sizeof x->id, isfinite(x->T) ? "%s-T%g" : "%s", x->method, x->T);
+		if (nv != 0 && nv != 1 && nv != 2 && nv != 4 && nv != 8) {
+			snprintf(why, sizeof why, "condition '%s': period %lld is not 1, 2, 4 or 8", x->id, (long long)nv);
+			bad = why;
+			break;
+		}
 		if (isfinite(x->T) && !(x->T >= 0 && x->T <= 255)) {
 			bad = "a condition's T is outside 0..255";
 			break;
