@@ -498,15 +498,6 @@ static void test_truth(void **state)
 
 /* ---- bad input: one line, non-zero exit, no run folder that looks complete ---- */
 
-static void expect_cli_error(const char *args, const char *needle)
-{
-	char cmd[8192], out[8192];
-	snprintf(cmd, sizeof cmd, "%s %s", TASLAB_BINARY, args);
-	int st = tu_run(cmd, out, sizeof out);
-	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
-		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
-}
-
 static void test_bad_input(void **state)
 {
 	(void)state;
@@ -532,7 +523,7 @@ static void test_bad_input(void **state)
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
 		snprintf(args, sizeof args, "%s %s", base, cases[i].opts);
-		expect_cli_error(args, cases[i].needle);
+		tu_expect_cli_error(args, cases[i].needle);
 	}
 	snprintf(path, sizeof path, "%s/r/manifest.json", dir);
 	assert_false(tu_file_exists(path));

@@ -231,15 +231,6 @@ static void test_tfr_moving_shadow_within_T(void **state)
 	scene_destroy(&s);
 }
 
-static void expect_cli_error(const char *args, const char *needle)
-{
-	char cmd[8192], out[8192];
-	snprintf(cmd, sizeof cmd, "%s %s", TASLAB_BINARY, args);
-	int st = tu_run(cmd, out, sizeof out);
-	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
-		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
-}
-
 static void test_bad_input(void **state)
 {
 	(void)state;
@@ -247,19 +238,19 @@ static void test_bad_input(void **state)
 	const char *dir = tu_tmpdir("tfr_bad");
 	snprintf(args, sizeof args, "analyze coherence --scene %s/tests/data/tfr_static.json --frames 240 --out %s/a",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "outside the clip");
+	tu_expect_cli_error(args, "outside the clip");
 	snprintf(args, sizeof args, "analyze predictors --scene %s/tests/data/tfr_static.json --frames 10:300:50 --out %s/a",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "outside the clip");
+	tu_expect_cli_error(args, "outside the clip");
 	snprintf(args, sizeof args, "analyze coherence --scene %s/tests/data/tfr_static.json --frames 10 --thresholds 8,0 --out %s/a",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "--thresholds");
+	tu_expect_cli_error(args, "--thresholds");
 	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --max-age 120 --out %s/r",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "--max-age 120: out of range [1, 119]");
+	tu_expect_cli_error(args, "--max-age 120: out of range [1, 119]");
 	snprintf(args, sizeof args, "render --scene %s/tests/data/tfr_static.json --method tfr --threshold -1 --out %s/r",
 		 TASLAB_SOURCE_DIR, dir);
-	expect_cli_error(args, "--threshold");
+	tu_expect_cli_error(args, "--threshold");
 	char path[4096];
 	snprintf(path, sizeof path, "%s/a/coherence.json", dir);
 	assert_false(tu_file_exists(path));

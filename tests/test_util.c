@@ -115,3 +115,12 @@ int tu_http(int port, const char *method, const char *path, const char *headers,
 	free(buf);
 	return status;
 }
+
+void tu_expect_cli_error(const char *args, const char *needle)
+{
+	char cmd[8192], out[8192];
+	snprintf(cmd, sizeof cmd, "%s %s", TASLAB_BINARY, args);
+	int st = tu_run(cmd, out, sizeof out);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
+		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
+}

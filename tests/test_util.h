@@ -17,6 +17,9 @@ int tu_file_exists(const char *path);
 char *tu_read_file(const char *path, size_t *len);
 /* Number of '\n'-terminated lines in s. */
 int tu_count_lines(const char *s);
+/* Runs `taslab ARGS` (TASLAB_BINARY) and fails the test unless it exits non-zero with exactly one line of output
+ * containing `needle`. */
+void tu_expect_cli_error(const char *args, const char *needle);
 
 
 /* Minimal HTTP/1.0 client for loopback tests: sends METHOD PATH (with BODY and extra header lines

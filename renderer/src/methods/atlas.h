@@ -33,6 +33,12 @@ void atlas_finish(render *r);
 #define ATLAS_PASS_COUNT 10
 extern const char *const atlas_pass_names[ATLAS_PASS_COUNT];
 
+/* The frame operations of every atlas method (render_method fields after .info and .init). */
+#define ATLAS_FRAME_OPS                                                                                            \
+	.pass_names = atlas_pass_names, .pass_count = ATLAS_PASS_COUNT, .state_ring = 1, .prepare = atlas_prepare,      \
+	.record_pre = atlas_record_pre, .cpu_step = atlas_cpu_step, .record = atlas_record, .collect = atlas_collect,   \
+	.finish = atlas_finish
+
 /* The options every atlas method has (method_option entries for an options struct T with fields scale, density,
  * lmax, lod0; DESIGN section 4 --atlas-scale). */
 #define ATLAS_OPTIONS(T)                                                                                           \
