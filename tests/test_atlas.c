@@ -391,6 +391,37 @@ static void test_bad_input(void **state)
 	assert_false(tu_file_exists(path));
 }
 
+/* Study stimuli with the atlas methods, and Table 1 against sa from their runs. */
+static void test_cli_pair_and_runs(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("atlas_cli");
+	char cmd[8192], out[16384], path[4096];
+	snprintf(cmd, sizeof cmd,
+		 "%s pair --scene %s/tests/data/tfr_shadow.json --variants sa,sau/4,tasa@8,tasa-oracle@8 --size 48x32 "
+		 "--frames 0:4 --out %s/set",
+		 TASLAB_BINARY, TASLAB_SOURCE_DIR, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s\n%s", cmd, out);
+	snprintf(path, sizeof path, "%s/set/pairs.json", dir);
+	char *p = tu_read_file(path, NULL);
+	assert_non_null(p);
+	assert_non_null(strstr(p, "\"variant\": \"sau/4\""));
+	assert_non_null(strstr(p, "\"period\": 4"));
+	assert_non_null(strstr(p, "\"method\": \"tasa-oracle\""));
+	free(p);
+	snprintf(cmd, sizeof cmd, "%s metrics runs --out %s/table %s/set/runs/sa %s/set/runs/sau-N4 %s/set/runs/tasa-T8", TASLAB_BINARY,
+		 dir, dir, dir, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s\n%s", cmd, out);
+	snprintf(path, sizeof path, "%s/table/table1.md", dir);
+	char *md = tu_read_file(path, NULL);
+	assert_non_null(md);
+	assert_non_null(strstr(md, "| sau/4 |"));
+	assert_non_null(strstr(md, "% vs sa |"));
+	free(md);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -398,6 +429,7 @@ int main(void)
 		cmocka_unit_test(test_bad_input),	  cmocka_unit_test(test_static_scene),
 		cmocka_unit_test(test_no_bleeding),	  cmocka_unit_test(test_convergence_and_gradients),
 		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_builtin_scenes),
+		cmocka_unit_test(test_cli_pair_and_runs),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
