@@ -170,10 +170,16 @@ static int runs_main(void *opts, cli_ctx *ctx)
 		char note[512];
 		if (mtr_runs_plot(s, n, o->out, note, sizeof note))
 			fprintf(stderr, "taslab metrics runs: note: %s\n", note);
-		for (size_t i = 0; i < n; i++)
-			fprintf(stderr, "%-40s %-14s reuse %6.2f%%  shaded %.0f/frame (reduction %.1f%%)  %.1f ms  speedup %.2fx\n",
-				s[i].path, s[i].variant, 100 * s[i].reuse_mean, s[i].shaded_samples / (double)s[i].frames,
-				100 * s[i].reduction, s[i].gpu_ms_median, s[i].speedup_vs_ref);
+		for (size_t i = 0; i < n; i++) {
+			char red[48] = "no baseline run", sp[32] = "no ref run";
+			if (isfinite(s[i].reduction))
+				snprintf(red, sizeof red, "reduction %.1f%% vs %s", 100 * s[i].reduction, s[i].baseline);
+			if (isfinite(s[i].speedup_vs_ref))
+				snprintf(sp, sizeof sp, "speedup %.2fx", s[i].speedup_vs_ref);
+			fprintf(stderr, "%-40s %-14s reuse %6.2f%%  shaded %.0f/frame (%s)  %.1f ms  %s\n", s[i].path,
+				s[i].variant, 100 * s[i].reuse_mean, s[i].shaded_samples / (double)s[i].frames, red,
+				s[i].gpu_ms_median, sp);
+		}
 	}
 	free(s);
 	return rc;
