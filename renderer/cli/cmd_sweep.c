@@ -255,16 +255,12 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	}
 	if (rc)
 		goto done;
-	if (!tl_is_file(path) && !o->slurm_dry_run &&
+	if (!tl_is_file(path) &&
 	    ((rc = tl_mkdirs(dir, err, err_size)) || (rc = sweep_spec_write(path, spec, err, err_size))))
 		goto done;
 	size_t n = sweep_run_count(spec);
 	if (o->slurm || o->slurm_dry_run) {
-		if (o->slurm_dry_run && !tl_is_file(path))
-			rc = tl_error(err, err_size, TL_ERR_ARG,
-				      "--slurm-dry-run: %s has no sweep.json yet (run once with --slurm, or locally)", dir);
-		else
-			rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
+		rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
 		goto done;
 	}
 	unsigned jobs = o->jobs ? o->jobs : req->jobs ? req->jobs : 1;

@@ -169,11 +169,9 @@ static int resolve_scene(const sweep_request *r, size_t i, sweep_spec *s, char *
 	if (r->frames[0] && (rc = cli_parse_frames(r->frames, &sc->first, &sc->end, &given, err, err_size)))
 		goto done;
 	camera_list(scn, names, sizeof names);
-	bool any_qualified = false;
 	for (size_t k = 0; k < r->camera_count; k++) {
 		const char *name = r->cameras[k], *slash = strchr(name, '/');
 		if (slash) {
-			any_qualified = true;
 			if ((size_t)(slash - name) != strlen(sc->name) || strncmp(name, sc->name, strlen(sc->name)))
 				continue;
 			name = slash + 1;
@@ -194,9 +192,6 @@ static int resolve_scene(const sweep_request *r, size_t i, sweep_spec *s, char *
 			if (add_camera(sc, scn, (int)c))
 				rc = tl_error(err, err_size, TL_ERR_ARG, "scene '%s' has more than %d camera paths", sc->name,
 					      SWEEP_MAX_CAMERAS);
-	if (!rc && !sc->camera_count)
-		rc = tl_error(err, err_size, TL_ERR_ARG, "cameras: none chosen for scene '%s'%s (available: %s)", sc->name,
-			      any_qualified ? " (SCENE/CAMERA entries name other scenes)" : "", names);
 	for (size_t k = 0; !rc && k < sc->camera_count; k++)
 		if (!folder_name(sc->cameras[k].name))
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "scene '%s': camera path '%s' cannot name a folder", sc->name,
@@ -352,6 +347,11 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 			return tl_error(err, err_size, TL_ERR_ARG, "cameras: '%s' names a scene that is not in --scenes",
 					r->cameras[k]);
 	}
+	for (size_t i = 0; i < s->scene_count; i++)
+		if (!s->scenes[i].camera_count)
+			return tl_error(err, err_size, TL_ERR_ARG,
+					"cameras: none chosen for scene '%s' (the SCENE/CAMERA entries name other scenes)",
+					s->scenes[i].name);
 	colour *col = NULL;
 	colour_desc cd = {.config_path = s->ocio_config[0] ? s->ocio_config : NULL, .display = s->display[0] ? s->display : NULL,
 			  .view = s->view[0] ? s->view : NULL};

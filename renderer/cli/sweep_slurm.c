@@ -212,9 +212,12 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 			}
 		}
 		printf("# ---- submission (%zu of %zu runs)\n", todo, n);
-		for (size_t k = 0; k < a; k++)
-			printf("%s%s", k ? " " : "", argv[k]);
-		printf("\nsbatch --parsable --dependency=afterany:<JOBID>");
+		if (todo)
+			for (size_t k = 0; k < a; k++)
+				printf("%s%s", k ? " " : "", argv[k]);
+		else
+			printf("# nothing to render: every run is complete");
+		printf("\nsbatch --parsable%s", todo ? " --dependency=afterany:<JOBID>" : "");
 		for (size_t k = 0; k < nw; k++)
 			printf(" %s", words[k]);
 		printf(" %s\n", report_sh);

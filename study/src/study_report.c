@@ -451,7 +451,8 @@ static const char *CSS =
 	"td img{max-width:160px;height:auto;display:block;image-rendering:pixelated}"
 	".missing{color:#b3261e;font-weight:600}.note{color:#666;font-size:12px}"
 	".player{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start;margin-top:8px}"
-	".player video{max-width:480px;width:45%;background:#000;image-rendering:pixelated}"
+	".player figure{flex:1 1 320px;max-width:640px;margin:0}.player video{width:100%;background:#000;"
+	"image-rendering:pixelated}"
 	".player .ctl{width:100%;display:flex;gap:10px;align-items:center}.scroll{overflow-x:auto}";
 
 static const char *SCRIPT =
