@@ -128,9 +128,9 @@ static int load_study(const char *db, const char *out, study_tab *t, char *err, 
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
 	/* columns by name: the tally may gain columns (period) without breaking this */
-	enum { C_METHOD, C_T, C_PERIOD, C_SCENE, C_CAMERA, C_N, C_Q, C_QLO, C_QHI, C_P, C_PLO, C_PHI, C_COUNT };
-	static const char *const names[C_COUNT] = {"method", "T", "period", "scene", "camera", "n",
-						   "Q", "Q_lo", "Q_hi", "p_ref", "p_ref_lo", "p_ref_hi"};
+	enum { C_METHOD, C_T, C_PERIOD, C_SCENE, C_CAMERA, C_N, C_Q, C_QLO, C_QHI, C_P, C_PLO, C_PHI, C_JND, C_COUNT };
+	static const char *const names[C_COUNT] = {"method", "T", "period", "scene", "camera", "n", "Q",
+						   "Q_lo", "Q_hi", "p_ref", "p_ref_lo", "p_ref_hi", "jnd"};
 	int col[C_COUNT];
 	for (int k = 0; k < C_COUNT; k++)
 		col[k] = -1;
@@ -162,9 +162,11 @@ static int load_study(const char *db, const char *out, study_tab *t, char *err, 
 		c->period = c->has_period && *CELL(C_PERIOD) ? (unsigned)strtoul(CELL(C_PERIOD), NULL, 10) : 0;
 		c->n = NUM(C_N), c->Q = NUM(C_Q), c->Q_lo = NUM(C_QLO), c->Q_hi = NUM(C_QHI);
 		c->p = NUM(C_P), c->p_lo = NUM(C_PLO), c->p_hi = NUM(C_PHI);
+		/* the tally's JND; its interval maps the Wilson interval of p_ref (Phi^-1 is monotone) */
+		c->jnd = col[C_JND] >= 0 ? NUM(C_JND) : jnd_of(c->p, c->n);
+		c->jnd_lo = jnd_of(c->p_lo, c->n), c->jnd_hi = jnd_of(c->p_hi, c->n);
 #undef NUM
 #undef CELL
-		c->jnd = jnd_of(c->p, c->n), c->jnd_lo = jnd_of(c->p_lo, c->n), c->jnd_hi = jnd_of(c->p_hi, c->n);
 		t->n++;
 	}
 	free(text);
