@@ -61,9 +61,12 @@ try {
       const { ref, test } = window.taslabReport.players[0];
       const out = [];
       const t0 = performance.now();
-      while (performance.now() - t0 < 2500) {
+      const fps = +document.querySelector('.player').dataset.fps;
+      while (performance.now() - t0 < 900) {
         await new Promise(r => requestAnimationFrame(r));
-        if (!ref.paused && ref.currentTime > 0) out.push([ref.currentTime, test.currentTime, test.paused]);
+        // away from the loop's restart at the end of the clip
+        if (!ref.paused && ref.currentTime > 1 / fps && ref.currentTime < ref.duration - 3 / fps)
+          out.push([ref.currentTime, test.currentTime, test.paused]);
       }
       return { out, duration: ref.duration, fps: +document.querySelector('.player').dataset.fps };
     });
