@@ -52,6 +52,16 @@ static int get_string(const ctx *c, const char *key, json_t *v, char *dst, size_
 	return TL_OK;
 }
 
+/* `s` for a message: control characters as '?', at most 64 characters (keys come from untrusted files). */
+static const char *printable(const char *s, char *buf, size_t n)
+{
+	size_t i = 0;
+	for (; s[i] && i + 1 < n && i < 64; i++)
+		buf[i] = (unsigned char)s[i] < 0x20 || s[i] == 0x7f ? '?' : s[i];
+	buf[i] = 0;
+	return buf;
+}
+
 /* A name usable as one folder name: no '/', not "." or "..", not starting with '.'. */
 static bool safe_name(const char *s)
 {
@@ -246,11 +256,12 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 				      "%s: a resolved sweep.json, not a sweep file (give it as 'taslab sweep %s' to resume)", path,
 				      path);
 		} else {
+			char pk[80];
 			rc = tl_error(err, err_size, TL_ERR_INPUT,
 				      "%s: unknown key \"%s\" (known: scenes, cameras, variants, methods, thresholds, periods, "
 				      "frames, size, fps, out, baseline, metrics, ppd, device, ocio_config, display, view, "
 				      "validation, jobs)",
-				      path, key);
+				      path, printable(key, pk, sizeof pk));
 		}
 		if (rc)
 			break;
@@ -303,8 +314,9 @@ static int only_keys(const ctx *c, const char *where, json_t *o, const char *con
 		size_t i = 0;
 		while (known[i] && strcmp(known[i], key))
 			i++;
+		char pk[80];
 		if (!known[i])
-			return bad(c, where, "unknown key \"%s\"", key);
+			return bad(c, where, "unknown key \"%s\"", printable(key, pk, sizeof pk));
 	}
 	return TL_OK;
 }
