@@ -450,7 +450,7 @@ static const char *CSS =
 	".plots img{width:100%;height:auto;display:block}figcaption{font-size:12px;color:#555;text-align:center}"
 	"table{border-collapse:collapse;font-size:13px;margin:6px 0}th,td{border-bottom:1px solid #e3e6ea;padding:3px 8px;"
 	"text-align:right;vertical-align:middle}th{background:#f0f2f5;position:sticky;top:0}td.l,th.l{text-align:left}"
-	"td img{max-width:160px;height:auto;display:block;image-rendering:pixelated}"
+	"td{white-space:nowrap}td img{max-width:104px;height:auto;display:block;image-rendering:pixelated}"
 	".missing{color:#b3261e;font-weight:600}.note{color:#666;font-size:12px}"
 	".player{display:flex;flex-wrap:wrap;gap:12px;align-items:flex-start;margin-top:8px}"
 	".player figure{flex:1 1 320px;max-width:640px;margin:0}.player video{width:100%;background:#000;"
