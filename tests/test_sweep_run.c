@@ -260,6 +260,18 @@ static void test_failure_and_study(void **state)
 	st = tu_run(cmd, out, sizeof out);
 	if (st)
 		fail_msg("study import failed: %s", out);
+	/* a coherence analysis of this scene and path (as `taslab analyze coherence --out SW/analysis/turntable/orbit`
+	 * writes it): the report draws its curves */
+	char analysis[4096];
+	snprintf(analysis, sizeof analysis, "%s/analysis/turntable/orbit", sw);
+	mkdir_p(analysis);
+	snprintf(p, sizeof p, "%s/coherence.csv", analysis);
+	f = fopen(p, "w");
+	fprintf(f, "T,k,unchanged_samples,visible_samples,fraction_unchanged\n");
+	for (int T = 2; T <= 64; T *= 2)
+		for (int k = 1; k <= 120; k++)
+			fprintf(f, "%d,%d,%d,1000,%.4f\n", T, k, 1000 - k * 8 / T, (1000 - k * 8 / T) / 1000.0);
+	fclose(f);
 	snprintf(cmd, sizeof cmd, "%s report %s --study %s --jnd-against maxrgb_p99 --quiet", TASLAB_BINARY, sw, db);
 	st = tu_run(cmd, out, sizeof out);
 	assert_int_equal(st, 1); /* written, but a run is still missing */
@@ -273,6 +285,8 @@ static void test_failure_and_study(void **state)
 	assert_non_null(strstr(csv, ",0.666667,"));
 	free(csv);
 	snprintf(p, sizeof p, "%s/report/plots/jnd.svg", sw);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--coherence.svg", sw);
 	assert_true(tu_file_exists(p));
 	snprintf(p, sizeof p, "%s/report/index.html", sw);
 	char *html = tu_read_file(p, NULL);
