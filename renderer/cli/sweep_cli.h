@@ -25,6 +25,9 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progress_fd, const char *command_line,
 		   bool *deferred, char *err, size_t err_size);
 
+/* The path of the running taslab binary (/proc/self/exe): what the local runner and Slurm scripts execute. */
+int cli_sweep_self(char *out, size_t out_size, char *err, size_t err_size);
+
 /* Runs every incomplete run of the plan, `jobs` at a time, each in its own process (`taslab sweep DIR/sweep.json
  * --task I`, output into its log file), with one progress line. *failed receives the number of runs that did not
  * complete. TL_ERR_INTERRUPTED after SIGINT/SIGTERM (children stopped, complete runs kept). */

@@ -142,6 +142,15 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 
 /* ------------------------------------------------------------------ the local job runner */
 
+int cli_sweep_self(char *out, size_t out_size, char *err, size_t err_size)
+{
+	ssize_t n = readlink("/proc/self/exe", out, out_size - 1);
+	if (n <= 0)
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "cannot find the taslab binary (/proc/self/exe)");
+	out[n] = 0;
+	return TL_OK;
+}
+
 typedef struct job {
 	pid_t pid;
 	int fd;             /* progress pipe (read end), -1 when closed */
@@ -265,13 +274,11 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 	job *active = calloc(jobs ? jobs : 1, sizeof *active);
 	char **env = child_env();
 	char self[TL_PATH_MAX];
-	ssize_t sl = readlink("/proc/self/exe", self, sizeof self - 1);
 	int rc = queue && failed && requeued && active && env ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
-	if (!rc && sl <= 0)
-		rc = tl_error(err, err_size, TL_ERR_INTERNAL, "cannot find the taslab binary (/proc/self/exe)");
+	if (!rc)
+		rc = cli_sweep_self(self, sizeof self, err, err_size);
 	if (rc)
 		goto done;
-	self[sl] = 0;
 	/* What is to do: every run without run, clip or metrics. Frames count only for runs still to render. */
 	size_t done_runs = 0, failed_runs = 0, nactive = 0, todo = 0;
 	uint64_t frames_todo = 0, frames_done = 0;

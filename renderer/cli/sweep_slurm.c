@@ -134,10 +134,9 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 		    size_t err_size)
 {
 	char self[TL_PATH_MAX], adir[TL_PATH_MAX], path[TL_PATH_MAX], runs_sh[TL_PATH_MAX], report_sh[TL_PATH_MAX];
-	ssize_t sl = readlink("/proc/self/exe", self, sizeof self - 1);
-	if (sl <= 0)
-		return tl_error(err, err_size, TL_ERR_INTERNAL, "cannot find the taslab binary (/proc/self/exe)");
-	self[sl] = 0;
+	int rc = cli_sweep_self(self, sizeof self, err, err_size);
+	if (rc)
+		return rc;
 	char *abs = realpath(dir, NULL);
 	if (!abs)
 		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", dir, strerror(errno));
@@ -173,7 +172,7 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 	char words_buf[4096];
 	char *words[MAX_ARGS];
 	size_t nw = 0;
-	int rc = slurm_opts ? split_words(slurm_opts, words_buf, sizeof words_buf, words, &nw, err, err_size) : TL_OK;
+	rc = slurm_opts ? split_words(slurm_opts, words_buf, sizeof words_buf, words, &nw, err, err_size) : TL_OK;
 	snprintf(path, sizeof path, "%s/slurm/logs", adir);
 	if (!rc)
 		rc = tl_mkdirs(path, err, err_size);

@@ -44,6 +44,25 @@ static void cellf(FILE *f, double v, const char *fmt)
 	fputs("</td>", f);
 }
 
+/* Table cells: a summary column and its format, NULL-terminated. */
+typedef struct cell_def {
+	const char *column, *fmt;
+} cell_def;
+
+static const cell_def TABLE1_CELLS[] = {{"shaded_per_frame", "%.0f"}, {"reduction_percent", "%.2f %%"},
+					 {"reuse_percent", "%.2f %%"}, {"speedup_vs_ref", "%.2f×"}, {NULL, NULL}};
+static const cell_def RUN_CELLS[] = {{"reuse_percent", "%.1f %%"}, {"reduction_percent", "%.1f %%"},
+				      {"speedup_vs_ref", "%.2f×"},  {"exceed_T", "%.5f"},
+				      {"exceed_8", "%.5f"},         {"maxrgb_p99", "%.2f"},
+				      {"flicker_mean", "%.3f"},     {"flip_mean", "%.4f"},
+				      {"psnr", "%.1f dB"},          {NULL, NULL}};
+
+static void cells(FILE *f, const mtr_sweep_row *r, const cell_def *c)
+{
+	for (; c->column; c++)
+		cellf(f, mtr_sweep_value(r, c->column), c->fmt);
+}
+
 /* File-name stem of a scene/camera group. */
 static void group_stem(const sweep_spec *s, size_t scene, size_t cam, char *out, size_t n)
 {
@@ -525,10 +544,7 @@ static void page_table1(FILE *f, const sweep_spec *s, group_info *gi, size_t ng)
 				fprintf(f, "<td class=\"missing\" colspan=\"4\">run missing or failed</td></tr>\n");
 				continue;
 			}
-			cellf(f, mtr_sweep_value(r, "shaded_per_frame"), "%.0f");
-			cellf(f, mtr_sweep_value(r, "reduction_percent"), "%.2f %%");
-			cellf(f, mtr_sweep_value(r, "reuse_percent"), "%.2f %%");
-			cellf(f, mtr_sweep_value(r, "speedup_vs_ref"), "%.2f×");
+			cells(f, r, TABLE1_CELLS);
 			fprintf(f, "</tr>\n");
 		}
 	fprintf(f, "</table></div></section>\n");
@@ -821,15 +837,7 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 				fprintf(f, "<td class=\"missing\" colspan=\"9\">run missing or failed (see ../logs/)</td></tr>\n");
 				continue;
 			}
-			cellf(f, mtr_sweep_value(r, "reuse_percent"), "%.1f %%");
-			cellf(f, mtr_sweep_value(r, "reduction_percent"), "%.1f %%");
-			cellf(f, mtr_sweep_value(r, "speedup_vs_ref"), "%.2f×");
-			cellf(f, mtr_sweep_value(r, "exceed_T"), "%.5f");
-			cellf(f, mtr_sweep_value(r, "exceed_8"), "%.5f");
-			cellf(f, mtr_sweep_value(r, "maxrgb_p99"), "%.2f");
-			cellf(f, mtr_sweep_value(r, "flicker_mean"), "%.3f");
-			cellf(f, mtr_sweep_value(r, "flip_mean"), "%.4f");
-			cellf(f, mtr_sweep_value(r, "psnr"), "%.1f dB");
+			cells(f, r, RUN_CELLS);
 			if (d->study) {
 				const cond *c = find_cond(&study, s, r);
 				if (c)
