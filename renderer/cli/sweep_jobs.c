@@ -269,7 +269,7 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 		    size_t err_size)
 {
 	size_t n = sweep_run_count(s);
-	size_t *queue = calloc(2 * n + 1, sizeof *queue), qhead = 0, qtail = 0;
+	size_t *queue = calloc(3 * n + 1, sizeof *queue), qhead = 0, qtail = 0;
 	bool *failed = calloc(n + 1, sizeof *failed), *requeued = calloc(n + 1, sizeof *requeued);
 	job *active = calloc(jobs ? jobs : 1, sizeof *active);
 	char **env = child_env();
@@ -309,7 +309,26 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 	bool dirty = true;
 	while ((qhead < qtail || nactive) && !rc) {
 		while (!stop_signal && nactive < jobs && qhead < qtail) {
-			size_t i = queue[qhead++];
+			/* the first entry that can go: one to render, or a comparison whose ref run is done (or failed) */
+			size_t pick = qtail;
+			for (size_t q = qhead; q < qtail && pick == qtail; q++) {
+				sweep_run r, ref;
+				sweep_status st, ref_st;
+				sweep_run_at(s, queue[q], &r);
+				sweep_run_status(s, dir, &r, &st);
+				sweep_run_at(s, r.ref_index, &ref);
+				sweep_run_status(s, dir, &ref, &ref_st);
+				if (!st.run || r.is_ref || ref_st.run || failed[r.ref_index])
+					pick = q;
+			}
+			if (pick == qtail) {
+				if (nactive)
+					break; /* comparisons wait for their ref runs */
+				pick = qhead; /* nothing runs that could complete a ref: let it report */
+			}
+			size_t i = queue[pick];
+			memmove(&queue[qhead + 1], &queue[qhead], (pick - qhead) * sizeof *queue);
+			queue[qhead++] = i;
 			job *j = &active[nactive];
 			sweep_run r;
 			sweep_status st;
@@ -380,23 +399,24 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 			char l[256], log[TL_PATH_MAX], why[1024];
 			label(s, j->index, l, sizeof l);
 			sweep_run_path(s, dir, &r, SWEEP_PATH_LOG, log, sizeof log);
-			bool ok = w > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-			if (ok && st.run && st.clip && !st.metrics && !stop_signal) {
-				/* compared later: its ref run was still rendering; requeue once the ref is complete or failed */
-				if (ref_st.run && !requeued[j->index]) {
-					requeued[j->index] = true;
-					queue[qtail++] = j->index;
-				} else {
-					ok = false;
-				}
-			} else if (ok && !(st.run && st.clip && st.metrics)) {
-				ok = false;
-			} else if (ok) {
+			bool exited_ok = w > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+			bool complete = st.run && st.clip && st.metrics;
+			/* run and clip done, the comparison not: its ref run was still rendering. It waits in the queue until
+			 * the ref is complete; a comparison missing with the ref complete gets one more try. */
+			bool waits = exited_ok && !complete && st.run && st.clip && !stop_signal && !failed[r.ref_index] &&
+				     !(ref_st.run && requeued[j->index]);
+			if (waits) {
+				requeued[j->index] |= ref_st.run;
+				queue[qtail++] = j->index;
+			} else if (exited_ok && complete) {
 				done_runs++;
-			}
-			if (!ok && !stop_signal) {
-				if (w > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0 && !ref_st.run)
+				if (!quiet && !tty)
+					fprintf(stderr, "taslab sweep: done %s\n", l);
+			} else if (!stop_signal) {
+				if (exited_ok && !ref_st.run)
 					snprintf(why, sizeof why, "no metrics: its ref run did not complete");
+				else if (exited_ok)
+					snprintf(why, sizeof why, "its clip or metrics are missing after the run (see the log)");
 				else if (w > 0 && WIFSIGNALED(status))
 					snprintf(why, sizeof why, "killed by signal %d", WTERMSIG(status));
 				else
@@ -406,8 +426,6 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 				if (tty && !quiet)
 					fputs("\r\033[K", stderr);
 				fprintf(stderr, "taslab sweep: %s failed: %s (log: %s)\n", l, why, log);
-			} else if (!quiet && !tty && ok) {
-				fprintf(stderr, "taslab sweep: done %s\n", l);
 			}
 			active[k] = active[--nactive];
 			dirty = true;
