@@ -65,7 +65,8 @@ try {
       while (performance.now() - t0 < 1500) {
         await new Promise(r => requestAnimationFrame(r));
         // both playing (not while the page pauses them to resynchronise), away from the loop's restart
-        if (st.playing && !st.resyncing && !ref.paused && !test.paused && ref.currentTime < ref.duration - 2 / fps)
+        if (st.playing && !st.resyncing && !ref.paused && !test.paused && !ref.ended && !test.ended &&
+            ref.currentTime < ref.duration - 2 / fps)
           out.push([ref.currentTime, test.currentTime, st.resyncs]);
       }
       return { out, duration: ref.duration, fps, resyncs: st.resyncs };
