@@ -114,6 +114,7 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 	sweep_run_path(s, dir, &r, SWEEP_PATH_METRICS, metrics, sizeof metrics);
 	sweep_run_status(s, dir, &r, &st);
 	int rc = TL_OK;
+	double t0 = tl_clock_s();
 	if (!st.run) {
 		/* A run being (re)rendered invalidates what was made from an earlier attempt. */
 		snprintf(p, sizeof p, "%s/summary.json", metrics);
@@ -121,11 +122,14 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 		unlink(p);
 		if ((rc = render_one(s, &r, run_dir, progress_fd, command_line, err, err_size)))
 			return rc;
+		fprintf(stderr, "taslab sweep: rendered in %.2f s\n", tl_clock_s() - t0);
 	}
 	if (!st.clip || !st.run) {
 		uint32_t n;
+		double t1 = tl_clock_s();
 		if ((rc = mkparent(clip, err, err_size)) || (rc = clip_encode_run(run_dir, clip, &n, err, err_size)))
 			return rc;
+		fprintf(stderr, "taslab sweep: clip of %u frames in %.2f s\n", n, tl_clock_s() - t1);
 	}
 	sweep_run_status(s, dir, &r, &st);
 	if (st.metrics)
@@ -137,7 +141,11 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 		fprintf(stderr, "taslab sweep: %s: the ref run is not complete yet; its metrics are computed later\n", run_dir);
 		return TL_OK;
 	}
-	return mtr_sweep_metrics(s, dir, &r, 0, err, err_size);
+	double t2 = tl_clock_s();
+	if ((rc = mtr_sweep_metrics(s, dir, &r, 0, err, err_size)))
+		return rc;
+	fprintf(stderr, "taslab sweep: metrics against ref in %.2f s\n", tl_clock_s() - t2);
+	return TL_OK;
 }
 
 /* ------------------------------------------------------------------ the local job runner */
