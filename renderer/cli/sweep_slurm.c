@@ -150,21 +150,13 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	size_t len = 0;
 	for (size_t i = 0; i < n;) {
-		sweep_run r;
-		sweep_status st;
-		sweep_run_at(s, i, &r);
-		sweep_run_status(s, dir, &r, &st);
-		if (st.run && st.clip && st.metrics) {
+		if (sweep_run_complete(s, dir, i)) {
 			i++;
 			continue;
 		}
 		size_t j = i + 1; /* a range of consecutive incomplete runs */
-		for (; j < n; j++) {
-			sweep_run_at(s, j, &r);
-			sweep_run_status(s, dir, &r, &st);
-			if (st.run && st.clip && st.metrics)
-				break;
-		}
+		while (j < n && !sweep_run_complete(s, dir, j))
+			j++;
 		len += (size_t)snprintf(array + len, cap - len, j - i > 1 ? "%s%zu-%zu" : "%s%zu", len ? "," : "", i, j - 1);
 		todo += j - i;
 		i = j;

@@ -588,3 +588,13 @@ void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, 
 	snprintf(q, sizeof q, "%s/summary.json", p);
 	st->metrics = r->is_ref ? st->run : tl_is_file(q);
 }
+
+bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index)
+{
+	sweep_run r;
+	sweep_status st;
+	if (sweep_run_at(s, index, &r))
+		return false;
+	sweep_run_status(s, dir, &r, &st);
+	return st.run && st.clip && st.metrics;
+}

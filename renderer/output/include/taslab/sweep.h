@@ -175,6 +175,8 @@ typedef struct sweep_status {
 	bool run, clip, metrics;
 } sweep_status;
 void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st);
+/* Run `index` of the plan has everything: run, clip and metrics. */
+bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index);
 
 #ifdef __cplusplus
 }
