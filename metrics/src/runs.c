@@ -265,6 +265,16 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 	return tl_atomic_commit(&md, err, err_size);
 }
 
+int mtr_runs_write_table1(const char *path, const mtr_run_summary *s, size_t n, char *err, size_t err_size)
+{
+	tl_atomic md;
+	int rc = tl_atomic_open(&md, path, err, err_size);
+	if (rc)
+		return rc;
+	write_table1(md.f, s, n);
+	return tl_atomic_commit(&md, err, err_size);
+}
+
 int mtr_runs_plot(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size)
 {
 	char path[4096];

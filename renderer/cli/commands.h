@@ -70,4 +70,22 @@ typedef struct study_opts {
 	bool keep_flagged;
 } study_opts;
 
+/* `taslab sweep` (cmd_sweep.c): every option may also come from the sweep file; given options override it. */
+typedef struct sweep_opts {
+	const char *scenes, *cameras, *variants, *methods, *thresholds, *periods, *frames, *out, *baseline, *metrics;
+	uint32_t size[2];
+	double fps, ppd;
+	const char *device, *ocio_config, *display, *view;
+	bool validation;
+	uint32_t jobs;
+	bool slurm, slurm_dry_run, no_report, quiet;
+	const char *slurm_opts, *task;
+} sweep_opts;
+
+/* `taslab report` (cmd_report.c). */
+typedef struct report_opts {
+	const char *study, *jnd_metric;
+	bool quiet;
+} report_opts;
+
 #endif

@@ -44,6 +44,9 @@ int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, 
  * speedup). */
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
 
+/* Writes only the Table 1 file (as in mtr_runs_write) to `path`, atomically (the sweep's SWEEP/table1.md). */
+int mtr_runs_write_table1(const char *path, const mtr_run_summary *s, size_t n, char *err, size_t err_size);
+
 /* Draws DIR/reduction.png, reuse.png and speedup.png against T, one line per method with a threshold (gnuplot,
  * from DIR/runs.csv written by mtr_runs_write). Returns non-zero with a note when gnuplot is missing or nothing
  * to draw. */

@@ -20,6 +20,7 @@ const char *tl_strerror(int code)
 	case TL_ERR_NOTFOUND: return "not found";
 	case TL_ERR_INTERRUPTED: return "interrupted";
 	case TL_ERR_INTERNAL: return "internal error";
+	case TL_ERR_INCOMPLETE: return "incomplete: some parts failed";
 	default: return "unknown error";
 	}
 }

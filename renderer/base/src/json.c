@@ -62,7 +62,13 @@ int tl_json_read(const char *path, json_t **out, char *err, size_t err_size)
 	json_error_t je;
 	*out = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
 	free(text);
-	if (!*out)
+	if (!*out) {
+		/* jansson quotes the offending input ("near '...'"): control characters there would break the one-line
+		 * message (found by fuzz_sweep) */
+		for (char *c = je.text; *c; c++)
+			if ((unsigned char)*c < 0x20 || *c == 0x7f)
+				*c = '?';
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s:%d:%d: %s", path, je.line, je.column, je.text);
+	}
 	return TL_OK;
 }

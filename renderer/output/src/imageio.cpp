@@ -60,6 +60,10 @@ extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t
 	spec.alpha_channel = 3;
 	spec.attribute("compression", "zip");
 	spec.attribute("oiio:ColorSpace", "Linear");
+	/* OIIO's EXR writer stamps the wall-clock time as DateTime unless one is given; an empty one writes none. Frames are
+	 * a pure function of their inputs (DESIGN section 2), so the same frame rendered twice (a sweep resumed on a
+	 * cluster, tests/test_sweep_slurm.sh) must be the same bytes. */
+	spec.attribute("DateTime", "");
 	for (size_t i = 0; i < attr_count; i++)
 		spec.attribute(attrs[i].name, attrs[i].value);
 	return write_atomic(path, "openexr", spec, TypeDesc::HALF, rgba_half, AutoStride, err, err_size);

@@ -29,9 +29,10 @@ typedef enum tl_err {
 	TL_ERR_NOTFOUND = -10,   /* a named thing (trial, participant, condition) does not exist */
 	TL_ERR_INTERRUPTED = -11, /* stopped on request (a signal) */
 	TL_ERR_INTERNAL = -12,   /* a bug: an invariant did not hold */
+	TL_ERR_INCOMPLETE = -13, /* the work went on, but some parts of it failed (a sweep's failed runs) */
 } tl_err;
 
-#define TL_ERR_MIN TL_ERR_INTERNAL
+#define TL_ERR_MIN TL_ERR_INCOMPLETE
 
 /* A short, static description of a code ("bad argument", "input error", ...); never NULL. */
 const char *tl_strerror(int code);

@@ -1,0 +1,391 @@
+/* cmd_sweep.c — `taslab sweep` and `taslab report`: a threshold sweep rendered, scored and reported in one command,
+ * on one machine (--jobs N) or a Slurm cluster (--slurm) (DESIGN section 9).
+ *
+ *   request (sweep file and/or options) --resolve--> spec --check against SWEEP/sweep.json--> plan
+ *     --> runs (render + clip + metrics, one process each) --> summary.csv, table1.md, report/index.html
+ *
+ * Everything that can be wrong with the input (unknown scene, camera, variant or key, a missing ref, a folder that
+ * holds another sweep) is found before anything is written: one line, exit 2, nothing rendered. */
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "sweep_cli.h"
+#include "taslab/metrics.h"
+#include "taslab/metrics_sweep.h"
+#include "taslab/study_report.h"
+#include "taslab/tl_clock.h"
+#include "taslab/tl_fs.h"
+
+/* ------------------------------------------------------------------ the closing step */
+
+int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric, bool report,
+		     bool quiet, size_t *incomplete, char *report_path, size_t report_path_size, char *err, size_t err_size)
+{
+	size_t n = sweep_run_count(s);
+	int rc = TL_OK;
+	report_path[0] = 0;
+	/* Comparisons (and clips) still missing for complete runs: a Slurm task whose ref run was not done yet, or a
+	 * sweep interrupted between its steps. No device is needed for either. */
+	for (size_t i = 0; i < n && !rc; i++) {
+		sweep_run r, ref;
+		sweep_status st, ref_st;
+		sweep_run_at(s, i, &r);
+		sweep_run_status(s, dir, &r, &st);
+		sweep_run_at(s, r.ref_index, &ref);
+		sweep_run_status(s, dir, &ref, &ref_st);
+		if (!st.run || (st.clip && st.metrics) || !ref_st.run)
+			continue;
+		bool deferred;
+		char why[1024];
+		int trc = cli_sweep_task(s, dir, i, -1, "taslab report", &deferred, why, sizeof why);
+		if (trc)
+			fprintf(stderr, "taslab: run %zu: %s\n", i, why);
+	}
+	mtr_sweep_row *rows = NULL;
+	size_t count = 0;
+	if ((rc = mtr_sweep_collect(s, dir, &rows, &count, err, err_size)))
+		return rc;
+	*incomplete = 0;
+	for (size_t i = 0; i < count; i++)
+		*incomplete += !(rows[i].status.run && rows[i].status.clip && rows[i].status.metrics);
+	rc = mtr_sweep_write(s, dir, rows, count, err, err_size);
+	if (!rc && report) {
+		double t0 = tl_clock_s();
+		sty_report_desc rd = {.dir = dir, .spec = s, .rows = rows, .count = count, .study = study,
+				      .jnd_metric = jnd_metric};
+		rc = sty_report_write(&rd, report_path, report_path_size, err, err_size);
+		if (!rc && !quiet)
+			fprintf(stderr, "taslab: report written in %.1f s\n", tl_clock_s() - t0);
+	}
+	free(rows);
+	return rc;
+}
+
+/* ------------------------------------------------------------------ sweep */
+
+static const cli_opt sweep_options[] = {
+	{.name = "scenes", .arg = "LIST",
+	 .help = "built-in scene names or scene files, comma-separated (e.g. calm,moderate,dynamic)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, scenes)},
+	{.name = "cameras", .arg = "LIST",
+	 .help = "camera paths: all (default), or names (each in every scene) and SCENE/CAMERA entries",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, cameras)},
+	{.name = "variants", .arg = "LIST",
+	 .help = "variants, comma-separated, ref among them (e.g. ref,tfr@2,tfr@8,tarc@8,rrc/4; see 'taslab render --help')",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, variants)},
+	{.name = "methods", .arg = "LIST",
+	 .help = "also every variant of these methods (or all available ones) at --thresholds and --periods, plus ref",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, methods)},
+	{.name = "thresholds", .arg = "LIST",
+	 .help = "T values for --methods (e.g. 2,4,8,16,32,64)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, thresholds)},
+	{.name = "periods", .arg = "LIST",
+	 .help = "period values for --methods (e.g. 2,4,8)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, periods)},
+	{.name = "frames", .arg = "A:B",
+	 .help = "frames A..B-1 of every scene; also A, :B, A: (default: each scene's whole clip)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, frames)},
+	{.name = "size", .arg = "WxH",
+	 .help = "frame size (default 960x540)",
+	 .type = CLI_SIZE, .offset = offsetof(sweep_opts, size)},
+	{.name = "fps", .arg = "F",
+	 .help = "frame rate (default: each scene's)",
+	 .type = CLI_DOUBLE, .offset = offsetof(sweep_opts, fps), .lo = 1, .hi = 1000},
+	{.name = "out", .arg = "SWEEP",
+	 .help = "the sweep folder (runs/, clips/, metrics/, summary.csv, table1.md, report/)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, out)},
+	{.name = "baseline", .arg = "VARIANT",
+	 .help = "variant the shaded-sample reductions are relative to (default ref; the paper's Table 1: sa)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, baseline)},
+	{.name = "metrics", .arg = "LIST",
+	 .help = "metrics against ref: maxrgb,psnr,ssim,flicker,flip or all (default)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, metrics)},
+	{.name = "ppd", .arg = "F",
+	 .help = "FLIP pixels per degree (default 67.0206)",
+	 .type = CLI_DOUBLE, .offset = offsetof(sweep_opts, ppd), .lo = 1e-3, .hi = 1000},
+	{.name = "jobs", .arg = "N",
+	 .help = "runs at a time on this machine, each in its own process (default 1)",
+	 .type = CLI_UINT, .offset = offsetof(sweep_opts, jobs), .lo = 1, .hi = 256},
+	{.name = "slurm", .arg = NULL,
+	 .help = "submit the incomplete runs as a Slurm job array (one task per run) and a dependent report job",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, slurm)},
+	{.name = "slurm-opts", .arg = "\"OPTS\"",
+	 .help = "options passed to both sbatch calls (e.g. \"--partition=gpu --time=2:00:00\")",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, slurm_opts)},
+	{.name = "slurm-dry-run", .arg = NULL,
+	 .help = "print the batch scripts and sbatch commands instead of submitting",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, slurm_dry_run)},
+	{.name = "task", .arg = "I",
+	 .help = "run only entry I of the plan (what each Slurm array task and local job runs)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, task)},
+	{.name = "no-report", .arg = NULL,
+	 .help = "skip report/index.html (summary.csv and table1.md are still written)",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, no_report)},
+	{.name = "quiet", .arg = NULL,
+	 .help = "no progress output",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, quiet)},
+	{.name = "device", .arg = "D",
+	 .help = "Vulkan device for every run: index, name substring, or 'lavapipe' (default: a GPU if present)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, device)},
+	{.name = "validation", .arg = NULL,
+	 .help = "every run with the Khronos validation layer; any message fails the run",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, validation)},
+	{.name = "ocio-config", .arg = "F",
+	 .help = "OpenColorIO config for the display transform (default: $OCIO, else the built-in ACES 1.0 SDR-video)",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, ocio_config)},
+	{.name = "display", .arg = "D",
+	 .help = "display of that config",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, display)},
+	{.name = "view", .arg = "V",
+	 .help = "view of that display",
+	 .type = CLI_STRING, .offset = offsetof(sweep_opts, view)},
+	{0},
+};
+
+/* Options that change what is swept: refused together with a resolved SWEEP/sweep.json. */
+static bool changes_spec(const sweep_opts *o)
+{
+	return o->scenes || o->cameras || o->variants || o->methods || o->thresholds || o->periods || o->frames ||
+	       o->size[0] || o->fps > 0 || o->baseline || o->metrics || o->ppd > 0 || o->device || o->validation ||
+	       o->ocio_config || o->display || o->view;
+}
+
+static int sweep_validate(void *opts, cli_ctx *ctx)
+{
+	sweep_opts *o = opts;
+	if (o->task) {
+		uint64_t t;
+		if (cli_parse_uint(o->task, "--task", 0, 1u << 30, &t, ctx->err, sizeof ctx->err))
+			return TL_ERR_ARG;
+		if (!ctx->npos)
+			return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--task needs the sweep's SWEEP/sweep.json");
+	}
+	if ((o->slurm || o->slurm_dry_run) && o->task)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--slurm and --task exclude each other");
+	if (o->slurm_opts && !o->slurm && !o->slurm_dry_run)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--slurm-opts goes with --slurm or --slurm-dry-run");
+	if (!ctx->npos && !o->scenes)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"give a sweep file or --scenes, --variants and --out (see 'taslab sweep --help')");
+	return TL_OK;
+}
+
+/* A folder that exists, holds something and is not a sweep: refused, a sweep never mixes into other files. */
+static bool foreign_folder(const char *dir)
+{
+	DIR *d = opendir(dir);
+	if (!d)
+		return false;
+	struct dirent *e;
+	bool other = false;
+	while ((e = readdir(d)))
+		if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+			other = true;
+	closedir(d);
+	return other;
+}
+
+static int sweep_main(void *opts, cli_ctx *ctx)
+{
+	sweep_opts *o = opts;
+	char *err = ctx->err;
+	size_t err_size = sizeof ctx->err;
+	sweep_request *req = calloc(1, sizeof *req);
+	sweep_spec *spec = calloc(1, sizeof *spec), *old = calloc(1, sizeof *old);
+	char dir[TL_PATH_MAX], path[TL_PATH_MAX + 32], what[512];
+	int rc = req && spec && old ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	const char *file = ctx->npos ? ctx->pos[0] : NULL;
+	bool resolved = false;
+	if (!rc && file) {
+		/* SWEEP/sweep.json (resolved): resume that sweep, in its folder */
+		if (sweep_spec_read(file, spec, what, sizeof what) == 0) {
+			resolved = true;
+			const char *slash = strrchr(file, '/');
+			snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - file) : 1, slash ? file : ".");
+			if (changes_spec(o) || o->out)
+				rc = tl_error(err, err_size, TL_ERR_ARG,
+					      "%s is a resolved sweep: options that change it cannot be added (write a sweep file)",
+					      file);
+		} else {
+			rc = sweep_request_read(file, req, err, err_size);
+		}
+	}
+	if (!rc && o->task) { /* one run of the plan, in this process */
+		if (!resolved)
+			rc = tl_error(err, err_size, TL_ERR_ARG, "--task needs a resolved SWEEP/sweep.json, not %s", file);
+		uint64_t t = 0;
+		if (!rc)
+			rc = cli_parse_uint(o->task, "--task", 0, sweep_run_count(spec) - 1, &t, err, err_size);
+		const char *fd_env = getenv("TASLAB_SWEEP_PROGRESS_FD");
+		bool deferred;
+		if (!rc)
+			rc = cli_sweep_task(spec, dir, (size_t)t, fd_env ? atoi(fd_env) : -1, ctx->command_line, &deferred, err,
+					    err_size);
+		goto done;
+	}
+	if (!rc && !resolved) {
+		rc = cli_sweep_request_from_opts(o, req, err, err_size);
+		if (!rc && !req->out[0])
+			rc = tl_error(err, err_size, TL_ERR_ARG, "--out SWEEP is required (or \"out\" in the sweep file)");
+		if (!rc)
+			rc = cli_sweep_resolve(req, spec, err, err_size);
+		snprintf(dir, sizeof dir, "%s", req->out);
+	}
+	if (rc)
+		goto done;
+	/* The folder: new, empty, or holding this very sweep. */
+	snprintf(path, sizeof path, "%s/sweep.json", dir);
+	if (tl_is_file(dir)) {
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s is a file (give a folder)", dir);
+	} else if (tl_is_file(path)) {
+		if ((rc = sweep_spec_read(path, old, err, err_size)))
+			goto done;
+		if (sweep_spec_compare(old, spec, what, sizeof what))
+			rc = tl_error(err, err_size, TL_ERR_ARG,
+				      "%s holds a different sweep (%s): use another --out, or 'taslab sweep %s' to resume it", dir,
+				      what, path);
+	} else if (foreign_folder(dir)) {
+		rc = tl_error(err, err_size, TL_ERR_ARG, "%s exists and is not a sweep folder (no sweep.json): use another --out",
+			      dir);
+	}
+	if (rc)
+		goto done;
+	if (!tl_is_file(path) &&
+	    ((rc = tl_mkdirs(dir, err, err_size)) || (rc = sweep_spec_write(path, spec, err, err_size))))
+		goto done;
+	size_t n = sweep_run_count(spec);
+	if (o->slurm || o->slurm_dry_run) {
+		rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
+		goto done;
+	}
+	unsigned jobs = o->jobs ? o->jobs : req->jobs ? req->jobs : 1;
+	size_t failed = 0, incomplete = 0;
+	double t0 = tl_clock_s();
+	rc = cli_sweep_local(spec, dir, jobs, o->quiet, &failed, err, err_size);
+	if (rc)
+		goto done;
+	char report[TL_PATH_MAX];
+	if ((rc = cli_sweep_finish(spec, dir, NULL, NULL, !o->no_report, o->quiet, &incomplete, report, sizeof report, err,
+				   err_size)))
+		goto done;
+	if (!o->quiet)
+		fprintf(stderr, "taslab sweep: %zu of %zu runs complete in %.1f s -> %s/summary.csv, table1.md%s%s\n",
+			n - incomplete, n, tl_clock_s() - t0, dir, report[0] ? ", " : "", report);
+	printf("%s\n", report[0] ? report : path);
+	if (incomplete)
+		rc = tl_error(err, err_size, TL_ERR_INCOMPLETE,
+			      "%zu of %zu runs failed or are incomplete (their logs: %s/logs/); run the same command again to "
+			      "retry them",
+			      incomplete, n, dir);
+done:
+	free(req);
+	free(spec);
+	free(old);
+	return rc;
+}
+
+static void sweep_help(FILE *out)
+{
+	fprintf(out, "\nsweep file (JSON; options given on the command line override it):\n"
+		     "  {\"scenes\": [\"calm\", \"moderate\"], \"cameras\": \"all\", \"variants\": [\"ref\", \"tfr@8\", \"rrc/4\"],\n"
+		     "   \"methods\": [\"tarc\"], \"thresholds\": [4, 16], \"periods\": [4], \"frames\": \"0:300\",\n"
+		     "   \"size\": \"960x540\", \"out\": \"sweeps/s1\", \"jobs\": 2}\n"
+		     "  keys: scenes cameras variants methods thresholds periods frames size fps out baseline metrics ppd\n"
+		     "        device ocio_config display view validation jobs (paths relative to the file's folder)\n"
+		     "\nresume: run the same command again, or 'taslab sweep SWEEP/sweep.json': complete runs (manifest.json)\n"
+		     "are kept, the rest is redone. Exit status 0 when every run completed, 1 when some failed.\n");
+}
+
+const cli_command cli_cmd_sweep = {
+	.name = "sweep",
+	.summary = "render, score and report a sweep of scenes x camera paths x variants (the main job)",
+	.synopsis = "taslab sweep --scenes LIST --variants LIST --out SWEEP [options]\n"
+		    "       taslab sweep SWEEP_FILE.json [options]      (a sweep file, or SWEEP/sweep.json to resume)",
+	.description = "For every scene x camera path x variant: renders a run (SWEEP/runs/SCENE/CAMERA/ID/), its clip\n"
+		       "(SWEEP/clips/), and its metrics against the ref run of the same scene and path (SWEEP/metrics/);\n"
+		       "then SWEEP/summary.csv, SWEEP/table1.md and SWEEP/report/index.html (opens from disk). The\n"
+		       "resolved sweep is written to SWEEP/sweep.json first. --jobs N runs N renders at a time; --slurm\n"
+		       "submits a job array instead. Prints the report's path on stdout.",
+	.options = sweep_options,
+	.opts_size = sizeof(sweep_opts),
+	.validate = sweep_validate,
+	.max_pos = 1,
+	.pos_help = "SWEEP_FILE",
+	.run = sweep_main,
+	.help_extra = sweep_help,
+};
+
+/* ------------------------------------------------------------------ report */
+
+static const cli_opt report_options[] = {
+	{.name = "study", .arg = "STUDY.db",
+	 .help = "add the study's Q, p_ref and JND per condition (method, T, period, scene, camera) beside the metrics",
+	 .type = CLI_STRING, .offset = offsetof(report_opts, study)},
+	{.name = "jnd-against", .arg = "COLUMN",
+	 .help = "summary.csv column to plot the JND against (default flip_mean; e.g. maxrgb_p99, exceed_T, flicker_mean)",
+	 .type = CLI_STRING, .offset = offsetof(report_opts, jnd_metric)},
+	{.name = "quiet", .arg = NULL,
+	 .help = "no progress output",
+	 .type = CLI_FLAG, .offset = offsetof(report_opts, quiet)},
+	{0},
+};
+
+static int report_validate(void *opts, cli_ctx *ctx)
+{
+	report_opts *o = opts;
+	if (o->jnd_metric && !sty_report_metric_known(o->jnd_metric))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"--jnd-against: '%s' is not a numeric summary.csv column (e.g. flip_mean, maxrgb_p99, exceed_T)",
+				o->jnd_metric);
+	if (o->study && !tl_is_file(o->study))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--study %s: no such file", o->study);
+	return TL_OK;
+}
+
+static int report_main(void *opts, cli_ctx *ctx)
+{
+	report_opts *o = opts;
+	const char *dir = ctx->pos[0];
+	char path[TL_PATH_MAX + 32], report[TL_PATH_MAX];
+	sweep_spec *spec = calloc(1, sizeof *spec);
+	if (!spec)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_NOMEM, "out of memory");
+	snprintf(path, sizeof path, "%s/sweep.json", dir);
+	size_t incomplete = 0;
+	int rc = tl_is_file(path) ? sweep_spec_read(path, spec, ctx->err, sizeof ctx->err)
+				  : tl_error(ctx->err, sizeof ctx->err, TL_ERR_INPUT, "%s is not a sweep folder (no sweep.json)", dir);
+	if (!rc)
+		rc = cli_sweep_finish(spec, dir, o->study, o->jnd_metric, true, o->quiet, &incomplete, report, sizeof report,
+				      ctx->err, sizeof ctx->err);
+	if (!rc) {
+		printf("%s\n", report);
+		if (incomplete)
+			rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_INCOMPLETE,
+				      "report written, but %zu of %zu runs are incomplete (rerun 'taslab sweep %s')", incomplete,
+				      sweep_run_count(spec), path);
+	}
+	free(spec);
+	return rc;
+}
+
+const cli_command cli_cmd_report = {
+	.name = "report",
+	.summary = "rebuild a sweep's summary.csv, table1.md and report (optionally with a study's results)",
+	.synopsis = "taslab report SWEEP [--study STUDY.db] [--jnd-against COLUMN]",
+	.description = "Reads SWEEP/sweep.json, computes comparisons still missing for complete runs, and writes\n"
+		       "SWEEP/summary.csv, SWEEP/table1.md and SWEEP/report/index.html. With --study, the study's tally\n"
+		       "(Q, p_ref, JND with 95% intervals) is joined per condition and the JND plotted against a metric.\n"
+		       "Exit status 1 when runs of the sweep are incomplete (the report is written all the same).",
+	.options = report_options,
+	.opts_size = sizeof(report_opts),
+	.validate = report_validate,
+	.min_pos = 1,
+	.max_pos = 1,
+	.pos_help = "SWEEP (a sweep folder)",
+	.run = report_main,
+};

@@ -1,0 +1,49 @@
+/* sweep_cli.h (private to the CLI) — `taslab sweep` and `taslab report` (DESIGN section 9): resolving a sweep request
+ * against the scene files and the method registry, running one run of the plan (render + clip + metrics), the local
+ * job runner, Slurm submission, and the closing tables and report. */
+#ifndef TASLAB_SWEEP_CLI_H
+#define TASLAB_SWEEP_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "commands.h"
+#include "taslab/sweep.h"
+
+/* Overlays the options given on the command line onto `r` (a request read from a sweep file, or zeroed).
+ * TL_ERR_ARG for malformed lists. */
+int cli_sweep_request_from_opts(const sweep_opts *o, sweep_request *r, char *err, size_t err_size);
+
+/* Resolves a request into a spec: scenes loaded (names, paths, cameras and their motion, frame range, fps), variants
+ * from the method registry (methods x thresholds x periods expanded; ref required), baseline, metric list and display
+ * transform checked. Nothing is written. TL_ERR_ARG / TL_ERR_INPUT with one line naming the bad entry. */
+int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t err_size);
+
+/* Runs plan entry `index` of the sweep in `dir` in this process: renders the run unless it is complete, encodes its
+ * clip unless present, and compares it with its ref run unless done or the ref run is not complete yet (then the
+ * comparison is left for later: *deferred = true). Progress: one byte per rendered frame to `progress_fd` (-1: none). */
+int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progress_fd, const char *command_line,
+		   bool *deferred, char *err, size_t err_size);
+
+/* The path of the running taslab binary (/proc/self/exe): what the local runner and Slurm scripts execute. */
+int cli_sweep_self(char *out, size_t out_size, char *err, size_t err_size);
+
+/* Runs every incomplete run of the plan, `jobs` at a time, each in its own process (`taslab sweep DIR/sweep.json
+ * --task I`, output into its log file), with one progress line. *failed receives the number of runs that did not
+ * complete. TL_ERR_INTERRUPTED after SIGINT/SIGTERM (children stopped, complete runs kept). */
+int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool quiet, size_t *failed, char *err,
+		    size_t err_size);
+
+/* Writes the Slurm batch scripts into DIR/slurm/ (a job array over the incomplete runs, one task per run, and a report
+ * job depending on it) and submits them with sbatch, `slurm_opts` passed to both; `dry_run` prints the scripts and
+ * the sbatch commands instead. */
+int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts, bool dry_run, char *err,
+		    size_t err_size);
+
+/* The closing step (and `taslab report`): clips and comparisons still missing for complete runs are made, then
+ * DIR/summary.csv, DIR/table1.md and DIR/report/index.html (with the study's tallies when `study` is given).
+ * *incomplete: runs without run, clip or metrics at the end. */
+int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric, bool report,
+		     bool quiet, size_t *incomplete, char *report_path, size_t report_path_size, char *err, size_t err_size);
+
+#endif

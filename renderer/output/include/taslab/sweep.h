@@ -1,0 +1,184 @@
+/* sweep.h — sweep files and the layout of a sweep folder (DESIGN section 9).
+ *
+ * Two forms of one description:
+ *  - a sweep *request*: what a user writes (a JSON sweep file, or the options of `taslab sweep`): scene names or
+ *    paths, camera path names or "all", variant tokens, or methods x thresholds x periods to expand, frames as
+ *    "A:B", the size, ... Names are not checked here (the CLI resolves them against the scene files and the
+ *    method registry, which this layer cannot see);
+ *  - a resolved sweep *spec*: SWEEP/sweep.json, written by `taslab sweep` before anything is rendered: every scene
+ *    with its file, frame range, fps and camera paths (with their motion class), every variant with its id, method
+ *    name, T and period, the size, the display transform and the metric settings. Rerunning `taslab sweep` on it
+ *    (or on the same request) resumes the sweep; `taslab report`, Slurm tasks and the local job runner read it.
+ *
+ * Sweep file (request) keys — anything else is refused with one line naming the key:
+ *   scenes     ["calm", "scenes/x.json", ...]            required
+ *   cameras    "all" (default) or ["walk", "calm/robots", ...]: a bare name must exist in every scene,
+ *              SCENE/CAMERA picks a path of one scene
+ *   variants   ["ref", "tfr@8", "rrc/4", "tarc-oracle@8", ...]
+ *   methods    "all" or ["tfr", "tarc", ...]: expanded with thresholds / periods (ref always included), added to
+ *   thresholds [4, 16]   periods [4]                       the variants
+ *   frames     "A:B" | "A" | ":B" | "A:" (default the whole clip of each scene)
+ *   size       "WxH" or [W, H] (default 960x540)      fps  number (default each scene's)
+ *   out        the sweep folder (relative to the sweep file's folder)
+ *   baseline   variant the reductions are relative to (default "ref")
+ *   metrics    "all" or "maxrgb,psnr,..."           ppd  FLIP pixels per degree
+ *   device, ocio_config, display, view, validation (bool), jobs (whole number)
+ * Relative scene paths are relative to the sweep file's folder too.
+ *
+ * Folder layout (index i of the plan: all `ref` runs first, scene-major, then every other run scene-major,
+ * camera, variant — the order Slurm array task ids and `--task I` use):
+ *   SWEEP/sweep.json                       the spec
+ *   SWEEP/runs/<scene>/<camera>/<id>/      run folder (run.h); complete iff manifest.json exists
+ *   SWEEP/clips/<scene>/<camera>/<id>.webm the run's clip (clip.h), written atomically
+ *   SWEEP/metrics/<scene>/<camera>/<id>/   `metrics diff` against the ref run of the same scene and path;
+ *                                          complete iff summary.json exists (written last)
+ *   SWEEP/logs/<scene>/<camera>/<id>.log   what the run's process printed
+ *   SWEEP/summary.csv, SWEEP/table1.md, SWEEP/report/index.html
+ *
+ * Errors: negative tl_err, one line in `err`. The structs are plain data with fixed arrays (about 100 KB:
+ * allocate them on the heap).
+ */
+#ifndef TASLAB_SWEEP_H
+#define TASLAB_SWEEP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/tl_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SWEEP_MAX_SCENES 16
+#define SWEEP_MAX_CAMERAS 16
+#define SWEEP_MAX_VARIANTS 64
+#define SWEEP_MAX_VALUES 16   /* thresholds, periods */
+#define SWEEP_NAME_MAX 64
+#define SWEEP_PATH_MAX 1024
+
+/* ---- request ---- */
+
+/* Which keys a request sets (so command-line options can override a file's). */
+enum {
+	SWEEP_SET_SCENES = 1u << 0, SWEEP_SET_CAMERAS = 1u << 1, SWEEP_SET_VARIANTS = 1u << 2,
+	SWEEP_SET_METHODS = 1u << 3, SWEEP_SET_THRESHOLDS = 1u << 4, SWEEP_SET_PERIODS = 1u << 5,
+	SWEEP_SET_FRAMES = 1u << 6, SWEEP_SET_SIZE = 1u << 7, SWEEP_SET_FPS = 1u << 8, SWEEP_SET_OUT = 1u << 9,
+	SWEEP_SET_BASELINE = 1u << 10, SWEEP_SET_METRICS = 1u << 11, SWEEP_SET_PPD = 1u << 12,
+	SWEEP_SET_DEVICE = 1u << 13, SWEEP_SET_OCIO = 1u << 14, SWEEP_SET_DISPLAY = 1u << 15, SWEEP_SET_VIEW = 1u << 16,
+	SWEEP_SET_VALIDATION = 1u << 17, SWEEP_SET_JOBS = 1u << 18,
+};
+
+typedef struct sweep_request {
+	uint32_t set;                                   /* SWEEP_SET_* */
+	char scenes[SWEEP_MAX_SCENES][SWEEP_PATH_MAX];  /* names or paths */
+	size_t scene_count;
+	bool cameras_all;
+	char cameras[SWEEP_MAX_CAMERAS * 4][2 * SWEEP_NAME_MAX]; /* NAME or SCENE/NAME */
+	size_t camera_count;
+	char variants[SWEEP_MAX_VARIANTS][SWEEP_NAME_MAX];
+	size_t variant_count;
+	bool methods_all;
+	char methods[SWEEP_MAX_VARIANTS][SWEEP_NAME_MAX];
+	size_t method_count;
+	double thresholds[SWEEP_MAX_VALUES];
+	size_t threshold_count;
+	uint32_t periods[SWEEP_MAX_VALUES];
+	size_t period_count;
+	char frames[64];
+	uint32_t width, height;
+	double fps, ppd;
+	char out[SWEEP_PATH_MAX], baseline[SWEEP_NAME_MAX], metrics[128];
+	char device[256], ocio_config[SWEEP_PATH_MAX], display[128], view[128];
+	bool validation;
+	uint32_t jobs;
+} sweep_request;
+
+/* Reads a sweep file (request form). Unknown keys, wrong types, empty lists, lists longer than the limits
+ * above and malformed values are TL_ERR_INPUT naming the file and the key. */
+int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err_size);
+
+/* ---- resolved spec (SWEEP/sweep.json) ---- */
+
+typedef struct sweep_camera {
+	char name[SWEEP_NAME_MAX];
+	char motion[16];          /* "stationary" | "moving" (the study's Camera factor) */
+} sweep_camera;
+
+typedef struct sweep_scene {
+	char name[SWEEP_NAME_MAX];
+	char path[SWEEP_PATH_MAX]; /* absolute path of the scene file */
+	uint32_t first, end;       /* frames [first, end) */
+	double fps;
+	sweep_camera cameras[SWEEP_MAX_CAMERAS];
+	size_t camera_count;
+} sweep_scene;
+
+typedef struct sweep_variant {
+	char variant[SWEEP_NAME_MAX]; /* canonical token "tarc-oracle@8" */
+	char id[SWEEP_NAME_MAX];      /* folder name "tarc-oracle-T8" */
+	char method[32];              /* the variant's method name "tarc-oracle" */
+	double T;                     /* NAN without a threshold */
+	uint32_t period;              /* 0 without a period */
+} sweep_variant;
+
+typedef struct sweep_spec {
+	sweep_scene scenes[SWEEP_MAX_SCENES];
+	size_t scene_count;
+	sweep_variant variants[SWEEP_MAX_VARIANTS]; /* "ref" among them */
+	size_t variant_count;
+	uint32_t width, height;
+	char baseline[SWEEP_NAME_MAX];  /* a variant token of the list */
+	char metrics[128];              /* metric list for `metrics diff` ("all") */
+	double ppd;                     /* FLIP pixels per degree */
+	char device[256];               /* --device as given ("" = the default choice) */
+	bool validation;
+	char ocio_config[SWEEP_PATH_MAX], display[128], view[128]; /* as given ("" = default) */
+	char display_transform[256];    /* the resolved transform's name (colour_name) */
+} sweep_spec;
+
+int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size);
+/* TL_ERR_INPUT naming the file and what is wrong (strict: unknown keys, types, ranges, duplicate ids). */
+int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size);
+/* 0 when a and b describe the same sweep (same runs, same rendering and metric settings); otherwise 1 with the
+ * first difference in `what` ("variants: tfr@8 vs tfr@16"). */
+int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t what_size);
+
+/* ---- the plan ---- */
+
+typedef struct sweep_run {
+	size_t index;
+	size_t scene, camera, variant;  /* indices into the spec */
+	size_t ref_index;               /* plan index of the ref run of the same scene and camera */
+	bool is_ref;
+} sweep_run;
+
+/* Number of runs: sum over scenes of cameras x variants. */
+size_t sweep_run_count(const sweep_spec *s);
+/* Run `index` of the plan (see the order above). TL_ERR_ARG when out of range. */
+int sweep_run_at(const sweep_spec *s, size_t index, sweep_run *out);
+
+typedef enum sweep_path_kind {
+	SWEEP_PATH_RUN = 0,  /* SWEEP/runs/<scene>/<camera>/<id> */
+	SWEEP_PATH_CLIP,     /* SWEEP/clips/<scene>/<camera>/<id>.webm */
+	SWEEP_PATH_METRICS,  /* SWEEP/metrics/<scene>/<camera>/<id> */
+	SWEEP_PATH_LOG,      /* SWEEP/logs/<scene>/<camera>/<id>.log */
+} sweep_path_kind;
+
+/* The path of one of a run's outputs under `dir` (the sweep folder). */
+void sweep_run_path(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_path_kind kind, char *out,
+		    size_t out_size);
+
+/* What exists of a run: the run is complete (manifest.json), its clip, its metrics (summary.json). */
+typedef struct sweep_status {
+	bool run, clip, metrics;
+} sweep_status;
+void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st);
+/* Run `index` of the plan has everything: run, clip and metrics. */
+bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,600 @@
+/* sweep.c — sweep files (request and resolved spec), their comparison, the plan and the folder layout (sweep.h). */
+#include "taslab/sweep.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
+
+/* ------------------------------------------------------------------ helpers */
+
+typedef struct ctx {
+	const char *file;
+	char *err;
+	size_t err_size;
+} ctx;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int bad(const ctx *c, const char *key, const char *fmt, ...)
+{
+	char why[512];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(why, sizeof why, fmt, ap);
+	va_end(ap);
+	return tl_error(c->err, c->err_size, TL_ERR_INPUT, "%s: \"%s\": %s", c->file, key, why);
+}
+
+/* A string value that fits `n` bytes (with its NUL) and holds no control characters. */
+static int get_string(const ctx *c, const char *key, json_t *v, char *dst, size_t n)
+{
+	const char *s = json_string_value(v);
+	if (!s)
+		return bad(c, key, "must be a string");
+	size_t len = strlen(s);
+	if (len != json_string_length(v))
+		return bad(c, key, "holds a NUL character");
+	if (!len)
+		return bad(c, key, "must not be empty");
+	if (len >= n)
+		return bad(c, key, "longer than %zu characters", n - 1);
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++)
+		if (*p < 0x20 || *p == 0x7f)
+			return bad(c, key, "holds a control character");
+	memcpy(dst, s, len + 1);
+	return TL_OK;
+}
+
+/* `s` for a message: control characters as '?', at most 64 characters (keys come from untrusted files). */
+static const char *printable(const char *s, char *buf, size_t n)
+{
+	size_t i = 0;
+	for (; s[i] && i + 1 < n && i < 64; i++)
+		buf[i] = (unsigned char)s[i] < 0x20 || s[i] == 0x7f ? '?' : s[i];
+	buf[i] = 0;
+	return buf;
+}
+
+/* A name usable as one folder name: no '/', not "." or "..", not starting with '.'. */
+static bool safe_name(const char *s)
+{
+	return *s && *s != '.' && !strchr(s, '/') && !strchr(s, '\\');
+}
+
+/* "dir of file" + rel, unless rel is absolute. */
+static void relative_to(const char *file, const char *rel, char *out, size_t n)
+{
+	const char *slash = strrchr(file, '/');
+	if (rel[0] == '/' || !slash)
+		snprintf(out, n, "%s", rel);
+	else
+		snprintf(out, n, "%.*s/%s", (int)(slash - file), file, rel);
+}
+
+/* A list of strings (or one string when `one_ok`) into fixed rows. */
+static int get_string_list(const ctx *c, const char *key, json_t *v, char *rows, size_t row_size, size_t max,
+			   size_t *count, bool one_ok)
+{
+	*count = 0;
+	if (one_ok && json_is_string(v)) {
+		*count = 1;
+		return get_string(c, key, v, rows, row_size);
+	}
+	if (!json_is_array(v))
+		return bad(c, key, "must be a list of strings");
+	if (!json_array_size(v))
+		return bad(c, key, "must not be empty");
+	if (json_array_size(v) > max)
+		return bad(c, key, "at most %zu entries", max);
+	size_t i;
+	json_t *e;
+	json_array_foreach(v, i, e) {
+		int rc = get_string(c, key, e, rows + i * row_size, row_size);
+		if (rc)
+			return rc;
+	}
+	*count = json_array_size(v);
+	return TL_OK;
+}
+
+static int get_number(const ctx *c, const char *key, json_t *v, double lo, double hi, double *out)
+{
+	if (!json_is_number(v) || !isfinite(json_number_value(v)) || json_number_value(v) < lo || json_number_value(v) > hi)
+		return bad(c, key, "must be a number in [%g, %g]", lo, hi);
+	*out = json_number_value(v);
+	return TL_OK;
+}
+
+static int get_uint(const ctx *c, const char *key, json_t *v, json_int_t lo, json_int_t hi, uint32_t *out)
+{
+	if (!json_is_integer(v) || json_integer_value(v) < lo || json_integer_value(v) > hi)
+		return bad(c, key, "must be a whole number in [%lld, %lld]", (long long)lo, (long long)hi);
+	*out = (uint32_t)json_integer_value(v);
+	return TL_OK;
+}
+
+static int get_size(const ctx *c, const char *key, json_t *v, uint32_t *w, uint32_t *h)
+{
+	if (json_is_string(v)) {
+		const char *s = json_string_value(v);
+		unsigned a, b;
+		char x, tail;
+		if (sscanf(s, "%u%c%u%c", &a, &x, &b, &tail) == 3 && (x == 'x' || x == 'X') && s[0] >= '0' && s[0] <= '9' &&
+		    a >= 1 && b >= 1 && a <= 16384 && b <= 16384 && !strchr(s, '+') && !strchr(s, ' ')) {
+			*w = a, *h = b;
+			return TL_OK;
+		}
+	} else if (json_is_array(v) && json_array_size(v) == 2) {
+		int rc = get_uint(c, key, json_array_get(v, 0), 1, 16384, w);
+		return rc ? rc : get_uint(c, key, json_array_get(v, 1), 1, 16384, h);
+	}
+	return bad(c, key, "must be \"WxH\" or [W, H] with each 1..16384");
+}
+
+/* ------------------------------------------------------------------ request */
+
+int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err_size)
+{
+	memset(r, 0, sizeof *r);
+	json_t *j = NULL;
+	int rc = tl_json_read(path, &j, err, err_size);
+	if (rc)
+		return rc;
+	ctx c = {path, err, err_size};
+	if (!json_is_object(j)) {
+		json_decref(j);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: a sweep file is a JSON object (see 'taslab sweep --help')", path);
+	}
+	const char *key;
+	json_t *v;
+	json_object_foreach(j, key, v) {
+		if (!strcmp(key, "scenes")) {
+			rc = get_string_list(&c, key, v, &r->scenes[0][0], sizeof r->scenes[0], SWEEP_MAX_SCENES, &r->scene_count,
+					     false);
+			for (size_t i = 0; !rc && i < r->scene_count; i++) {
+				/* a path (it has a '/' or a file extension) is relative to the sweep file */
+				if (strchr(r->scenes[i], '/') || strstr(r->scenes[i], ".json") || strstr(r->scenes[i], ".gltf") ||
+				    strstr(r->scenes[i], ".glb")) {
+					char tmp[SWEEP_PATH_MAX];
+					relative_to(path, r->scenes[i], tmp, sizeof tmp);
+					snprintf(r->scenes[i], sizeof r->scenes[i], "%s", tmp);
+				}
+			}
+			r->set |= SWEEP_SET_SCENES;
+		} else if (!strcmp(key, "cameras")) {
+			if (json_is_string(v) && !strcmp(json_string_value(v), "all"))
+				r->cameras_all = true;
+			else
+				rc = get_string_list(&c, key, v, &r->cameras[0][0], sizeof r->cameras[0],
+						     sizeof r->cameras / sizeof r->cameras[0], &r->camera_count, false);
+			r->set |= SWEEP_SET_CAMERAS;
+		} else if (!strcmp(key, "variants")) {
+			rc = get_string_list(&c, key, v, &r->variants[0][0], sizeof r->variants[0], SWEEP_MAX_VARIANTS,
+					     &r->variant_count, false);
+			r->set |= SWEEP_SET_VARIANTS;
+		} else if (!strcmp(key, "methods")) {
+			if (json_is_string(v) && !strcmp(json_string_value(v), "all"))
+				r->methods_all = true;
+			else
+				rc = get_string_list(&c, key, v, &r->methods[0][0], sizeof r->methods[0], SWEEP_MAX_VARIANTS,
+						     &r->method_count, false);
+			r->set |= SWEEP_SET_METHODS;
+		} else if (!strcmp(key, "thresholds") || !strcmp(key, "periods")) {
+			bool T = key[0] == 't';
+			if (!json_is_array(v) || !json_array_size(v) || json_array_size(v) > SWEEP_MAX_VALUES) {
+				rc = bad(&c, key, "must be a list of 1..%d numbers", SWEEP_MAX_VALUES);
+				break;
+			}
+			size_t i;
+			json_t *e;
+			json_array_foreach(v, i, e) {
+				if (T)
+					rc = get_number(&c, key, e, 1e-6, 255, &r->thresholds[i]);
+				else
+					rc = get_uint(&c, key, e, 1, 1024, &r->periods[i]);
+				if (rc)
+					break;
+			}
+			if (T)
+				r->threshold_count = json_array_size(v), r->set |= SWEEP_SET_THRESHOLDS;
+			else
+				r->period_count = json_array_size(v), r->set |= SWEEP_SET_PERIODS;
+		} else if (!strcmp(key, "frames")) {
+			rc = get_string(&c, key, v, r->frames, sizeof r->frames);
+			r->set |= SWEEP_SET_FRAMES;
+		} else if (!strcmp(key, "size")) {
+			rc = get_size(&c, key, v, &r->width, &r->height);
+			r->set |= SWEEP_SET_SIZE;
+		} else if (!strcmp(key, "fps")) {
+			rc = get_number(&c, key, v, 1, 1000, &r->fps);
+			r->set |= SWEEP_SET_FPS;
+		} else if (!strcmp(key, "ppd")) {
+			rc = get_number(&c, key, v, 1e-3, 1000, &r->ppd);
+			r->set |= SWEEP_SET_PPD;
+		} else if (!strcmp(key, "out")) {
+			char tmp[SWEEP_PATH_MAX];
+			if (!(rc = get_string(&c, key, v, tmp, sizeof tmp)))
+				relative_to(path, tmp, r->out, sizeof r->out);
+			r->set |= SWEEP_SET_OUT;
+		} else if (!strcmp(key, "baseline")) {
+			rc = get_string(&c, key, v, r->baseline, sizeof r->baseline);
+			r->set |= SWEEP_SET_BASELINE;
+		} else if (!strcmp(key, "metrics")) {
+			rc = get_string(&c, key, v, r->metrics, sizeof r->metrics);
+			r->set |= SWEEP_SET_METRICS;
+		} else if (!strcmp(key, "device")) {
+			rc = get_string(&c, key, v, r->device, sizeof r->device);
+			r->set |= SWEEP_SET_DEVICE;
+		} else if (!strcmp(key, "ocio_config")) {
+			char tmp[SWEEP_PATH_MAX];
+			if (!(rc = get_string(&c, key, v, tmp, sizeof tmp)))
+				relative_to(path, tmp, r->ocio_config, sizeof r->ocio_config);
+			r->set |= SWEEP_SET_OCIO;
+		} else if (!strcmp(key, "display")) {
+			rc = get_string(&c, key, v, r->display, sizeof r->display);
+			r->set |= SWEEP_SET_DISPLAY;
+		} else if (!strcmp(key, "view")) {
+			rc = get_string(&c, key, v, r->view, sizeof r->view);
+			r->set |= SWEEP_SET_VIEW;
+		} else if (!strcmp(key, "validation")) {
+			if (!json_is_boolean(v))
+				rc = bad(&c, key, "must be true or false");
+			r->validation = json_is_true(v);
+			r->set |= SWEEP_SET_VALIDATION;
+		} else if (!strcmp(key, "jobs")) {
+			rc = get_uint(&c, key, v, 1, 256, &r->jobs);
+			r->set |= SWEEP_SET_JOBS;
+		} else if (!strcmp(key, "taslab_sweep")) {
+			rc = tl_error(err, err_size, TL_ERR_INPUT,
+				      "%s: a resolved sweep.json, not a sweep file (give it as 'taslab sweep %s' to resume)", path,
+				      path);
+		} else {
+			char pk[80];
+			rc = tl_error(err, err_size, TL_ERR_INPUT,
+				      "%s: unknown key \"%s\" (known: scenes, cameras, variants, methods, thresholds, periods, "
+				      "frames, size, fps, out, baseline, metrics, ppd, device, ocio_config, display, view, "
+				      "validation, jobs)",
+				      path, printable(key, pk, sizeof pk));
+		}
+		if (rc)
+			break;
+	}
+	json_decref(j);
+	return rc;
+}
+
+/* ------------------------------------------------------------------ spec */
+
+static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size)
+{
+	json_t *scenes = json_array(), *variants = json_array();
+	for (size_t i = 0; i < s->scene_count; i++) {
+		const sweep_scene *sc = &s->scenes[i];
+		json_t *cams = json_array();
+		for (size_t k = 0; k < sc->camera_count; k++)
+			json_array_append_new(cams, json_pack("{s:s, s:s}", "name", sc->cameras[k].name, "motion",
+							      sc->cameras[k].motion));
+		json_array_append_new(scenes, json_pack("{s:s, s:s, s:[i,i], s:f, s:o}", "name", sc->name, "path", sc->path,
+							"frames", (int)sc->first, (int)sc->end, "fps", sc->fps, "cameras",
+							cams));
+	}
+	for (size_t i = 0; i < s->variant_count; i++) {
+		const sweep_variant *v = &s->variants[i];
+		json_array_append_new(variants, json_pack("{s:s, s:s, s:s, s:o, s:o}", "variant", v->variant, "id", v->id,
+							  "method", v->method, "T", jnum(v->T), "period",
+							  v->period ? json_integer(v->period) : json_null()));
+	}
+	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
+			      "scenes", scenes, "variants", variants, "size", (int)s->width, (int)s->height, "baseline",
+			      s->baseline, "metrics", s->metrics, "ppd", s->ppd, "device", s->device, "validation",
+			      (int)s->validation, "ocio_config", s->ocio_config, "display", s->display, "view", s->view,
+			      "display_transform", s->display_transform);
+	int rc = tl_json_write(path, j, err, err_size);
+	json_decref(j);
+	return rc;
+}
+
+/* Keys of an object must all be in `known` (NULL-terminated). */
+static int only_keys(const ctx *c, const char *where, json_t *o, const char *const *known)
+{
+	if (!json_is_object(o))
+		return bad(c, where, "must be an object");
+	const char *key;
+	json_t *v;
+	json_object_foreach(o, key, v) {
+		size_t i = 0;
+		while (known[i] && strcmp(known[i], key))
+			i++;
+		char pk[80];
+		if (!known[i])
+			return bad(c, where, "unknown key \"%s\"", printable(key, pk, sizeof pk));
+	}
+	return TL_OK;
+}
+
+/* A string that may be empty (settings "as given"). */
+static int get_string_or_empty(const ctx *c, const char *key, json_t *v, char *dst, size_t n)
+{
+	if (json_is_string(v) && !json_string_length(v)) {
+		dst[0] = 0;
+		return TL_OK;
+	}
+	return get_string(c, key, v, dst, n);
+}
+
+static int read_variant(const ctx *c, json_t *o, sweep_variant *v)
+{
+	static const char *const keys[] = {"variant", "id", "method", "T", "period", NULL};
+	int rc = only_keys(c, "variants", o, keys);
+	json_t *T = json_object_get(o, "T"), *N = json_object_get(o, "period");
+	if (!rc)
+		rc = get_string(c, "variants.variant", json_object_get(o, "variant"), v->variant, sizeof v->variant);
+	if (!rc)
+		rc = get_string(c, "variants.id", json_object_get(o, "id"), v->id, sizeof v->id);
+	if (!rc)
+		rc = get_string(c, "variants.method", json_object_get(o, "method"), v->method, sizeof v->method);
+	if (!rc && !safe_name(v->id))
+		rc = bad(c, "variants.id", "'%s' is not a folder name", v->id);
+	if (!rc && !json_is_null(T))
+		rc = get_number(c, "variants.T", T, 1e-6, 255, &v->T);
+	else if (!rc)
+		v->T = NAN;
+	if (!rc && !json_is_null(N))
+		rc = get_uint(c, "variants.period", N, 1, 1024, &v->period);
+	return rc;
+}
+
+static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
+{
+	static const char *const keys[] = {"name", "path", "frames", "fps", "cameras", NULL};
+	int rc = only_keys(c, "scenes", o, keys);
+	json_t *fr = json_object_get(o, "frames"), *cams = json_object_get(o, "cameras");
+	if (!rc)
+		rc = get_string(c, "scenes.name", json_object_get(o, "name"), sc->name, sizeof sc->name);
+	if (!rc && !safe_name(sc->name))
+		rc = bad(c, "scenes.name", "'%s' is not a folder name", sc->name);
+	if (!rc)
+		rc = get_string(c, "scenes.path", json_object_get(o, "path"), sc->path, sizeof sc->path);
+	if (!rc && (json_array_size(fr) != 2 || get_uint(c, "scenes.frames", json_array_get(fr, 0), 0, 1 << 30, &sc->first) ||
+		    get_uint(c, "scenes.frames", json_array_get(fr, 1), 1, 1 << 30, &sc->end) || sc->end <= sc->first))
+		rc = bad(c, "scenes.frames", "must be [first, end] with first < end");
+	if (!rc)
+		rc = get_number(c, "scenes.fps", json_object_get(o, "fps"), 1, 1000, &sc->fps);
+	if (!rc && (!json_is_array(cams) || !json_array_size(cams) || json_array_size(cams) > SWEEP_MAX_CAMERAS))
+		rc = bad(c, "scenes.cameras", "must be a list of 1..%d camera paths", SWEEP_MAX_CAMERAS);
+	static const char *const cam_keys[] = {"name", "motion", NULL};
+	for (size_t k = 0; !rc && k < json_array_size(cams); k++) {
+		json_t *e = json_array_get(cams, k);
+		sweep_camera *cam = &sc->cameras[k];
+		if (!(rc = only_keys(c, "scenes.cameras", e, cam_keys)) &&
+		    !(rc = get_string(c, "scenes.cameras.name", json_object_get(e, "name"), cam->name, sizeof cam->name)) &&
+		    !(rc = get_string(c, "scenes.cameras.motion", json_object_get(e, "motion"), cam->motion,
+				      sizeof cam->motion))) {
+			if (!safe_name(cam->name))
+				rc = bad(c, "scenes.cameras.name", "'%s' is not a folder name", cam->name);
+			else if (strcmp(cam->motion, "stationary") && strcmp(cam->motion, "moving"))
+				rc = bad(c, "scenes.cameras.motion", "must be stationary or moving");
+			for (size_t q = 0; !rc && q < k; q++)
+				if (!strcmp(sc->cameras[q].name, cam->name))
+					rc = bad(c, "scenes.cameras", "'%s' is listed twice", cam->name);
+		}
+		sc->camera_count = k + 1;
+	}
+	return rc;
+}
+
+int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
+{
+	memset(s, 0, sizeof *s);
+	json_t *j = NULL;
+	int rc = tl_json_read(path, &j, err, err_size);
+	if (rc)
+		return rc;
+	ctx c = {path, err, err_size};
+	static const char *const keys[] = {"taslab_sweep", "scenes", "variants", "size", "baseline", "metrics", "ppd",
+					   "device", "validation", "ocio_config", "display", "view", "display_transform",
+					   NULL};
+	json_t *scenes = json_object_get(j, "scenes"), *variants = json_object_get(j, "variants");
+	if (!json_is_object(j) || json_integer_value(json_object_get(j, "taslab_sweep")) != 1)
+		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab sweep.json (no \"taslab_sweep\": 1)", path);
+	if (!rc)
+		rc = only_keys(&c, "sweep.json", j, keys);
+	if (!rc && (!json_is_array(scenes) || !json_array_size(scenes) || json_array_size(scenes) > SWEEP_MAX_SCENES))
+		rc = bad(&c, "scenes", "must be a list of 1..%d scenes", SWEEP_MAX_SCENES);
+	for (size_t i = 0; !rc && i < json_array_size(scenes); i++) {
+		rc = read_scene(&c, json_array_get(scenes, i), &s->scenes[i]);
+		for (size_t q = 0; !rc && q < i; q++)
+			if (!strcmp(s->scenes[q].name, s->scenes[i].name))
+				rc = bad(&c, "scenes", "'%s' is listed twice", s->scenes[i].name);
+		s->scene_count = i + 1;
+	}
+	if (!rc && (!json_is_array(variants) || !json_array_size(variants) || json_array_size(variants) > SWEEP_MAX_VARIANTS))
+		rc = bad(&c, "variants", "must be a list of 1..%d variants", SWEEP_MAX_VARIANTS);
+	bool has_ref = false;
+	for (size_t i = 0; !rc && i < json_array_size(variants); i++) {
+		rc = read_variant(&c, json_array_get(variants, i), &s->variants[i]);
+		for (size_t q = 0; !rc && q < i; q++)
+			if (!strcmp(s->variants[q].id, s->variants[i].id) || !strcmp(s->variants[q].variant, s->variants[i].variant))
+				rc = bad(&c, "variants", "'%s' is listed twice", s->variants[i].variant);
+		has_ref |= !rc && !strcmp(s->variants[i].id, "ref");
+		s->variant_count = i + 1;
+	}
+	if (!rc && !has_ref)
+		rc = bad(&c, "variants", "no ref variant (every run is compared with the ref run of its scene and path)");
+	if (!rc)
+		rc = get_size(&c, "size", json_object_get(j, "size"), &s->width, &s->height);
+	if (!rc)
+		rc = get_string(&c, "baseline", json_object_get(j, "baseline"), s->baseline, sizeof s->baseline);
+	bool baseline_found = false;
+	for (size_t i = 0; !rc && i < s->variant_count; i++)
+		baseline_found |= !strcmp(s->variants[i].variant, s->baseline);
+	if (!rc && !baseline_found)
+		rc = bad(&c, "baseline", "'%s' is not one of the variants", s->baseline);
+	if (!rc)
+		rc = get_string(&c, "metrics", json_object_get(j, "metrics"), s->metrics, sizeof s->metrics);
+	if (!rc)
+		rc = get_number(&c, "ppd", json_object_get(j, "ppd"), 1e-3, 1000, &s->ppd);
+	if (!rc && !json_is_boolean(json_object_get(j, "validation")))
+		rc = bad(&c, "validation", "must be true or false");
+	s->validation = json_is_true(json_object_get(j, "validation"));
+	if (!rc)
+		rc = get_string_or_empty(&c, "device", json_object_get(j, "device"), s->device, sizeof s->device);
+	if (!rc)
+		rc = get_string_or_empty(&c, "ocio_config", json_object_get(j, "ocio_config"), s->ocio_config,
+					 sizeof s->ocio_config);
+	if (!rc)
+		rc = get_string_or_empty(&c, "display", json_object_get(j, "display"), s->display, sizeof s->display);
+	if (!rc)
+		rc = get_string_or_empty(&c, "view", json_object_get(j, "view"), s->view, sizeof s->view);
+	if (!rc)
+		rc = get_string(&c, "display_transform", json_object_get(j, "display_transform"), s->display_transform,
+				sizeof s->display_transform);
+	json_decref(j);
+	return rc;
+}
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int differ(char *what, size_t n, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(what, n, fmt, ap);
+	va_end(ap);
+	return 1;
+}
+
+static bool same_num(double a, double b) { return (isnan(a) && isnan(b)) || a == b; }
+
+int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t n)
+{
+	if (a->scene_count != b->scene_count)
+		return differ(what, n, "%zu scenes vs %zu", a->scene_count, b->scene_count);
+	for (size_t i = 0; i < a->scene_count; i++) {
+		const sweep_scene *x = &a->scenes[i], *y = &b->scenes[i];
+		if (strcmp(x->name, y->name) || strcmp(x->path, y->path))
+			return differ(what, n, "scene %s (%s) vs %s (%s)", x->name, x->path, y->name, y->path);
+		if (x->first != y->first || x->end != y->end)
+			return differ(what, n, "%s: frames %u:%u vs %u:%u", x->name, x->first, x->end, y->first, y->end);
+		if (x->fps != y->fps)
+			return differ(what, n, "%s: fps %g vs %g", x->name, x->fps, y->fps);
+		if (x->camera_count != y->camera_count)
+			return differ(what, n, "%s: %zu camera paths vs %zu", x->name, x->camera_count, y->camera_count);
+		for (size_t k = 0; k < x->camera_count; k++)
+			if (strcmp(x->cameras[k].name, y->cameras[k].name))
+				return differ(what, n, "%s: camera %s vs %s", x->name, x->cameras[k].name, y->cameras[k].name);
+	}
+	if (a->variant_count != b->variant_count)
+		return differ(what, n, "%zu variants vs %zu", a->variant_count, b->variant_count);
+	for (size_t i = 0; i < a->variant_count; i++)
+		if (strcmp(a->variants[i].variant, b->variants[i].variant) || strcmp(a->variants[i].id, b->variants[i].id) ||
+		    !same_num(a->variants[i].T, b->variants[i].T) || a->variants[i].period != b->variants[i].period)
+			return differ(what, n, "variant %s vs %s", a->variants[i].variant, b->variants[i].variant);
+	if (a->width != b->width || a->height != b->height)
+		return differ(what, n, "size %ux%u vs %ux%u", a->width, a->height, b->width, b->height);
+	if (strcmp(a->baseline, b->baseline))
+		return differ(what, n, "baseline %s vs %s", a->baseline, b->baseline);
+	if (strcmp(a->metrics, b->metrics) || a->ppd != b->ppd)
+		return differ(what, n, "metrics %s (ppd %g) vs %s (ppd %g)", a->metrics, a->ppd, b->metrics, b->ppd);
+	if (strcmp(a->device, b->device))
+		return differ(what, n, "device '%s' vs '%s'", a->device, b->device);
+	if (a->validation != b->validation)
+		return differ(what, n, "validation %s vs %s", a->validation ? "on" : "off", b->validation ? "on" : "off");
+	if (strcmp(a->display_transform, b->display_transform) || strcmp(a->ocio_config, b->ocio_config) ||
+	    strcmp(a->display, b->display) || strcmp(a->view, b->view))
+		return differ(what, n, "display transform %s vs %s", a->display_transform, b->display_transform);
+	return 0;
+}
+
+/* ------------------------------------------------------------------ plan */
+
+size_t sweep_run_count(const sweep_spec *s)
+{
+	size_t n = 0;
+	for (size_t i = 0; i < s->scene_count; i++)
+		n += s->scenes[i].camera_count * s->variant_count;
+	return n;
+}
+
+static size_t ref_variant(const sweep_spec *s)
+{
+	for (size_t v = 0; v < s->variant_count; v++)
+		if (!strcmp(s->variants[v].id, "ref"))
+			return v;
+	return 0;
+}
+
+int sweep_run_at(const sweep_spec *s, size_t index, sweep_run *out)
+{
+	memset(out, 0, sizeof *out);
+	size_t ref = ref_variant(s), cams = 0;
+	for (size_t i = 0; i < s->scene_count; i++)
+		cams += s->scenes[i].camera_count;
+	/* First the ref run of every scene and camera (scene-major): everything else is compared with them. */
+	size_t k = 0;
+	for (size_t i = 0; i < s->scene_count; i++)
+		for (size_t c = 0; c < s->scenes[i].camera_count; c++, k++)
+			if (k == index) {
+				*out = (sweep_run){.index = index, .scene = i, .camera = c, .variant = ref, .ref_index = k,
+						   .is_ref = true};
+				return TL_OK;
+			}
+	/* Then every other variant, scene-major, camera, variant order. */
+	size_t j = cams, pair = 0;
+	for (size_t i = 0; i < s->scene_count; i++)
+		for (size_t c = 0; c < s->scenes[i].camera_count; c++, pair++)
+			for (size_t v = 0; v < s->variant_count; v++) {
+				if (v == ref)
+					continue;
+				if (j++ == index) {
+					*out = (sweep_run){.index = index, .scene = i, .camera = c, .variant = v,
+							   .ref_index = pair, .is_ref = false};
+					return TL_OK;
+				}
+			}
+	return TL_ERR_ARG;
+}
+
+void sweep_run_path(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_path_kind kind, char *out,
+		    size_t out_size)
+{
+	static const char *const top[] = {"runs", "clips", "metrics", "logs"};
+	static const char *const ext[] = {"", ".webm", "", ".log"};
+	const sweep_scene *sc = &s->scenes[r->scene];
+	snprintf(out, out_size, "%s/%s/%s/%s/%s%s", dir, top[kind], sc->name, sc->cameras[r->camera].name,
+		 s->variants[r->variant].id, ext[kind]);
+}
+
+void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st)
+{
+	char p[TL_PATH_MAX], q[TL_PATH_MAX];
+	sweep_run_path(s, dir, r, SWEEP_PATH_RUN, p, sizeof p);
+	snprintf(q, sizeof q, "%s/manifest.json", p);
+	st->run = tl_is_file(q);
+	sweep_run_path(s, dir, r, SWEEP_PATH_CLIP, p, sizeof p);
+	st->clip = tl_is_file(p);
+	/* The ref run is the reference of its scene and path: there is nothing to compare it with. */
+	sweep_run_path(s, dir, r, SWEEP_PATH_METRICS, p, sizeof p);
+	snprintf(q, sizeof q, "%s/summary.json", p);
+	st->metrics = r->is_ref ? st->run : tl_is_file(q);
+}
+
+bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index)
+{
+	sweep_run r;
+	sweep_status st;
+	if (sweep_run_at(s, index, &r))
+		return false;
+	sweep_run_status(s, dir, &r, &st);
+	return st.run && st.clip && st.metrics;
+}

@@ -1,0 +1,416 @@
+/* test_sweep.c — the sweep description without rendering (DESIGN section 9): sweep-file parsing, resolution against
+ * the built-in scenes and the method registry (methods x thresholds x periods), the resolved SWEEP/sweep.json round
+ * trip and comparison, the plan (order, ref of each run, paths, status), the summary columns, and bad input (one line
+ * naming what is wrong). Links the CLI library: the resolver lives there (it needs scenes and the registry). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "sweep_cli.h"
+#include "taslab/metrics.h"
+#include "taslab/metrics_sweep.h"
+#include "taslab/study_report.h"
+#include "taslab/sweep.h"
+#include "taslab/tl_fs.h"
+#include "test_util.h"
+
+static char err[1024];
+
+static const char *write_file(const char *dir, const char *name, const char *text)
+{
+	static char path[4096];
+	snprintf(path, sizeof path, "%s/%s", dir, name);
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	fputs(text, f);
+	fclose(f);
+	return path;
+}
+
+/* A request from a file must fail with one line containing `needle`. */
+static void request_fails(const char *dir, const char *json, const char *needle)
+{
+	sweep_request *r = calloc(1, sizeof *r);
+	const char *p = write_file(dir, "bad.json", json);
+	int rc = sweep_request_read(p, r, err, sizeof err);
+	if (rc == 0 || !strstr(err, needle) || strchr(err, '\n'))
+		fail_msg("%s: rc %d, message '%s', expected one line with '%s'", json, rc, err, needle);
+	free(r);
+}
+
+static void test_request_file(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_request");
+	sweep_request *r = calloc(1, sizeof *r);
+	const char *p = write_file(dir, "s.json",
+				   "{\"scenes\": [\"calm\", \"sub/x.json\"], \"cameras\": [\"walk\", \"calm/robots\"],\n"
+				   " \"variants\": [\"ref\", \"tfr@8\"], \"methods\": [\"tarc\"], \"thresholds\": [4, 16.5],\n"
+				   " \"periods\": [2, 8], \"frames\": \"0:30\", \"size\": [48, 32], \"fps\": 30, \"out\": \"sw\",\n"
+				   " \"baseline\": \"ref\", \"metrics\": \"maxrgb,flip\", \"ppd\": 40, \"device\": \"lavapipe\",\n"
+				   " \"validation\": true, \"jobs\": 3}");
+	assert_int_equal(sweep_request_read(p, r, err, sizeof err), 0);
+	assert_int_equal(r->scene_count, 2);
+	assert_string_equal(r->scenes[0], "calm");
+	char want[4096];
+	snprintf(want, sizeof want, "%s/sub/x.json", dir); /* paths relative to the sweep file */
+	assert_string_equal(r->scenes[1], want);
+	assert_int_equal(r->camera_count, 2);
+	assert_string_equal(r->cameras[1], "calm/robots");
+	assert_int_equal(r->variant_count, 2);
+	assert_int_equal(r->method_count, 1);
+	assert_true(r->threshold_count == 2 && r->thresholds[1] == 16.5);
+	assert_true(r->period_count == 2 && r->periods[1] == 8);
+	assert_true(r->width == 48 && r->height == 32 && r->fps == 30 && r->ppd == 40 && r->validation && r->jobs == 3);
+	snprintf(want, sizeof want, "%s/sw", dir);
+	assert_string_equal(r->out, want);
+	assert_true(r->set & SWEEP_SET_FRAMES);
+	assert_false(r->set & SWEEP_SET_VIEW);
+	p = write_file(dir, "s2.json", "{\"scenes\": [\"turntable\"], \"cameras\": \"all\", \"methods\": \"all\", \"size\": \"96x54\"}");
+	assert_int_equal(sweep_request_read(p, r, err, sizeof err), 0);
+	assert_true(r->cameras_all && r->methods_all && r->width == 96 && r->height == 54);
+	free(r);
+
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"colour\": 1}", "unknown key \"colour\"");
+	request_fails(dir, "{\"scenes\": \"calm\"}", "\"scenes\": must be a list");
+	request_fails(dir, "{\"scenes\": []}", "must not be empty");
+	request_fails(dir, "{\"scenes\": [\"\"]}", "must not be empty");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": \"0x5\"}", "\"size\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": [1, 2, 3]}", "\"size\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"thresholds\": [0]}", "\"thresholds\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"periods\": [1.5]}", "\"periods\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"validation\": 1}", "\"validation\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"jobs\": 0}", "\"jobs\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"fps\": \"60\"}", "\"fps\"");
+	request_fails(dir, "[\"calm\"]", "is a JSON object");
+	request_fails(dir, "{\"scenes\": [\"calm\"],}", "bad.json:1");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"scenes\": [\"x\"]}", "bad.json");
+	request_fails(dir, "{\"taslab_sweep\": 1}", "resolved sweep.json");
+}
+
+/* Resolution through the same path as `taslab sweep`: options onto a request, then the resolver. */
+static int resolve(const sweep_opts *o, sweep_spec *s)
+{
+	sweep_request *r = calloc(1, sizeof *r);
+	int rc = cli_sweep_request_from_opts(o, r, err, sizeof err);
+	if (!rc)
+		rc = cli_sweep_resolve(r, s, err, sizeof err);
+	free(r);
+	return rc;
+}
+
+static void resolve_fails(const sweep_opts *o, const char *needle)
+{
+	sweep_spec *s = calloc(1, sizeof *s);
+	int rc = resolve(o, s);
+	if (rc == 0 || !strstr(err, needle) || strchr(err, '\n'))
+		fail_msg("rc %d, message '%s', expected one line with '%s'", rc, err, needle);
+	free(s);
+}
+
+static size_t find_variant(const sweep_spec *s, const char *token)
+{
+	for (size_t i = 0; i < s->variant_count; i++)
+		if (!strcmp(s->variants[i].variant, token))
+			return i;
+	return (size_t)-1;
+}
+
+static void test_resolve(void **state)
+{
+	(void)state;
+	sweep_spec *s = calloc(1, sizeof *s);
+	sweep_opts o = {.scenes = "turntable", .variants = "ref,tfr@8,rrc/4,tarc-oracle@8", .frames = "10:14",
+			.size = {48, 32}};
+	assert_int_equal(resolve(&o, s), 0);
+	assert_int_equal(s->scene_count, 1);
+	assert_string_equal(s->scenes[0].name, "turntable");
+	assert_true(s->scenes[0].path[0] == '/'); /* absolute: tasks run from anywhere */
+	assert_int_equal(s->scenes[0].camera_count, 2); /* default: all camera paths */
+	assert_string_equal(s->scenes[0].cameras[0].name, "orbit");
+	assert_string_equal(s->scenes[0].cameras[0].motion, "moving");
+	assert_true(s->scenes[0].first == 10 && s->scenes[0].end == 14 && s->scenes[0].fps == 60);
+	assert_int_equal(s->variant_count, 4);
+	const sweep_variant *v = &s->variants[find_variant(s, "tarc-oracle@8")];
+	assert_string_equal(v->id, "tarc-oracle-T8");
+	assert_string_equal(v->method, "tarc-oracle");
+	assert_true(v->T == 8 && v->period == 0);
+	v = &s->variants[find_variant(s, "rrc/4")];
+	assert_true(isnan(v->T) && v->period == 4 && !strcmp(v->id, "rrc-N4"));
+	assert_string_equal(s->baseline, "ref");
+	assert_string_equal(s->metrics, "all");
+	assert_true(s->width == 48 && s->height == 32 && s->display_transform[0]);
+
+	/* methods x thresholds x periods, from the registry's option tables; ref always; flags as extra variants */
+	sweep_opts m = {.scenes = "turntable", .cameras = "orbit", .methods = "tfr,tarc,rrc", .thresholds = "4,16",
+			.periods = "2"};
+	assert_int_equal(resolve(&m, s), 0);
+	const char *want[] = {"ref", "tfr@4", "tfr@16", "tarc@4", "tarc@16", "tarc-oracle@4", "tarc-oracle@16", "rrc/2"};
+	assert_int_equal(s->variant_count, sizeof want / sizeof want[0]);
+	for (size_t i = 0; i < sizeof want / sizeof want[0]; i++)
+		assert_string_equal(s->variants[i].variant, want[i]);
+	/* "all": every available method (so sa, sau, tasa join when they land) */
+	sweep_opts all = {.scenes = "turntable", .cameras = "orbit", .methods = "all", .thresholds = "8", .periods = "4",
+			  .variants = "ref,tfr@8"};
+	assert_int_equal(resolve(&all, s), 0);
+	assert_true(find_variant(s, "rrc/4") != (size_t)-1 && find_variant(s, "tarc-oracle@8") != (size_t)-1);
+	assert_string_equal(s->variants[1].variant, "tfr@8"); /* explicit ones first, expansion does not repeat them */
+
+	/* cameras: bare names in every scene, SCENE/CAMERA for one */
+	sweep_opts c = {.scenes = "turntable,calm", .cameras = "turntable/overview,calm/walk,calm/robots",
+			.variants = "ref", .frames = "0:2"};
+	assert_int_equal(resolve(&c, s), 0);
+	assert_true(s->scenes[0].camera_count == 1 && !strcmp(s->scenes[0].cameras[0].name, "overview"));
+	assert_true(s->scenes[1].camera_count == 2 && !strcmp(s->scenes[1].cameras[1].motion, "stationary"));
+	free(s);
+
+	/* bad input: one line naming what is wrong */
+	sweep_opts b = o;
+	b.variants = "tfr@8,rrc/4";
+	resolve_fails(&b, "no ref");
+	b.variants = "ref,warp@8";
+	resolve_fails(&b, "unknown method 'warp'");
+	b.variants = "ref,tfr@8,tfr@8";
+	resolve_fails(&b, "'tfr@8' is listed twice");
+	b.variants = "ref,ref@8";
+	resolve_fails(&b, "variants:");
+	b = o;
+	b.scenes = "turntable,no_such_scene";
+	resolve_fails(&b, "no_such_scene");
+	b.scenes = "turntable,turntable";
+	resolve_fails(&b, "listed twice");
+	b = o;
+	b.cameras = "helicopter";
+	resolve_fails(&b, "no camera path 'helicopter' (available: orbit, overview");
+	b.cameras = "calm/walk";
+	resolve_fails(&b, "not in --scenes");
+	b = o;
+	b.frames = "9:3";
+	resolve_fails(&b, "--frames");
+	b.frames = NULL;
+	b.baseline = "tfr@4";
+	resolve_fails(&b, "baseline: tfr@4 is not one of the variants");
+	b.baseline = NULL;
+	b.metrics = "maxrgb,vmaf";
+	resolve_fails(&b, "unknown metric 'vmaf'");
+	b = m;
+	b.thresholds = NULL;
+	resolve_fails(&b, "tfr has a threshold: give --thresholds");
+	b = m;
+	b.methods = "tfr,warp";
+	resolve_fails(&b, "unknown method 'warp'");
+	b = o;
+	b.variants = NULL;
+	resolve_fails(&b, "--variants");
+	b = o;
+	b.scenes = NULL;
+	resolve_fails(&b, "--scenes is required");
+}
+
+static void test_spec_file_and_plan(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_spec");
+	sweep_spec *s = calloc(1, sizeof *s), *t = calloc(1, sizeof *t);
+	sweep_opts o = {.scenes = "turntable", .variants = "ref,tfr@8,rrc/4", .frames = "0:3", .size = {48, 32}};
+	assert_int_equal(resolve(&o, s), 0);
+	char path[4096], what[256];
+	snprintf(path, sizeof path, "%s/sweep.json", dir);
+	assert_int_equal(sweep_spec_write(path, s, err, sizeof err), 0);
+	assert_int_equal(sweep_spec_read(path, t, err, sizeof err), 0);
+	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 0);
+	/* written again from what was read: the same bytes (a stable file) */
+	char p2[4096];
+	snprintf(p2, sizeof p2, "%s/again.json", dir);
+	assert_int_equal(sweep_spec_write(p2, t, err, sizeof err), 0);
+	char *a = tu_read_file(path, NULL), *b = tu_read_file(p2, NULL);
+	assert_string_equal(a, b);
+	free(a), free(b);
+	/* any change of what is swept is a different sweep */
+	*t = *s;
+	snprintf(t->variants[1].variant, sizeof t->variants[1].variant, "tfr@16");
+	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);
+	assert_non_null(strstr(what, "tfr@16"));
+	*t = *s;
+	t->width = 96;
+	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);
+	*t = *s;
+	t->scenes[0].end = 4;
+	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);
+
+	/* the plan: ref runs first (one per scene and camera), then the rest scene-major, camera, variant */
+	assert_int_equal(sweep_run_count(s), 6);
+	sweep_run r;
+	assert_int_equal(sweep_run_at(s, 0, &r), 0);
+	assert_true(r.is_ref && r.camera == 0 && r.ref_index == 0);
+	assert_int_equal(sweep_run_at(s, 1, &r), 0);
+	assert_true(r.is_ref && r.camera == 1 && r.ref_index == 1);
+	const char *order[] = {"orbit/tfr-T8", "orbit/rrc-N4", "overview/tfr-T8", "overview/rrc-N4"};
+	for (size_t i = 2; i < 6; i++) {
+		assert_int_equal(sweep_run_at(s, i, &r), 0);
+		char want[256], got[4096];
+		assert_false(r.is_ref);
+		assert_int_equal(r.ref_index, r.camera); /* the ref run of the same camera */
+		snprintf(want, sizeof want, "SW/runs/turntable/%s", order[i - 2]);
+		sweep_run_path(s, "SW", &r, SWEEP_PATH_RUN, got, sizeof got);
+		assert_string_equal(got, want);
+	}
+	assert_int_equal(sweep_run_at(s, 6, &r), TL_ERR_ARG);
+	sweep_run_at(s, 2, &r);
+	char got[4096];
+	sweep_run_path(s, "SW", &r, SWEEP_PATH_CLIP, got, sizeof got);
+	assert_string_equal(got, "SW/clips/turntable/orbit/tfr-T8.webm");
+	sweep_run_path(s, "SW", &r, SWEEP_PATH_METRICS, got, sizeof got);
+	assert_string_equal(got, "SW/metrics/turntable/orbit/tfr-T8");
+	sweep_run_path(s, "SW", &r, SWEEP_PATH_LOG, got, sizeof got);
+	assert_string_equal(got, "SW/logs/turntable/orbit/tfr-T8.log");
+
+	/* status: a run is complete iff its manifest exists; a ref run has no comparison of its own */
+	sweep_status st;
+	sweep_run_status(s, dir, &r, &st);
+	assert_false(st.run || st.clip || st.metrics);
+	char p[4096];
+	sweep_run_path(s, dir, &r, SWEEP_PATH_RUN, p, sizeof p);
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), 0);
+	sweep_run_status(s, dir, &r, &st);
+	assert_false(st.run);
+	write_file(p, "manifest.json", "{}");
+	sweep_run_status(s, dir, &r, &st);
+	assert_true(st.run && !st.clip && !st.metrics);
+	sweep_run ref;
+	sweep_run_at(s, 0, &ref);
+	sweep_run_path(s, dir, &ref, SWEEP_PATH_RUN, p, sizeof p);
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), 0);
+	write_file(p, "manifest.json", "{}");
+	sweep_run_status(s, dir, &ref, &st);
+	assert_true(st.run && st.metrics);
+	free(s);
+	free(t);
+}
+
+static void spec_fails(const char *dir, const char *json, const char *needle)
+{
+	sweep_spec *s = calloc(1, sizeof *s);
+	const char *p = write_file(dir, "sweep.json", json);
+	int rc = sweep_spec_read(p, s, err, sizeof err);
+	if (rc == 0 || !strstr(err, needle) || strchr(err, '\n'))
+		fail_msg("%s: rc %d, message '%s', expected one line with '%s'", json, rc, err, needle);
+	free(s);
+}
+
+#define SCENE "{\"name\": \"t\", \"path\": \"/x.json\", \"frames\": [0, 3], \"fps\": 60, \"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}"
+#define REF "{\"variant\": \"ref\", \"id\": \"ref\", \"method\": \"ref\", \"T\": null, \"period\": null}"
+#define TAIL "\"size\": [4, 4], \"baseline\": \"ref\", \"metrics\": \"all\", \"ppd\": 67, \"device\": \"\", \"validation\": false, \"ocio_config\": \"\", \"display\": \"\", \"view\": \"\", \"display_transform\": \"d\"}"
+
+static void test_spec_bad(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_spec_bad");
+	sweep_spec *s = calloc(1, sizeof *s);
+	const char *ok = write_file(dir, "ok.json", "{\"taslab_sweep\": 1, \"scenes\": [" SCENE "], \"variants\": [" REF "], " TAIL);
+	assert_int_equal(sweep_spec_read(ok, s, err, sizeof err), 0);
+	free(s);
+	spec_fails(dir, "{\"scenes\": [" SCENE "], \"variants\": [" REF "], " TAIL, "taslab_sweep");
+	spec_fails(dir, "{\"taslab_sweep\": 1, \"scenes\": [" SCENE "], \"variants\": [" REF "], \"extra\": 1, " TAIL,
+		   "unknown key \"extra\"");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [" SCENE "], \"variants\": [{\"variant\": \"tfr@8\", \"id\": \"tfr-T8\", "
+		   "\"method\": \"tfr\", \"T\": 8, \"period\": null}], " TAIL,
+		   "no ref variant");
+	spec_fails(dir, "{\"taslab_sweep\": 1, \"scenes\": [" SCENE "], \"variants\": [" REF ", " REF "], " TAIL, "listed twice");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"../up\", \"path\": \"/x\", \"frames\": [0, 3], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}], \"variants\": [" REF "], " TAIL,
+		   "not a folder name");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [5, 3], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}], \"variants\": [" REF "], " TAIL,
+		   "first < end");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [0, 3], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"fast\"}]}], \"variants\": [" REF "], " TAIL,
+		   "stationary or moving");
+}
+
+/* summary.csv values by column name, exceed_T at the variant's own T. */
+static void test_values(void **state)
+{
+	(void)state;
+	mtr_sweep_row row;
+	memset(&row, 0, sizeof row);
+	row.status.run = true;
+	for (int c = 0; c < MTR_SWEEP_MAX_COLUMNS; c++)
+		row.metric[c] = NAN;
+	int e8 = -1, e16 = -1;
+	for (int c = 0; mtr_column_name(c); c++) {
+		if (!strcmp(mtr_column_name(c), "exceed_8"))
+			e8 = c;
+		if (!strcmp(mtr_column_name(c), "exceed_16"))
+			e16 = c;
+	}
+	assert_true(e8 >= 0 && e16 >= 0);
+	row.metric[e8] = 0.25, row.metric[e16] = 0.125;
+	row.summary.threshold = 16;
+	row.summary.reuse_mean = 0.5;
+	row.summary.frames = 4;
+	row.summary.shaded_samples = 100;
+	assert_true(mtr_sweep_value(&row, "exceed_T") == 0.125);
+	assert_true(mtr_sweep_value(&row, "exceed_8") == 0.25);
+	assert_true(mtr_sweep_value(&row, "reuse_percent") == 50);
+	assert_true(mtr_sweep_value(&row, "shaded_per_frame") == 25);
+	row.summary.threshold = 5; /* not one of the exceedance thresholds */
+	assert_true(isnan(mtr_sweep_value(&row, "exceed_T")));
+	row.summary.threshold = NAN;
+	assert_true(isnan(mtr_sweep_value(&row, "exceed_T")));
+	assert_true(isnan(mtr_sweep_value(&row, "no_such_column")));
+	assert_true(sty_report_metric_known("flip_mean") && sty_report_metric_known("exceed_T"));
+	assert_false(sty_report_metric_known("no_such_column"));
+}
+
+/* The command line: sweep and report options as the parser takes them. */
+static void test_cli(void **state)
+{
+	(void)state;
+	static _Alignas(max_align_t) unsigned char opts[CLI_OPTS_MAX_B];
+	static cli_ctx ctx;
+	const cli_command *c = cli_find_command("sweep");
+	assert_non_null(c);
+	char *ok[] = {"sweep", "--scenes", "calm,moderate", "--cameras=all", "--variants", "ref,tfr@8", "--frames", "0:300",
+		      "--size", "960x540", "--out", "sweeps/s1", "--jobs", "2", "--slurm-dry-run", "--slurm-opts", "-p gpu"};
+	assert_int_equal(cli_parse_command(c, 17, ok, opts, &ctx), 0);
+	sweep_opts *o = (sweep_opts *)opts;
+	assert_true(o->jobs == 2 && o->slurm_dry_run && !strcmp(o->slurm_opts, "-p gpu") && o->size[0] == 960);
+	char *bad1[] = {"sweep", "--scenes", "calm", "--jobs", "0"};
+	assert_int_equal(cli_parse_command(c, 5, bad1, opts, &ctx), TL_ERR_ARG);
+	assert_non_null(strstr(ctx.err, "--jobs"));
+	char *bad2[] = {"sweep", "--scenes", "calm", "--task", "3"};
+	assert_int_equal(cli_parse_command(c, 5, bad2, opts, &ctx), TL_ERR_ARG);
+	assert_non_null(strstr(ctx.err, "--task needs"));
+	char *bad3[] = {"sweep", "--scenes", "calm", "--slurm-opts", "-p x"};
+	assert_int_equal(cli_parse_command(c, 5, bad3, opts, &ctx), TL_ERR_ARG);
+	assert_non_null(strstr(ctx.err, "--slurm-opts goes with"));
+	char *bad4[] = {"sweep"};
+	assert_int_equal(cli_parse_command(c, 1, bad4, opts, &ctx), TL_ERR_ARG);
+	char *bad5[] = {"sweep", "a.json", "b.json"};
+	assert_int_equal(cli_parse_command(c, 3, bad5, opts, &ctx), TL_ERR_ARG);
+	const cli_command *rep = cli_find_command("report");
+	assert_non_null(rep);
+	char *r1[] = {"report", "SW", "--study", "/nonexistent.db"};
+	assert_int_equal(cli_parse_command(rep, 4, r1, opts, &ctx), TL_ERR_ARG);
+	char *r2[] = {"report", "SW", "--jnd-against", "vmaf"};
+	assert_int_equal(cli_parse_command(rep, 4, r2, opts, &ctx), TL_ERR_ARG);
+	assert_non_null(strstr(ctx.err, "vmaf"));
+	char *r3[] = {"report", "SW", "--jnd-against", "maxrgb_p99"};
+	assert_int_equal(cli_parse_command(rep, 4, r3, opts, &ctx), 0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_request_file), cmocka_unit_test(test_resolve), cmocka_unit_test(test_spec_file_and_plan),
+		cmocka_unit_test(test_spec_bad),     cmocka_unit_test(test_values),  cmocka_unit_test(test_cli),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,307 @@
+/* test_sweep_run.c — `taslab sweep` and `taslab report` as a user runs them (DESIGN section 9), on lavapipe with the
+ * validation layer in every run: bad input gives one line and renders nothing; a tiny sweep writes its runs, clips,
+ * metrics, summary.csv, table1.md and report; a rerun redoes nothing; after a SIGKILL only the incomplete runs are
+ * redone (manifest modification times of the complete ones unchanged); a failing run is reported, the others go on,
+ * and the exit status says so; --slurm-dry-run prints the batch scripts; `report --study` joins a study's tally. */
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "test_util.h"
+
+static char out[1 << 16];
+
+#define COMMON "--scenes turntable --cameras orbit --size 48x32 --device lavapipe --validation"
+
+static int sweep(const char *args)
+{
+	char cmd[8192];
+	snprintf(cmd, sizeof cmd, "%s sweep %s", TASLAB_BINARY, args);
+	return tu_run(cmd, out, sizeof out);
+}
+
+static void expect_bad(const char *args, const char *needle, const char *must_not_exist)
+{
+	int st = sweep(args);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
+		fail_msg("'taslab sweep %s' exited %d and printed:\n%s\nexpected one line containing '%s'", args, st, out, needle);
+	if (must_not_exist)
+		assert_false(tu_file_exists(must_not_exist));
+}
+
+static long long mtime_ns(const char *path)
+{
+	struct stat sb;
+	if (stat(path, &sb))
+		return -1;
+	return (long long)sb.st_mtim.tv_sec * 1000000000LL + sb.st_mtim.tv_nsec;
+}
+
+static void mkdir_p(const char *path)
+{
+	char cmd[8192];
+	snprintf(cmd, sizeof cmd, "mkdir -p '%s'", path);
+	assert_int_equal(system(cmd), 0);
+}
+
+static void test_bad_input(void **state)
+{
+	(void)state;
+	char dir[4096];
+	snprintf(dir, sizeof dir, "%s", tu_tmpdir("sweep_bad"));
+	char args[8192], sw[4096], file[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(args, sizeof args, "--scenes turntable,nowhere --variants ref --out %s", sw);
+	expect_bad(args, "nowhere", sw);
+	snprintf(args, sizeof args, "%s --cameras helicopter --variants ref --out %s", "--scenes turntable", sw);
+	expect_bad(args, "helicopter", sw);
+	snprintf(args, sizeof args, COMMON " --variants ref,warp@3 --out %s", sw);
+	expect_bad(args, "unknown method 'warp'", sw);
+	snprintf(args, sizeof args, COMMON " --variants tfr@8 --out %s", sw);
+	expect_bad(args, "no ref", sw);
+	snprintf(args, sizeof args, COMMON " --variants ref --frames 5:2 --out %s", sw);
+	expect_bad(args, "--frames", sw);
+	snprintf(file, sizeof file, "%s/s.json", dir);
+	FILE *f = fopen(file, "w");
+	fprintf(f, "{\"scenes\": [\"turntable\"], \"variants\": [\"ref\"], \"out\": \"sw\", \"treshold\": 8}\n");
+	fclose(f);
+	snprintf(args, sizeof args, "%s", file);
+	expect_bad(args, "unknown key \"treshold\"", sw);
+	/* a folder that holds other files, or another sweep */
+	char other[4096];
+	snprintf(other, sizeof other, "%s/notes", dir);
+	mkdir_p(other);
+	snprintf(file, sizeof file, "%s/notes/x.txt", dir);
+	f = fopen(file, "w");
+	fclose(f);
+	snprintf(args, sizeof args, COMMON " --variants ref --frames 0:1 --out %s", other);
+	expect_bad(args, "not a sweep folder", NULL);
+	snprintf(args, sizeof args, COMMON " --variants ref --frames 0:1 --out %s --slurm-dry-run", sw);
+	assert_int_equal(sweep(args), 0); /* writes sweep.json and the scripts, submits nothing */
+	assert_non_null(strstr(out, "#SBATCH --job-name=taslab-sweep"));
+	assert_non_null(strstr(out, "--array=0"));
+	assert_non_null(strstr(out, "--task \"$SLURM_ARRAY_TASK_ID\""));
+	assert_non_null(strstr(out, "--dependency=afterany:"));
+	snprintf(file, sizeof file, "%s/runs", sw);
+	assert_false(tu_file_exists(file)); /* nothing rendered */
+	snprintf(args, sizeof args, COMMON " --variants ref,tfr@8 --frames 0:1 --out %s", sw);
+	expect_bad(args, "holds a different sweep (1 variants vs 2)", file);
+}
+
+static void check_outputs(const char *sw, const char *const *ids, size_t n)
+{
+	char p[4096];
+	const char *files[] = {"sweep.json", "summary.csv", "table1.md", "report/index.html"};
+	for (size_t i = 0; i < 4; i++) {
+		snprintf(p, sizeof p, "%s/%s", sw, files[i]);
+		if (!tu_file_exists(p))
+			fail_msg("%s missing", p);
+	}
+	for (size_t i = 0; i < n; i++) {
+		snprintf(p, sizeof p, "%s/runs/turntable/orbit/%s/manifest.json", sw, ids[i]);
+		assert_true(tu_file_exists(p));
+		snprintf(p, sizeof p, "%s/clips/turntable/orbit/%s.webm", sw, ids[i]);
+		assert_true(tu_file_exists(p));
+		if (strcmp(ids[i], "ref")) {
+			snprintf(p, sizeof p, "%s/metrics/turntable/orbit/%s/summary.json", sw, ids[i]);
+			assert_true(tu_file_exists(p));
+		}
+	}
+	snprintf(p, sizeof p, "%s/summary.csv", sw);
+	char *csv = tu_read_file(p, NULL);
+	assert_int_equal(tu_count_lines(csv), (int)n + 1);
+	assert_true(strncmp(csv, "scene,camera,camera_motion,method,variant,T,period,frames,width,height,status,", 78) == 0);
+	assert_null(strstr(csv, "missing"));
+	assert_null(strstr(csv, "partial"));
+	free(csv);
+}
+
+static void test_sweep_resume(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_run");
+	char args[8192], sw[4096], p[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(args, sizeof args, COMMON " --variants ref,tfr@8 --frames 0:3 --jobs 2 --out %s", sw);
+	int st = sweep(args);
+	if (st)
+		fail_msg("sweep failed (%d):\n%s", st, out);
+	const char *ids[] = {"ref", "tfr-T8"};
+	check_outputs(sw, ids, 2);
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	assert_non_null(strstr(out, p)); /* the report's path on stdout */
+	char *html = tu_read_file(p, NULL);
+	assert_non_null(strstr(html, "plots/turntable--orbit--flip.svg"));
+	assert_non_null(strstr(html, "../clips/turntable/orbit/tfr-T8.webm"));
+	free(html);
+	/* again: everything is complete, nothing is redone */
+	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tfr-T8/manifest.json", sw);
+	long long before = mtime_ns(p);
+	assert_int_equal(sweep(args), 0);
+	assert_non_null(strstr(out, "2 complete, 0 to do"));
+	assert_true(mtime_ns(p) == before);
+	/* the resolved sweep.json resumes the same sweep; options that change it are refused */
+	char spec[4096];
+	snprintf(spec, sizeof spec, "%s/sweep.json --quiet", sw);
+	assert_int_equal(sweep(spec), 0);
+	snprintf(spec, sizeof spec, "%s/sweep.json --variants ref", sw);
+	assert_int_not_equal(sweep(spec), 0);
+	assert_non_null(strstr(out, "resolved sweep"));
+}
+
+/* Starts `taslab sweep ARGS` in the background; returns its pid. */
+static pid_t start(const char *args, const char *log)
+{
+	pid_t pid = fork();
+	if (pid == 0) {
+		char cmd[8192];
+		snprintf(cmd, sizeof cmd, "exec %s sweep %s >%s 2>&1", TASLAB_BINARY, args, log);
+		setenv("ASAN_OPTIONS", "detect_leaks=0:quarantine_size_mb=8", 1);
+		execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
+		_exit(127);
+	}
+	return pid;
+}
+
+static void test_sigkill_resume(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_kill");
+	char args[8192], sw[4096], ref_m[4096], rrc_m[4096], tfr_m[4096], rrc_f[4096], log[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(log, sizeof log, "%s/first.log", dir);
+	snprintf(args, sizeof args, COMMON " --variants ref,rrc/4,tfr@8 --frames 0:12 --jobs 1 --no-report --out %s", sw);
+	snprintf(ref_m, sizeof ref_m, "%s/runs/turntable/orbit/ref/manifest.json", sw);
+	snprintf(rrc_m, sizeof rrc_m, "%s/runs/turntable/orbit/rrc-N4/manifest.json", sw);
+	snprintf(rrc_f, sizeof rrc_f, "%s/runs/turntable/orbit/rrc-N4/frames/000001.png", sw);
+	snprintf(tfr_m, sizeof tfr_m, "%s/runs/turntable/orbit/tfr-T8/manifest.json", sw);
+	pid_t pid = start(args, log);
+	/* kill the sweep (the parent, as `kill -9` would) while the second run is rendering */
+	struct timespec ts = {0, 10 * 1000 * 1000};
+	int waited = 0;
+	while (!(tu_file_exists(ref_m) && tu_file_exists(rrc_f)) && waited < 300 * 100) {
+		nanosleep(&ts, NULL);
+		waited++;
+	}
+	assert_true(tu_file_exists(rrc_f));
+	kill(pid, SIGKILL);
+	waitpid(pid, NULL, 0);
+	sleep(1); /* the run's process dies with its parent (PR_SET_PDEATHSIG) */
+	assert_true(tu_file_exists(ref_m));
+	assert_false(tu_file_exists(rrc_m)); /* interrupted: not complete */
+	assert_false(tu_file_exists(tfr_m));
+	long long ref_before = mtime_ns(ref_m);
+	/* nothing renders into the folder any more: the killed sweep's child is gone */
+	char frames[4096];
+	snprintf(frames, sizeof frames, "%s/runs/turntable/orbit/rrc-N4/frames/000011.png", sw);
+	sleep(1);
+	assert_false(tu_file_exists(frames));
+	int st = sweep(args);
+	if (st)
+		fail_msg("resumed sweep failed (%d):\n%s", st, out);
+	assert_non_null(strstr(out, "1 complete, 2 to do"));
+	assert_true(mtime_ns(ref_m) == ref_before); /* the complete run was not redone */
+	assert_true(tu_file_exists(rrc_m) && tu_file_exists(tfr_m));
+	const char *ids[] = {"ref", "rrc-N4", "tfr-T8"};
+	char p[4096];
+	snprintf(p, sizeof p, "%s/report", sw);
+	assert_false(tu_file_exists(p)); /* --no-report */
+	for (size_t i = 0; i < 3; i++) {
+		snprintf(p, sizeof p, "%s/runs/turntable/orbit/%s/manifest.json", sw, ids[i]);
+		assert_true(tu_file_exists(p));
+	}
+}
+
+static void test_failure_and_study(void **state)
+{
+	(void)state;
+	char dir[4096];
+	snprintf(dir, sizeof dir, "%s", tu_tmpdir("sweep_fail"));
+	char args[8192], sw[4096], p[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(args, sizeof args, COMMON " --variants ref,tfr@8,rrc/2 --frames 0:2 --out %s", sw);
+	/* make one run fail: its run folder's place is taken by a file */
+	char sweep_dir[4096];
+	snprintf(sweep_dir, sizeof sweep_dir, "%s/runs/turntable/orbit", sw);
+	snprintf(p, sizeof p, "--slurm-dry-run " COMMON " --variants ref,tfr@8,rrc/2 --frames 0:2 --out %s", sw);
+	assert_int_equal(sweep(p), 0); /* writes sweep.json only */
+	mkdir_p(sweep_dir);
+	snprintf(p, sizeof p, "%s/rrc-N2", sweep_dir);
+	FILE *f = fopen(p, "w");
+	fclose(f);
+	int st = sweep(args);
+	assert_int_equal(st, 1); /* some runs failed */
+	assert_non_null(strstr(out, "turntable/orbit/rrc-N2 failed"));
+	assert_non_null(strstr(out, "1 of 3 runs failed or are incomplete"));
+	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tfr-T8/manifest.json", sw);
+	assert_true(tu_file_exists(p)); /* the others went on */
+	snprintf(p, sizeof p, "%s/summary.csv", sw);
+	char *csv = tu_read_file(p, NULL);
+	assert_non_null(strstr(csv, "rrc/2,,2,2,48,32,missing"));
+	free(csv);
+
+	/* a study of tfr@8 on this scene and path: report --study joins it per condition */
+	char ratings[4096], db[4096];
+	snprintf(ratings, sizeof ratings, "%s/ratings.csv", dir);
+	snprintf(db, sizeof db, "%s/study.db", dir);
+	f = fopen(ratings, "w");
+	fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms\n");
+	const int answers[6] = {1, 0, -1, 2, 1, 0};
+	for (int i = 0; i < 6; i++) /* ref second, answer +a: the reference preferred by a */
+		fprintf(f, "P%d,0,turntable,orbit,moving,tfr,8,0,%d,%d,1500\n", i, answers[i], answers[i]);
+	fclose(f);
+	char cmd[8192];
+	snprintf(cmd, sizeof cmd, "%s study import --db %s %s", TASLAB_BINARY, db, ratings);
+	st = tu_run(cmd, out, sizeof out);
+	if (st)
+		fail_msg("study import failed: %s", out);
+	/* a coherence analysis of this scene and path (as `taslab analyze coherence --out SW/analysis/turntable/orbit`
+	 * writes it): the report draws its curves */
+	char analysis[4096];
+	snprintf(analysis, sizeof analysis, "%s/analysis/turntable/orbit", sw);
+	mkdir_p(analysis);
+	snprintf(p, sizeof p, "%s/coherence.csv", analysis);
+	f = fopen(p, "w");
+	fprintf(f, "T,k,unchanged_samples,visible_samples,fraction_unchanged\n");
+	for (int T = 2; T <= 64; T *= 2)
+		for (int k = 1; k <= 120; k++)
+			fprintf(f, "%d,%d,%d,1000,%.4f\n", T, k, 1000 - k * 8 / T, (1000 - k * 8 / T) / 1000.0);
+	fclose(f);
+	snprintf(cmd, sizeof cmd, "%s report %s --study %s --jnd-against maxrgb_p99 --quiet", TASLAB_BINARY, sw, db);
+	st = tu_run(cmd, out, sizeof out);
+	assert_int_equal(st, 1); /* written, but a run is still missing */
+	assert_non_null(strstr(out, "report written, but 1 of 3 runs are incomplete"));
+	snprintf(p, sizeof p, "%s/report/data/study.csv", sw);
+	csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	/* p_ref = (3 preferring the reference + 2 ties / 2) / 6 = 4/6 */
+	assert_non_null(strstr(csv, "turntable,orbit,tfr,tfr@8,8,,"));
+	assert_non_null(strstr(csv, ",6,0.5,"));  /* n = 6, Q = mean rating 0.5 */
+	assert_non_null(strstr(csv, ",0.666667,"));
+	free(csv);
+	snprintf(p, sizeof p, "%s/report/plots/jnd.svg", sw);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--coherence.svg", sw);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	char *html = tu_read_file(p, NULL);
+	assert_non_null(strstr(html, "JND [95%]"));
+	assert_non_null(strstr(html, "0.67 ["));
+	free(html);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_bad_input),
+		cmocka_unit_test(test_sweep_resume),
+		cmocka_unit_test(test_sigkill_resume),
+		cmocka_unit_test(test_failure_and_study),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
