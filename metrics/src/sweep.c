@@ -130,7 +130,8 @@ int mtr_sweep_collect(const sweep_spec *s, const char *dir, mtr_sweep_row **rows
 	}
 	/* Reductions against the baseline and speedups against ref, matched per scene/path/frames/size. */
 	if (!rc && nc)
-		rc = mtr_runs_summarise((const char *const *)paths, nc, s->baseline, sums, err, err_size);
+		rc = mtr_runs_summarise((const char *const *)paths, nc, strcmp(s->baseline, "auto") ? s->baseline : NULL,
+					sums, err, err_size);
 	for (size_t k = 0; !rc && k < nc; k++)
 		rows[which[k]].summary = sums[k];
 	for (size_t k = 0; paths && k < nc; k++)

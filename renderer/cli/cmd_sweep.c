@@ -100,7 +100,8 @@ static const cli_opt sweep_options[] = {
 	 .help = "the sweep folder (runs/, clips/, metrics/, summary.csv, table1.md, report/)",
 	 .type = CLI_STRING, .offset = offsetof(sweep_opts, out)},
 	{.name = "baseline", .arg = "VARIANT",
-	 .help = "variant the shaded-sample reductions are relative to (default ref; the paper's Table 1: sa)",
+	 .help = "variant the shaded-sample reductions are relative to, or auto (default: sa for sa/sau/tasa when sa "
+		 "is swept, as the paper's Table 1; ref otherwise)",
 	 .type = CLI_STRING, .offset = offsetof(sweep_opts, baseline)},
 	{.name = "metrics", .arg = "LIST",
 	 .help = "metrics against ref: maxrgb,psnr,ssim,flicker,flip or all (default)",

@@ -303,19 +303,24 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 		return tl_error(err, err_size, TL_ERR_ARG,
 				"--variants has no ref: every run is compared with the ref run of its scene and camera path "
 				"(add ref to the list)");
-	/* baseline: a variant of the list, as its canonical token */
-	const char *baseline = r->baseline[0] ? r->baseline : "ref";
-	method_config bc;
-	char why[512], token[SWEEP_NAME_MAX];
-	if (method_config_parse_variant(&bc, baseline, why, sizeof why))
-		return tl_error(err, err_size, TL_ERR_ARG, "baseline: %s", why);
-	method_config_variant(&bc, token, sizeof token);
-	bool found = false;
-	for (size_t i = 0; i < s->variant_count; i++)
-		found |= !strcmp(s->variants[i].variant, token);
-	if (!found)
-		return tl_error(err, err_size, TL_ERR_ARG, "baseline: %s is not one of the variants", token);
-	snprintf(s->baseline, sizeof s->baseline, "%s", token);
+	/* baseline: "auto" (sa for the atlas methods when sa is swept, else ref; metrics_runs.h) or a variant of the
+	 * list, as its canonical token */
+	const char *baseline = r->baseline[0] ? r->baseline : "auto";
+	if (!strcmp(baseline, "auto")) {
+		snprintf(s->baseline, sizeof s->baseline, "auto");
+	} else {
+		method_config bc;
+		char why[512], token[SWEEP_NAME_MAX];
+		if (method_config_parse_variant(&bc, baseline, why, sizeof why))
+			return tl_error(err, err_size, TL_ERR_ARG, "baseline: %s", why);
+		method_config_variant(&bc, token, sizeof token);
+		bool found = false;
+		for (size_t i = 0; i < s->variant_count; i++)
+			found |= !strcmp(s->variants[i].variant, token);
+		if (!found)
+			return tl_error(err, err_size, TL_ERR_ARG, "baseline: %s is not one of the variants", token);
+		snprintf(s->baseline, sizeof s->baseline, "%s", token);
+	}
 	/* metrics and display transform */
 	uint32_t mask;
 	snprintf(s->metrics, sizeof s->metrics, "%s", r->metrics[0] ? r->metrics : "all");

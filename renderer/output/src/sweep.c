@@ -434,7 +434,7 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 		rc = get_size(&c, "size", json_object_get(j, "size"), &s->width, &s->height);
 	if (!rc)
 		rc = get_string(&c, "baseline", json_object_get(j, "baseline"), s->baseline, sizeof s->baseline);
-	bool baseline_found = false;
+	bool baseline_found = !rc && !strcmp(s->baseline, "auto");
 	for (size_t i = 0; !rc && i < s->variant_count; i++)
 		baseline_found |= !strcmp(s->variants[i].variant, s->baseline);
 	if (!rc && !baseline_found)

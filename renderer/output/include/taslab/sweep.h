@@ -20,7 +20,8 @@
  *   frames     "A:B" | "A" | ":B" | "A:" (default the whole clip of each scene)
  *   size       "WxH" or [W, H] (default 960x540)      fps  number (default each scene's)
  *   out        the sweep folder (relative to the sweep file's folder)
- *   baseline   variant the reductions are relative to (default "ref")
+ *   baseline   variant the reductions are relative to, or "auto" (default: sa for atlas methods when sa is swept,
+ *              else ref)
  *   metrics    "all" or "maxrgb,psnr,..."           ppd  FLIP pixels per degree
  *   device, ocio_config, display, view, validation (bool), jobs (whole number)
  * Relative scene paths are relative to the sweep file's folder too.
