@@ -327,7 +327,7 @@ static int set_value(const cli_opt *o, const char *flag, const char *v, void *ds
 		break;
 	case CLI_UINT:
 	case CLI_U64: {
-		uint64_t u;
+		uint64_t u = 0;
 		if ((rc = cli_parse_uint(v, flag, (uint64_t)o->lo, (uint64_t)o->hi, &u, err, err_size)))
 			return rc;
 		if (o->type == CLI_UINT)

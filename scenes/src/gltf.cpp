@@ -922,7 +922,7 @@ int add_node(loader &L, int node, int parent, int first_material, std::vector<in
 		return L.fail("node hierarchy has a cycle or shared node at node %d", node);
 	const tinygltf::Node &n = L.m.nodes[(size_t)node];
 	std::string name = n.name.empty() ? "node" + std::to_string(node) : n.name;
-	tlm_trs trs;
+	tlm_trs trs = {};
 	int obj, rc;
 	if ((rc = node_trs(L, node, n, &trs)) || (rc = add_object(L.s, name.c_str(), parent, trs, -1, -1, &obj)))
 		return rc;

@@ -53,7 +53,8 @@ typedef struct atlas_state {
 	uint32_t atlas_w, atlas_h;
 	float rho;
 	vkdev_buffer buf[B_COUNT];
-	vkdev_image ids, atlas, scratch;
+	vkdev_image ids, atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
+	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
 	uint32_t shade_chunks, truth_chunks;
 	VkDescriptorSetLayout set_layout;
@@ -115,6 +116,9 @@ static int make_patches(render *r, atlas_state *s, char *err, size_t err_size)
 	return TL_OK;
 }
 
+/* tasa proper (not its oracle) measures gradients while shading */
+static bool tasa_gradients(const atlas_state *s) { return s->v.kind == ATLAS_TASA && !s->v.oracle; }
+
 static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 {
 	const scene *sc = r->scene;
@@ -171,22 +175,29 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 				      false, "atlas", &s->atlas)) ||
 	    (res = vkdev_image_create(r->dev, s->v.oracle ? s->atlas_w : 1, s->v.oracle ? s->atlas_h : 1, 1, 1,
 				      VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas scratch", &s->scratch)))
+				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas scratch", &s->scratch)) ||
+	    (res = vkdev_image_create(r->dev, tasa_gradients(s) ? s->atlas_w : 1, tasa_gradients(s) ? s->atlas_h : 1, 1, 1,
+				      VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas shown", &s->shown)))
 		return render_vk_error(err, err_size, "atlas images", res);
 	return TL_OK;
 }
+
+/* The method's descriptor set (atlas.glsl): storage buffers, and images at 12-15 and 17. */
+enum { ATLAS_BINDINGS = 18 };
+static bool is_image_binding(uint32_t i) { return (i >= 12 && i <= 15) || i == 17; }
 
 static int make_set(render *r, atlas_state *s, char *err, size_t err_size)
 {
 	VkDevice d = r->dev->device;
 	VkShaderStageFlags st = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	VkDescriptorSetLayoutBinding b[17];
-	for (uint32_t i = 0; i < 17; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, i >= 12 && i <= 15 ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
+	VkDescriptorSetLayoutBinding b[ATLAS_BINDINGS];
+	for (uint32_t i = 0; i < ATLAS_BINDINGS; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){i, is_image_binding(i) ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE
 								 : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
 						      1, st, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-					      .bindingCount = 17, .pBindings = b};
+					      .bindingCount = ATLAS_BINDINGS, .pBindings = b};
 	VkResult res;
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "atlas: descriptor set layout", res);
@@ -194,29 +205,30 @@ static int make_set(render *r, atlas_state *s, char *err, size_t err_size)
 					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
 	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
 		return render_vk_error(err, err_size, "atlas: descriptor set", res);
-	/* bindings 0-9, 11: our buffers; 10 vertices, 16 indices (the scene's); 12-15 images */
-	const vkdev_buffer *bufs[17] = {&s->buf[B_CORNERS], &s->buf[B_TRIINFO], &s->buf[B_OBJINFO], &s->buf[B_BLOCKS],
+	/* bindings 0-9, 11: our buffers; 10 vertices, 16 indices (the scene's); 12-15 and 17 images */
+	const vkdev_buffer *bufs[ATLAS_BINDINGS] = {&s->buf[B_CORNERS], &s->buf[B_TRIINFO], &s->buf[B_OBJINFO], &s->buf[B_BLOCKS],
 					&s->buf[B_WORK],    &s->buf[B_VISIBLE], &s->buf[B_G],       &s->buf[B_F],
 					&s->buf[B_GNEW],    &s->buf[B_COUNTERS], &r->vertices,      &s->buf[B_DMAX],
-					NULL, NULL, NULL, NULL, &r->indices};
-	const vkdev_image *imgs[4] = {&s->ids, &s->atlas, &s->scratch, &r->hdr};
-	VkDescriptorBufferInfo bi[17];
-	VkDescriptorImageInfo ii[4];
-	VkWriteDescriptorSet w[17];
-	for (uint32_t i = 0; i < 17; i++) {
+					NULL, NULL, NULL, NULL, &r->indices, NULL};
+	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
+						   [17] = &s->shown};
+	VkDescriptorBufferInfo bi[ATLAS_BINDINGS];
+	VkDescriptorImageInfo ii[ATLAS_BINDINGS];
+	VkWriteDescriptorSet w[ATLAS_BINDINGS];
+	for (uint32_t i = 0; i < ATLAS_BINDINGS; i++) {
 		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set, .dstBinding = i,
 					      .descriptorCount = 1};
-		if (i >= 12 && i <= 15) {
-			ii[i - 12] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i - 12]->view, VK_IMAGE_LAYOUT_GENERAL};
+		if (is_image_binding(i)) {
+			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
 			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-			w[i].pImageInfo = &ii[i - 12];
+			w[i].pImageInfo = &ii[i];
 		} else {
 			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
 			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 			w[i].pBufferInfo = &bi[i];
 		}
 	}
-	vkUpdateDescriptorSets(d, 17, w, 0, NULL);
+	vkUpdateDescriptorSets(d, ATLAS_BINDINGS, w, 0, NULL);
 	return TL_OK;
 }
 
@@ -258,10 +270,10 @@ static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)
 	free(fs);
 	if (rc)
 		return rc;
-	char defs[160];
-	snprintf(defs, sizeof defs, "%s%s%s%s", s->v.kind == ATLAS_TASA && !s->v.oracle ? "#define TASA 1\n" : "",
+	char defs[200];
+	snprintf(defs, sizeof defs, "%s%s%s%s%s", tasa_gradients(s) ? "#define TASA 1\n" : "",
 		 s->v.oracle ? "#define ORACLE 1\n" : "", s->v.truth ? "#define TRUTH 1\n" : "",
-		 s->v.lod0 ? "#define TL_TEXTURE_LOD0 1\n" : "");
+		 s->v.lod0 ? "#define TL_TEXTURE_LOD0 1\n" : "", s->subgroup ? "#define TL_SUBGROUP 1\n" : "");
 	if ((rc = make_compute(r, s, "atlas/visible.comp.in", defs, &s->visible_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/shade.comp.in", defs, &s->shade_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/resolve.comp.in", defs, &s->resolve_pipe, err, err_size)))
@@ -271,6 +283,22 @@ static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)
 	if (s->v.truth && !s->v.oracle && (rc = make_compute(r, s, "atlas/truth.comp.in", defs, &s->truth_pipe, err, err_size)))
 		return rc;
 	return TL_OK;
+}
+
+/* Arithmetic and vote subgroup operations in compute shaders (lavapipe: yes, subgroups of 8). Without them, or with
+ * TASLAB_ATLAS_ATOMICS=1 in the environment (test_atlas compares the two), the gradients are reduced with one atomic
+ * per texel: the same result, slower. */
+static bool has_subgroup_reduction(VkPhysicalDevice pd)
+{
+	const char *force = getenv("TASLAB_ATLAS_ATOMICS");
+	if (force && strcmp(force, "1") == 0)
+		return false;
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
+	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT |
+				      VK_SUBGROUP_FEATURE_VOTE_BIT;
+	return (sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sp.supportedOperations & need) == need;
 }
 
 int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
@@ -296,6 +324,7 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 		return tl_error(err, err_size, TL_ERR_ARG, "--atlas-scale %g: atlas %ux%u exceeds 16384 texels per side",
 				(double)v->scale, s->atlas_w, s->atlas_h);
 	s->rho = v->density > 0.0f ? v->density : sqrtf(v->scale / 8.0f);
+	s->subgroup = tasa_gradients(s) && has_subgroup_reduction(r->dev->physical);
 	int rc = make_patches(r, s, err, err_size);
 	if (!rc)
 		rc = atlas_alloc_create(s->atlas_w, s->atlas_h, &s->alloc, err, err_size);
@@ -313,8 +342,8 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[2] = {&s->atlas, &s->scratch};
-	for (int i = 0; i < 2; i++) {
+	const vkdev_image *im[3] = {&s->atlas, &s->scratch, &s->shown};
+	for (int i = 0; i < 3; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -703,6 +732,7 @@ void atlas_finish(render *r)
 	vkdev_image_destroy(r->dev, &s->ids);
 	vkdev_image_destroy(r->dev, &s->atlas);
 	vkdev_image_destroy(r->dev, &s->scratch);
+	vkdev_image_destroy(r->dev, &s->shown);
 	atlas_alloc_destroy(&s->alloc);
 	atlas_patches_free(&s->patches);
 	free(s->patch_object);
