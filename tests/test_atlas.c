@@ -12,6 +12,9 @@
  *  S7  explicit texture gradients beat mip 0 against ref on a textured scene;
  *  U1  sau/1 equals sa; U2 static scene: sau/N shades every block at t mod N = 0 and none otherwise, frames equal sa;
  *  A1  static scene: tasa shades every block in frames 0 and 1, none after, frames equal sa bit for bit;
+ *  A2  the 2x2 image-space max filter (sec. 6.2 step 2): a constant quad (atlas_filter*.json: no light reaches it)
+ *      beside a quad lit by a ramping lamp reshades only when the two touch on screen — a background gap between
+ *      them, or no constant quad at all, gives the same shading counts after frame 1;
  *  A3  oracle: no late texel (--truth), frames within T + 2 of sa; T = 0 equals sa;
  *  (d) allocated samples, visible and new units identical across sa, sau, tasa and the oracle on a moving scene;
  *  determinism; every built-in scene renders with each method; bad input. */
@@ -220,6 +223,34 @@ static void test_moving(void **state)
 		tu_clip_free(all[i]);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
+}
+
+/* A2: blocks shaded in frames 2.. (after every block's first two shadings) of tasa@4 on a variant of atlas_filter. */
+static int64_t shaded_after_start(vkdev *dev, const char *name, uint32_t n)
+{
+	scene *s = tu_load_scene(name);
+	tu_clip c = tu_render_clip(dev, s, 0, "tasa@4", NULL, NULL, 64, 36, n, false);
+	int64_t units = 0;
+	for (uint32_t f = 2; f < n; f++)
+		units += c.st[f].shaded_units;
+	tu_clip_free(&c);
+	scene_destroy(&s);
+	return units;
+}
+
+static void test_filter(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	enum { F = 24 };
+	int64_t touch = shaded_after_start(dev, "atlas_filter", F), gap = shaded_after_start(dev, "atlas_filter_gap", F);
+	int64_t alone = shaded_after_start(dev, "atlas_filter_alone", F);
+	print_message("A2: blocks reshaded in frames 2..%d: lit quad alone %lld, constant quad beside it with a gap %lld, "
+		      "touching %lld\n", F - 1, (long long)alone, (long long)gap, (long long)touch);
+	assert_true(alone > 0);         /* the ramp reshades the lit quad */
+	assert_int_equal(gap, alone);   /* the constant quad, apart on screen, never reshades */
+	assert_true(touch > alone);     /* touching, its blocks next to the lit quad take its gradient */
+	vkdev_destroy(&dev);
 }
 
 /* Every built-in scene renders with every atlas method (two frames, a moving path). */
@@ -431,7 +462,8 @@ int main(void)
 		cmocka_unit_test(test_allocator),	  cmocka_unit_test(test_patches_and_levels),
 		cmocka_unit_test(test_bad_input),	  cmocka_unit_test(test_static_scene),
 		cmocka_unit_test(test_no_bleeding),	  cmocka_unit_test(test_convergence_and_gradients),
-		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_builtin_scenes),
+		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_filter),
+		cmocka_unit_test(test_builtin_scenes),
 		cmocka_unit_test(test_cli_pair_and_runs),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
