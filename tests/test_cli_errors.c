@@ -1,6 +1,6 @@
 /* test_cli_errors.c — the taslab binary as a user runs it: bad input gives one line on stderr and a
  * non-zero exit and leaves no manifest.json; a good run completes with validation on and is
- * byte-for-byte reproducible. */
+ * byte-for-byte reproducible; analyze refuses an --out that takes no files before it starts. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -126,6 +126,17 @@ static void test_good_run_reproducible(void **state)
 	assert_true(tu_file_exists(p)); /* device selection fails before the run folder is touched */
 }
 
+/* Issue 12: analyze checks that --out can take files before it analyses anything (it used to fail only when writing
+ * the results, after minutes). /proc/self is a folder that takes no files, for root too. */
+static void test_analyze_out_first(void **state)
+{
+	(void)state;
+	tu_expect_cli_error("analyze coherence --scene turntable --size 32x18 --frames 10,20 --device lavapipe --no-plots "
+			    "--out /proc/self", "--out /proc/self: cannot write there");
+	tu_expect_cli_error("analyze predictors --scene turntable --size 32x18 --frames 10 --device lavapipe --no-plots "
+			    "--out /proc/self/taslab", "/proc/self/taslab");
+}
+
 static void test_help_and_version(void **state)
 {
 	(void)state;
@@ -152,6 +163,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_bad_inputs),
 		cmocka_unit_test(test_good_run_reproducible),
+		cmocka_unit_test(test_analyze_out_first),
 		cmocka_unit_test(test_help_and_version),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
