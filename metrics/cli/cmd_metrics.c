@@ -11,6 +11,7 @@
 #include "taslab/metrics_diff.h"
 #include "taslab/metrics_flip.h"
 #include "taslab/metrics_runs.h"
+#include "taslab/tl_fs.h"
 
 /* ---- diff ---- */
 
@@ -68,6 +69,21 @@ static void diff_defaults(void *opts, cli_setup_opts *setup)
 	o->ppd = MTR_FLIP_PPD_DEFAULT;
 }
 
+/* A run folder (manifest.json or frames/ in it) must hold exactly its run: no command's --out goes inside one. */
+static int out_outside_runs(const char *out, const char *const *inputs, size_t n, cli_ctx *ctx)
+{
+	for (size_t i = 0; i < n; i++) {
+		char m[4200], f[4200];
+		snprintf(m, sizeof m, "%s/manifest.json", inputs[i]);
+		snprintf(f, sizeof f, "%s/frames", inputs[i]);
+		if ((tl_is_file(m) || tl_is_dir(f)) && tl_path_inside(out, inputs[i]))
+			return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+					"--out %s lies inside the run folder %s, which must hold only its run (write elsewhere)", out,
+					inputs[i]);
+	}
+	return TL_OK;
+}
+
 static int diff_validate(void *opts, cli_ctx *ctx)
 {
 	diff_cli_opts *x = opts;
@@ -80,7 +96,8 @@ static int diff_validate(void *opts, cli_ctx *ctx)
 				"--ref, --test and --out are required (see 'taslab metrics diff --help')");
 	if (strcmp(o->format, "png") && strcmp(o->format, "exr"))
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--format is png or exr, not '%s'", o->format);
-	return TL_OK;
+	const char *inputs[2] = {o->ref, o->test};
+	return out_outside_runs(o->out, inputs, 2, ctx);
 }
 
 static int diff_main(void *opts, cli_ctx *ctx)
@@ -152,7 +169,7 @@ static int runs_validate(void *opts, cli_ctx *ctx)
 	metrics_runs_opts *o = opts;
 	if (!o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out DIR is required (see 'taslab metrics runs --help')");
-	return TL_OK;
+	return out_outside_runs(o->out, ctx->pos, ctx->npos, ctx);
 }
 
 static int runs_main(void *opts, cli_ctx *ctx)

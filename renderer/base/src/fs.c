@@ -37,6 +37,7 @@ int tl_mkdirs(const char *path, char *err, size_t err_size)
 				break;
 		}
 	}
+	tl_fs_clean_temps(path); /* an output folder: what killed writers left in it goes */
 	return TL_OK;
 }
 

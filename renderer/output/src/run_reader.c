@@ -113,7 +113,9 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 		if (!seen[i])
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: frame %06zu.%s is missing (run frames %u..%u)%s", path,
 				      m->first_frame + i, ext, m->first_frame, m->last_frame,
-				      !strcmp(ext, "png") && !m->png ? "; the run was rendered with --no-png" : "; render the run again");
+				      !strcmp(ext, "png") && !m->png   ? "; the run was rendered with --no-png"
+				      : !strcmp(ext, "exr") && !m->exr ? "; the run was rendered with --no-exr"
+								       : "; render the run again");
 	free(seen);
 	return rc;
 }

@@ -30,7 +30,8 @@ extern "C" {
 
 #define TL_PATH_MAX 4096
 
-/* Creates a folder and its parents (mkdir -p). TL_ERR_OUTPUT when a part exists as a file or cannot be
+/* Creates a folder and its parents (mkdir -p) for outputs, and removes the temporary files that killed
+ * writers left in it (tl_fs_clean_temps). TL_ERR_OUTPUT when a part exists as a file or cannot be
  * created. */
 int tl_mkdirs(const char *path, char *err, size_t err_size);
 
