@@ -187,6 +187,11 @@ int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size)
 	return TL_OK;
 }
 
+void tl_atomic_unlock(tl_atomic *a)
+{
+	release(a);
+}
+
 void tl_atomic_abort(tl_atomic *a)
 {
 	if (a->f) {

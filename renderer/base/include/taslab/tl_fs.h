@@ -50,6 +50,9 @@ int tl_atomic_detach(tl_atomic *a, char *err, size_t err_size);
 /* Flushes, checks every write, fsyncs, closes, renames into place and fsyncs the folder. On any failure
  * the temporary file is removed and TL_ERR_OUTPUT returned (ENOSPC and EIO are reported here). */
 int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size);
+/* Gives up the lock of a detached temporary file, for sets of thousands of files (each lock holds a file
+ * descriptor). A cleaner may then take the file for abandoned; the commit then fails with a message. */
+void tl_atomic_unlock(tl_atomic *a);
 /* Discards the temporary file (safe to call after a commit or on a zeroed struct). */
 void tl_atomic_abort(tl_atomic *a);
 
