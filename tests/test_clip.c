@@ -199,10 +199,15 @@ static void test_careless_outputs(void **state)
 	snprintf(p, sizeof p, "%s/tm/000011.png", dir);
 	assert_false(tu_file_exists(p));
 	assert_false(dir_has_tmp(dir));
-	/* clip: a .webm only; a killed clip's temporary file (unlocked) goes, the finished clip stays. */
+	/* tonemap into the run's own frames folder (its PNGs under another view transform): refused. */
 	snprintf(p, sizeof p, "%s/frames/000010.png", run);
 	size_t before_len, after_len;
 	char *before = tu_read_file(p, &before_len);
+	snprintf(args, sizeof args, "tonemap %s --out %s/frames", run, run);
+	tu_expect_cli_error(args, "is the folder of the input frames");
+	snprintf(args, sizeof args, "tonemap %s --out %s/./frames/", run, run);
+	tu_expect_cli_error(args, "is the folder of the input frames");
+	/* clip: a .webm only; a killed clip's temporary file (unlocked) goes, the finished clip stays. */
 	snprintf(args, sizeof args, "clip %s --out %s", run, p);
 	tu_expect_cli_error(args, "give a name ending in .webm");
 	char *after = tu_read_file(p, &after_len);
