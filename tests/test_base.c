@@ -111,6 +111,7 @@ static void test_atomic_write(void **state)
 	snprintf(p, sizeof p, "%s/missing/out.txt", d);
 	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_ERR_OUTPUT);
 	assert_non_null(strstr(err, "missing/out.txt"));
+	assert_non_null(strstr(err, "does not exist (create it first)")); /* said, not "No such file or directory" */
 	assert_int_equal(tl_write_file("", "x", 1, err, sizeof err), TL_ERR_ARG);
 }
 
