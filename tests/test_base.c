@@ -1,11 +1,14 @@
 /* test_base.c — the base layer: error codes and messages, mkdir -p, the atomic-write helper, temp-file
- * cleanup, path checks, JSON files. */
+ * cleanup (live writers keep their files, killed ones do not), sets of files committed together, output-folder
+ * checks, path checks, JSON files. */
 #include <dirent.h>
 #include <jansson.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "taslab/tl_clock.h"
@@ -108,6 +111,7 @@ static void test_atomic_write(void **state)
 	snprintf(p, sizeof p, "%s/missing/out.txt", d);
 	assert_int_equal(tl_atomic_open(&a, p, err, sizeof err), TL_ERR_OUTPUT);
 	assert_non_null(strstr(err, "missing/out.txt"));
+	assert_non_null(strstr(err, "does not exist (create it first)")); /* said, not "No such file or directory" */
 	assert_int_equal(tl_write_file("", "x", 1, err, sizeof err), TL_ERR_ARG);
 }
 
@@ -146,7 +150,7 @@ static void test_atomic_full_disk(void **state)
 static void test_clean_temps(void **state)
 {
 	(void)state;
-	char p[4096];
+	char p[4096], err[512];
 	const char *d = tu_tmpdir("base_clean");
 	const char *names[] = {".a.png.tmp.Ab12Cd", ".stats.csv.tmp.xyzXYZ", "keep.tmp.abcdef", ".keep.tmp.abc", "plain"};
 	for (size_t i = 0; i < 5; i++) {
@@ -155,6 +159,91 @@ static void test_clean_temps(void **state)
 	}
 	assert_int_equal(tl_fs_clean_temps(d), 2);
 	assert_int_equal(count_entries(d), 3);
+	/* A writer that is still running keeps its temporary file, detached or not; one SIGKILLed midway loses it. */
+	tl_atomic live, detached;
+	snprintf(p, sizeof p, "%s/live.csv", d);
+	assert_int_equal(tl_atomic_open(&live, p, err, sizeof err), TL_OK);
+	snprintf(p, sizeof p, "%s/detached.png", d);
+	assert_int_equal(tl_atomic_open(&detached, p, err, sizeof err), TL_OK);
+	assert_int_equal(tl_atomic_detach(&detached, err, sizeof err), TL_OK);
+	int ready[2];
+	assert_int_equal(pipe(ready), 0);
+	pid_t child = fork();
+	if (child == 0) {
+		tl_atomic a;
+		snprintf(p, sizeof p, "%s/killed.webm", d);
+		if (tl_atomic_open(&a, p, err, sizeof err) == TL_OK && tl_atomic_detach(&a, err, sizeof err) == TL_OK)
+			(void)!write(ready[1], "x", 1);
+		pause();
+		_exit(0);
+	}
+	char c;
+	assert_int_equal(read(ready[0], &c, 1), 1);
+	assert_int_equal(tl_fs_clean_temps(d), 0); /* the child is alive: its file stays */
+	assert_int_equal(count_entries(d), 6);
+	kill(child, SIGKILL);
+	waitpid(child, NULL, 0);
+	snprintf(p, sizeof p, "%s/x", d);
+	assert_int_equal(tl_fs_clean_temps_beside(p), 1);
+	assert_int_equal(count_entries(d), 5);
+	assert_int_equal(tl_atomic_commit(&live, err, sizeof err), TL_OK);
+	assert_int_equal(tl_atomic_commit(&detached, err, sizeof err), TL_OK);
+	assert_int_equal(count_entries(d), 5); /* plain, keep.tmp.abcdef, .keep.tmp.abc, live.csv, detached.png */
+	close(ready[0]);
+	close(ready[1]);
+}
+
+/* A set appears together: nothing under a final name before the commit, all after it; an abort leaves the old files. */
+static void test_atomic_set(void **state)
+{
+	(void)state;
+	char p[4096], err[512];
+	const char *d = tu_tmpdir("base_set");
+	tl_atomic set[3] = {0};
+	for (int i = 0; i < 2; i++) {
+		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
+		assert_int_equal(tl_write_file(p, "old", 3, err, sizeof err), TL_OK);
+		assert_int_equal(tl_atomic_open(&set[i], p, err, sizeof err), TL_OK);
+		fputs("new", set[i].f);
+	}
+	tl_atomic_abort_set(set, 3);
+	assert_int_equal(count_entries(d), 2);
+	for (int i = 0; i < 2; i++) {
+		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
+		char *t = tu_read_file(p, NULL);
+		assert_string_equal(t, "old");
+		free(t);
+		assert_int_equal(tl_atomic_open(&set[i], p, err, sizeof err), TL_OK);
+		fputs("new", set[i].f);
+	}
+	assert_int_equal(tl_atomic_detach(&set[1], err, sizeof err), TL_OK); /* detached members commit too */
+	assert_int_equal(tl_atomic_commit_set(set, 3, err, sizeof err), TL_OK); /* set[2] zeroed: skipped */
+	assert_int_equal(count_entries(d), 2);
+	for (int i = 0; i < 2; i++) {
+		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
+		char *t = tu_read_file(p, NULL);
+		assert_string_equal(t, "new");
+		free(t);
+	}
+}
+
+/* An output folder is checked before the work: created when missing, refused when it cannot take a file
+ * (/proc/self exists as a folder but takes no files, for root too). */
+static void test_check_out_dir(void **state)
+{
+	(void)state;
+	char p[4096], err[512];
+	const char *d = tu_tmpdir("base_outdir");
+	snprintf(p, sizeof p, "%s/a/b", d);
+	assert_int_equal(tl_check_out_dir(p, "--out", err, sizeof err), TL_OK);
+	assert_true(tl_is_dir(p));
+	assert_int_equal(count_entries(p), 0); /* the probe is gone */
+	assert_int_equal(tl_check_out_dir("/proc/self", "--out", err, sizeof err), TL_ERR_OUTPUT);
+	assert_non_null(strstr(err, "--out /proc/self: cannot write there"));
+	snprintf(p, sizeof p, "%s/file", d);
+	assert_int_equal(tl_write_file(p, "x", 1, err, sizeof err), TL_OK);
+	snprintf(p, sizeof p, "%s/file/sub", d);
+	assert_int_equal(tl_check_out_dir(p, "--out", err, sizeof err), TL_ERR_OUTPUT);
 }
 
 static void test_paths(void **state)
@@ -173,6 +262,12 @@ static void test_paths(void **state)
 	snprintf(b, sizeof b, "%s/run/.", d);
 	assert_true(tl_same_file(a, b));
 	assert_false(tl_same_file(a, d));
+	/* The same file whether it exists yet or not. */
+	snprintf(a, sizeof a, "%s/run/new.csv", d);
+	snprintf(b, sizeof b, "%s/run/../run/./new.csv", d);
+	assert_true(tl_same_path(a, b));
+	snprintf(b, sizeof b, "%s/run/new.csv2", d);
+	assert_false(tl_same_path(a, b));
 }
 
 static void test_json(void **state)
@@ -213,7 +308,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_errors),	   cmocka_unit_test(test_mkdirs), cmocka_unit_test(test_atomic_write),
 		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths),
-		cmocka_unit_test(test_json),
+		cmocka_unit_test(test_json), cmocka_unit_test(test_atomic_set), cmocka_unit_test(test_check_out_dir),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

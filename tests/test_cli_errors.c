@@ -1,9 +1,10 @@
 /* test_cli_errors.c — the taslab binary as a user runs it: bad input gives one line on stderr and a
  * non-zero exit and leaves no manifest.json; a good run completes with validation on and is
- * byte-for-byte reproducible. */
+ * byte-for-byte reproducible (PNG and EXR, rendered a second apart); analyze refuses an --out that takes no files before it starts. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "test_util.h"
 
@@ -89,6 +90,7 @@ static void test_good_run_reproducible(void **state)
 	snprintf(a, sizeof a, "%s/a", dir);
 	snprintf(b, sizeof b, "%s/b", dir);
 	render_ok(a);
+	sleep(1); /* a wall-clock stamp in a file (EXR DateTime) would now differ */
 	render_ok(b);
 	snprintf(p, sizeof p, "%s/manifest.json", a);
 	assert_true(tu_file_exists(p));
@@ -114,8 +116,16 @@ static void test_good_run_reproducible(void **state)
 		assert_memory_equal(x, y, la); /* same inputs, same device: same PNG bytes */
 		free(x);
 		free(y);
+		/* EXRs too (issue 12: OpenImageIO stamped the wall-clock time as DateTime into every EXR) */
 		snprintf(p, sizeof p, "%s/frames/%06d.exr", a, fr);
-		assert_true(tu_file_exists(p));
+		snprintf(q, sizeof q, "%s/frames/%06d.exr", b, fr);
+		x = tu_read_file(p, &la), y = tu_read_file(q, &lb);
+		assert_non_null(x);
+		assert_non_null(y);
+		assert_int_equal(la, lb);
+		assert_memory_equal(x, y, la);
+		free(x);
+		free(y);
 	}
 	/* A re-run into the same folder first removes the old manifest; a failing re-run leaves none. */
 	char cmd[8192];
@@ -124,6 +134,17 @@ static void test_good_run_reproducible(void **state)
 	assert_int_not_equal(tu_run(cmd, out, sizeof out), 0);
 	snprintf(p, sizeof p, "%s/manifest.json", a);
 	assert_true(tu_file_exists(p)); /* device selection fails before the run folder is touched */
+}
+
+/* Issue 12: analyze checks that --out can take files before it analyses anything (it used to fail only when writing
+ * the results, after minutes). /proc/self is a folder that takes no files, for root too. */
+static void test_analyze_out_first(void **state)
+{
+	(void)state;
+	tu_expect_cli_error("analyze coherence --scene turntable --size 32x18 --frames 10,20 --device lavapipe --no-plots "
+			    "--out /proc/self", "--out /proc/self: cannot write there");
+	tu_expect_cli_error("analyze predictors --scene turntable --size 32x18 --frames 10 --device lavapipe --no-plots "
+			    "--out /proc/self/taslab", "/proc/self/taslab");
 }
 
 static void test_help_and_version(void **state)
@@ -152,6 +173,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_bad_inputs),
 		cmocka_unit_test(test_good_run_reproducible),
+		cmocka_unit_test(test_analyze_out_first),
 		cmocka_unit_test(test_help_and_version),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

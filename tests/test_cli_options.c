@@ -177,6 +177,13 @@ static void test_metrics_options(void **state)
 	PARSE_OK("metrics jnd", "jnd", "--n", "40", "--ref-preferred", "22", "--ties", "6");
 	assert_true(j->n == 40 && j->confidence == 0.95);
 	PARSE_BAD("metrics jnd", "--n", "jnd", "--n", "10", "--ref-preferred", "12");
+	/* Issue 12: answer counts are whole numbers (fractions were taken as counts). */
+	PARSE_BAD("metrics jnd", "whole number", "jnd", "--n", "10.5", "--ref-preferred", "3");
+	PARSE_BAD("metrics jnd", "whole number", "jnd", "--n", "10", "--ref-preferred", "3.2");
+	PARSE_BAD("metrics jnd", "whole number", "jnd", "--n", "10", "--ref-preferred", "3", "--ties", "0.5");
+	PARSE_BAD("metrics jnd", "--ref-preferred", "jnd", "--n", "10");
+	PARSE_BAD("metrics diff", "empty entry", "diff", "--ref", "a", "--test", "b", "--out", "o", "--metrics", "maxrgb,,psnr");
+	PARSE_BAD("metrics diff", "empty entry", "diff", "--ref", "a", "--test", "b", "--out", "o", "--metrics", "maxrgb,");
 }
 
 static void test_analyze_options(void **state)

@@ -1,6 +1,7 @@
 /* test_clip.c — clips are bit-exact: a rendered run is encoded (lossless VP9, gbrp, WebM) and decoded with
  * libavcodec, and every decoded frame equals its PNG exactly; `taslab tonemap` reproduces the renderer's
- * PNGs within 1 code value (GPU vs CPU OCIO); bad runs fail with one line and leave no clip behind. */
+ * PNGs within 1 code value (GPU vs CPU OCIO); bad runs fail with one line (nothing from the decoder library) and
+ * leave no clip behind; careless inputs and outputs of tonemap and clip (test_careless_outputs). */
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -98,9 +99,9 @@ static int dir_has_tmp(const char *dir)
 	return found;
 }
 
-/* One line on stderr from taslab; `noisy_library` allows extra lines printed by a decoder library itself
- * (libpng reports truncated files straight to stderr before OpenImageIO returns the error to us). */
-static void expect_clip_failure(const char *run_dir, const char *needle, int noisy_library)
+/* One line on stderr from taslab and nothing else (a decoder library printing its own lines, as libpng did through
+ * OpenImageIO for truncated PNGs, fails this). */
+static void expect_clip_failure(const char *run_dir, const char *needle)
 {
 	char cmd[8192], clip[4096];
 	snprintf(clip, sizeof clip, "%s.webm", run_dir); /* beside the run: never inside it */
@@ -108,8 +109,7 @@ static void expect_clip_failure(const char *run_dir, const char *needle, int noi
 	int st = tu_run(cmd, out, sizeof out);
 	const char *ours = strstr(out, "taslab clip:");
 	const char *nl = ours ? strchr(ours, '\n') : NULL;
-	int ok = st != 0 && ours && nl && strstr(ours, needle) && strstr(ours, needle) < nl &&
-		 (noisy_library || tu_count_lines(out) == 1);
+	int ok = st != 0 && ours && nl && strstr(ours, needle) && strstr(ours, needle) < nl && tu_count_lines(out) == 1;
 	if (!ok)
 		fail_msg("'%s' gave %d:\n%s(expected one line with '%s')", cmd, st, out, needle);
 	assert_false(tu_file_exists(clip));
@@ -128,20 +128,20 @@ static void test_bad_runs(void **state)
 	snprintf(cmd, sizeof cmd, "cp -r %s %s/gap && rm %s/gap/frames/000012.png", run, dir, dir);
 	assert_int_equal(system(cmd), 0);
 	snprintf(p, sizeof p, "%s/gap", dir);
-	expect_clip_failure(p, "000012.png is missing", 0);
+	expect_clip_failure(p, "000012.png is missing");
 	/* A frame of another size. */
 	snprintf(cmd, sizeof cmd, "cp -r %s %s/size && oiiotool %s/frames/000011.png --resize 32x18 -o %s/size/frames/000012.png",
 		 run, dir, run, dir);
 	assert_int_equal(system(cmd), 0);
 	snprintf(p, sizeof p, "%s/size", dir);
-	expect_clip_failure(p, "differs from the run's", 0);
+	expect_clip_failure(p, "differs from the run's");
 	/* A truncated PNG. */
 	snprintf(cmd, sizeof cmd, "cp -r %s %s/trunc && truncate -s 100 %s/trunc/frames/000013.png", run, dir, dir);
 	assert_int_equal(system(cmd), 0);
 	snprintf(p, sizeof p, "%s/trunc", dir);
-	expect_clip_failure(p, "000013.png", 1);
+	expect_clip_failure(p, "000013.png");
 	/* Not a run. */
-	expect_clip_failure(dir, "manifest.json", 0);
+	expect_clip_failure(dir, "manifest.json");
 	/* Unknown OCIO display / view and a missing config: one line, usage exit status, nothing written. */
 	snprintf(p, sizeof p, "%s/cfg.ocio", dir);
 	FILE *f = fopen(p, "w");
@@ -167,6 +167,63 @@ static void test_bad_runs(void **state)
 		 dir, TASLAB_BINARY, dir);
 	assert_int_not_equal(tu_run(cmd, out, sizeof out), 0);
 	assert_non_null(strstr(out, "000013.exr"));
+}
+
+/* Issue 12: tonemap converts scene-linear EXRs only (a display-referred PNG, also one named .exr, was tone-mapped
+ * again into wrong colours that looked like a result), and its PNGs appear all together or not at all (frames
+ * before a bad one stayed); clip writes only a .webm (it wrote a WebM over another run's frame PNG) and removes the
+ * temporary file a killed clip left beside its --out. */
+static void test_careless_outputs(void **state)
+{
+	(void)state;
+	char cmd[8192], args[8192], p[4096];
+	const char *dir = tu_tmpdir("clip_careless");
+	snprintf(args, sizeof args, "tonemap %s/frames/000011.png --out %s/tm_png", run, dir);
+	tu_expect_cli_error(args, "not an OpenEXR file");
+	snprintf(p, sizeof p, "%s/tm_png", dir);
+	assert_false(tu_file_exists(p));
+	/* A run whose last EXR is a PNG under an .exr name: no PNG of the good frames appears; an old file stays. */
+	snprintf(cmd, sizeof cmd, "cp -r %s %s/fake && cp %s/frames/000013.png %s/fake/frames/000013.exr && mkdir %s/tm && "
+		 "echo old > %s/tm/000010.png", run, dir, run, dir, dir, dir);
+	assert_int_equal(system(cmd), 0);
+	snprintf(args, sizeof args, "tonemap %s/fake --out %s/tm_new", dir, dir);
+	tu_expect_cli_error(args, "000013.exr: not an OpenEXR file");
+	snprintf(p, sizeof p, "%s/tm_new", dir);
+	assert_false(tu_file_exists(p));
+	snprintf(args, sizeof args, "tonemap %s/fake --out %s/tm", dir, dir);
+	tu_expect_cli_error(args, "000013.exr: not an OpenEXR file");
+	snprintf(p, sizeof p, "%s/tm/000010.png", dir);
+	char *old = tu_read_file(p, NULL);
+	assert_string_equal(old, "old\n");
+	free(old);
+	snprintf(p, sizeof p, "%s/tm/000011.png", dir);
+	assert_false(tu_file_exists(p));
+	assert_false(dir_has_tmp(dir));
+	/* tonemap into the run's own frames folder (its PNGs under another view transform): refused. */
+	snprintf(p, sizeof p, "%s/frames/000010.png", run);
+	size_t before_len, after_len;
+	char *before = tu_read_file(p, &before_len);
+	snprintf(args, sizeof args, "tonemap %s --out %s/frames", run, run);
+	tu_expect_cli_error(args, "is the folder of the input frames");
+	snprintf(args, sizeof args, "tonemap %s --out %s/./frames/", run, run);
+	tu_expect_cli_error(args, "is the folder of the input frames");
+	/* clip: a .webm only; a killed clip's temporary file (unlocked) goes, the finished clip stays. */
+	snprintf(args, sizeof args, "clip %s --out %s", run, p);
+	tu_expect_cli_error(args, "give a name ending in .webm");
+	char *after = tu_read_file(p, &after_len);
+	assert_true(before_len == after_len && !memcmp(before, after, before_len));
+	free(before);
+	free(after);
+	snprintf(p, sizeof p, "%s/.c.webm.tmp.Ab12Cd", dir);
+	FILE *f = fopen(p, "w");
+	fputs("half a clip", f);
+	fclose(f);
+	snprintf(cmd, sizeof cmd, "%s clip %s --out %s/c.webm", TASLAB_BINARY, run, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s", out);
+	assert_false(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/c.webm", dir);
+	assert_true(tu_file_exists(p));
 }
 
 typedef struct count_ctx {
@@ -225,6 +282,7 @@ int main(void)
 		cmocka_unit_test(test_tonemap_matches_renderer),
 		cmocka_unit_test(test_bad_runs),
 		cmocka_unit_test(test_pair),
+		cmocka_unit_test(test_careless_outputs),
 	};
 	return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -106,6 +106,12 @@ static void test_options(void **state)
 	assert_int_equal(method_config_set(&c, "max-age", "3", err, sizeof err), TL_OK);
 	assert_int_equal(method_config_set(&c, "max-age", "0", err, sizeof err), TL_ERR_ARG);
 	assert_int_equal(method_config_set(&c, "max-age", "3.5", err, sizeof err), TL_ERR_ARG);
+	/* Issue 12: whole numbers as digits only, like every count of the command line. */
+	const char *not_digits[] = {"3.0", "1e1", "+3", " 3", "0x3"};
+	for (size_t i = 0; i < sizeof not_digits / sizeof *not_digits; i++) {
+		assert_int_equal(method_config_set(&c, "max-age", not_digits[i], err, sizeof err), TL_ERR_ARG);
+		assert_non_null(strstr(err, "not a whole number") ? err : strstr(err, "not a number"));
+	}
 	assert_int_equal(method_config_set(&c, "period", "4", err, sizeof err), TL_ERR_ARG);
 	assert_non_null(strstr(err, "not an option of tfr") ? err : strstr(err, "no option"));
 	/* Manifest entries: every option, defaults included. */

@@ -7,13 +7,16 @@
  *    double-precision mean, weighted median / quartiles within 1e-3, through the library and through `diff`;
  *    identical images give 0, a changed pixel is found at its place, 1x1 and odd sizes, bad input;
  *  - the metric registry: --metrics selection keeps the column layout, unknown metrics and options are refused;
- *  - bad input: sizes, frame counts, unreadable files, NaN in EXR. */
+ *  - bad input: sizes, frame counts, unreadable files, NaN in EXR; run folders checked against their manifest
+ *    (stale, missing and resized frames, --no-exr, no manifest; test_diff_runs_checked). */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "taslab/colour.h"
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_diff.h"
@@ -356,6 +359,85 @@ static void test_diff_files(void **state)
 	float *px;
 	assert_int_not_equal(imageio_read_rgba_float(p, &w, &h, &px, 1, err, sizeof err), 0);
 	assert_non_null(strstr(err, "NaN"));
+}
+
+/* A run folder for diff: manifest.json for frames 0..2 at w x h, PNG frames 0..n-1 of size fw x fh in RUN/frames. */
+static void make_png_run(const char *dir, int n, uint32_t fw, uint32_t fh, int bump)
+{
+	char p[4200];
+	snprintf(p, sizeof p, "rm -rf %s && mkdir -p %s/frames", dir, dir);
+	assert_int_equal(system(p), 0);
+	snprintf(p, sizeof p, "%s/frames", dir);
+	write_png_dir(p, n, fw, fh, bump);
+	snprintf(p, sizeof p, "%s/manifest.json", dir);
+	FILE *f = fopen(p, "w");
+	fputs("{\"inputs\": {\"method\": \"ref\", \"frames\": [0, 2], \"size\": [20, 16], \"fps\": 60}, "
+	      "\"outputs\": {\"png\": true, \"exr\": false}}", f);
+	fclose(f);
+}
+
+/* Issue 12, stale run folders: diff checks a run folder's frames against its manifest (range, presence, size) and
+ * refuses an incomplete run, where it used to compare whatever frames the folder held. */
+static void test_diff_runs_checked(void **state)
+{
+	(void)state;
+	const char *base = tu_tmpdir("metrics_diff_runs");
+	char a[4096], b[4096], out[4096], err[1024], p[4200];
+	snprintf(a, sizeof a, "%s/a", base);
+	snprintf(b, sizeof b, "%s/b", base);
+	snprintf(out, sizeof out, "%s/out", base);
+	mtr_diff_desc d = {.ref = a, .test = b, .out = out, .threads = 1, .metrics = "maxrgb"};
+	mtr_diff_result r;
+	make_png_run(a, 3, 20, 16, -1);
+	make_png_run(b, 3, 20, 16, 1);
+	if (mtr_diff_run(&d, &r, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(r.frames, 3);
+	/* A frame left by a longer earlier run, in both folders (their names still match). */
+	make_png_run(a, 4, 20, 16, -1);
+	make_png_run(b, 4, 20, 16, 1);
+	assert_int_equal(mtr_diff_run(&d, &r, err, sizeof err), TL_ERR_INPUT);
+	assert_non_null(strstr(err, "000003.png: not a frame of this run"));
+	/* The same frame missing in both. */
+	make_png_run(a, 3, 20, 16, -1);
+	make_png_run(b, 3, 20, 16, 1);
+	snprintf(p, sizeof p, "%s/frames/000001.png", a);
+	unlink(p);
+	snprintf(p, sizeof p, "%s/frames/000001.png", b);
+	unlink(p);
+	assert_int_equal(mtr_diff_run(&d, &r, err, sizeof err), TL_ERR_INPUT);
+	assert_non_null(strstr(err, "frame 000001.png is missing"));
+	/* Every frame of both runs at another size than the manifest's. */
+	make_png_run(a, 3, 10, 8, -1);
+	make_png_run(b, 3, 10, 8, 1);
+	assert_int_not_equal(mtr_diff_run(&d, &r, err, sizeof err), 0);
+	assert_non_null(strstr(err, "differs from the run's 20x16"));
+	/* EXRs of a --no-exr run; an incomplete run (no manifest). */
+	make_png_run(a, 3, 20, 16, -1);
+	make_png_run(b, 3, 20, 16, 1);
+	colour_desc cdesc = {0};
+	colour *cl = NULL;
+	if (colour_create(&cdesc, &cl, err, sizeof err))
+		fail_msg("%s", err);
+	d.format = MTR_FORMAT_EXR;
+	d.colour = cl;
+	assert_int_not_equal(mtr_diff_run(&d, &r, err, sizeof err), 0);
+	assert_non_null(strstr(err, "--no-exr"));
+	colour_destroy(&cl);
+	d.format = MTR_FORMAT_PNG;
+	d.colour = NULL;
+	snprintf(p, sizeof p, "%s/manifest.json", b);
+	unlink(p);
+	assert_int_not_equal(mtr_diff_run(&d, &r, err, sizeof err), 0);
+	assert_non_null(strstr(err, "without manifest.json"));
+	/* No summary of a refused comparison. */
+	snprintf(p, sizeof p, "%s/summary.json", out);
+	assert_false(tu_file_exists(p));
+	/* --out inside a run folder (the CLI). */
+	make_png_run(b, 3, 20, 16, 1);
+	char args[8192];
+	snprintf(args, sizeof args, "metrics diff --ref %s --test %s --out %s/diff", a, b, b);
+	tu_expect_cli_error(args, "lies inside the run folder");
 }
 
 /* ------------------------------------------------------------------ FLIP */
@@ -859,7 +941,7 @@ int main(void)
 		cmocka_unit_test(test_flip_reference),   cmocka_unit_test(test_flip_diff),
 		cmocka_unit_test(test_flip_identical_and_pixel), cmocka_unit_test(test_flip_sizes_and_errors),
 		cmocka_unit_test(test_registry),         cmocka_unit_test(test_percentile_paths),
-		cmocka_unit_test(test_ssim_frame),
+		cmocka_unit_test(test_ssim_frame),       cmocka_unit_test(test_diff_runs_checked),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

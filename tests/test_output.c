@@ -1,11 +1,16 @@
 /* test_output.c — the file formats of output/: run folder writer and reader (manifest, stats.csv, frames
  * checked against the manifest), a re-used run folder holding exactly its run, pairs.json round trip and
- * its refusals. */
+ * its refusals, frame numbers >= 2^31 (test_large_frame_numbers), PNG reading and writing (colours as stored,
+ * no library output, full disk; test_png_io). */
+#include <dirent.h>
+#include <fcntl.h>
 #include <math.h>
+#include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "taslab/imageio.h"
 #include "taslab/pairs.h"
@@ -35,7 +40,8 @@ static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, boo
 	run_writer *w = NULL;
 	if (run_writer_create(dir, &info, &w, err, sizeof err))
 		fail_msg("%s", err);
-	for (uint32_t f = first; f < first + n; f++) {
+	for (uint32_t k = 0; k < n; k++) {
+		uint32_t f = first + k; /* first + n may wrap: the last frame number is 2^32 - 1 */
 		frame_stats st = {.frame = f, .time_s = f / 30.0, .visible_samples = 20, .shaded_samples = 5, .reused_samples = 15,
 				  .allocated_samples = -1, .late_samples = -1, .visible_units = 20, .shaded_units = 5,
 				  .new_units = 1, .fs_invocations = -1, .cs_invocations = -1, .gpu_ms_total = 1.5,
@@ -187,6 +193,168 @@ static void test_run_bad_input(void **state)
 	}
 }
 
+/* Issue 12: frame numbers are uint32_t everywhere; the manifest held frames >= 2^31 as negative numbers (the
+ * run then was "impossible" to clip or compare). */
+static void test_large_frame_numbers(void **state)
+{
+	(void)state;
+	char err[1024], p[4096];
+	const char *d = tu_tmpdir("output_big_frames");
+	write_run(d, 2147483648u + 5, 2, true, false);
+	snprintf(p, sizeof p, "%s/manifest.json", d);
+	char *text = tu_read_file(p, NULL);
+	assert_non_null(strstr(text, "2147483653"));
+	assert_null(strstr(text, "-2147"));
+	free(text);
+	run_manifest m;
+	if (run_manifest_read(d, &m, err, sizeof err))
+		fail_msg("%s", err);
+	assert_true(m.first_frame == 2147483653u && m.last_frame == 2147483654u);
+	assert_int_equal(run_check_frames(d, &m, "png", err, sizeof err), TL_OK);
+	/* The largest frame number. */
+	write_run(d, 4294967295u, 1, true, false);
+	assert_int_equal(run_manifest_read(d, &m, err, sizeof err), TL_OK);
+	assert_true(m.first_frame == 4294967295u && m.last_frame == 4294967295u);
+	if (run_check_frames(d, &m, "png", err, sizeof err))
+		fail_msg("%s", err);
+}
+
+/* A PNG written by libpng directly, in the colour type and bit depth given (the reader must not depend on our
+ * writer's choices). `px` holds `channels` samples per pixel of `depth` bits (16-bit big-endian). */
+static void raw_png(const char *path, int w, int h, int type, int depth, const uint8_t *px, int channels)
+{
+	FILE *f = fopen(path, "wb");
+	png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+	png_infop info = png_create_info_struct(png);
+	png_init_io(png, f);
+	png_set_IHDR(png, info, (png_uint_32)w, (png_uint_32)h, depth, type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+		     PNG_FILTER_TYPE_DEFAULT);
+	png_write_info(png, info);
+	for (int y = 0; y < h; y++)
+		png_write_row(png, (png_const_bytep)(px + (size_t)y * w * channels * (depth / 8)));
+	png_write_end(png, info);
+	png_destroy_write_struct(&png, &info);
+	fclose(f);
+}
+
+/* Runs f(arg) with stderr sent to a file; returns what was printed there (caller frees). */
+static char *stderr_of(void (*fn)(void *), void *arg, const char *dir)
+{
+	char p[4096];
+	snprintf(p, sizeof p, "%s/stderr.txt", dir);
+	fflush(stderr);
+	int saved = dup(2), fd = open(p, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+	dup2(fd, 2);
+	close(fd);
+	fn(arg);
+	fflush(stderr);
+	dup2(saved, 2);
+	close(saved);
+	return tu_read_file(p, NULL);
+}
+
+typedef struct read_job {
+	const char *path;
+	int rc;
+	char err[1024];
+} read_job;
+
+static void read_rgb8_job(void *arg)
+{
+	read_job *j = arg;
+	uint32_t w, h;
+	uint8_t *px = NULL;
+	j->rc = imageio_read_rgb8(j->path, &w, &h, &px, j->err, sizeof j->err);
+	free(px);
+}
+
+/* Issue 12, images: an RGBA PNG is read as stored (it was premultiplied by its alpha, so clip and metrics saw other
+ * colours), grey + alpha is grey; a truncated PNG is one message and nothing on stderr (libpng printed "libpng
+ * error" lines); a full disk is reported by the PNG writer and leaves no file (a truncated PNG was renamed into
+ * place; needs root for a small tmpfs, skipped with a message otherwise). */
+static void test_png_io(void **state)
+{
+	(void)state;
+	char err[1024], p[4096], cmd[4200];
+	const char *d = tu_tmpdir("output_png");
+	uint32_t w, h;
+	uint8_t *px = NULL;
+	const uint8_t rgba[2 * 4] = {200, 100, 50, 128, 10, 20, 30, 0};
+	snprintf(p, sizeof p, "%s/rgba.png", d);
+	raw_png(p, 2, 1, PNG_COLOR_TYPE_RGBA, 8, rgba, 4);
+	assert_int_equal(imageio_read_rgb8(p, &w, &h, &px, err, sizeof err), TL_OK);
+	assert_true(w == 2 && h == 1);
+	const uint8_t expect[6] = {200, 100, 50, 10, 20, 30};
+	assert_memory_equal(px, expect, 6);
+	free(px);
+	const uint8_t ga[2 * 2] = {77, 10, 200, 255};
+	snprintf(p, sizeof p, "%s/ga.png", d);
+	raw_png(p, 2, 1, PNG_COLOR_TYPE_GRAY_ALPHA, 8, ga, 2);
+	assert_int_equal(imageio_read_rgb8(p, &w, &h, &px, err, sizeof err), TL_OK);
+	const uint8_t expect_ga[6] = {77, 77, 77, 200, 200, 200};
+	assert_memory_equal(px, expect_ga, 6);
+	free(px);
+	const uint8_t rgb16[6] = {0xff, 0xff, 0x80, 0x00, 0x00, 0x00}; /* 65535, 32768, 0 -> 255, 128, 0 */
+	snprintf(p, sizeof p, "%s/rgb16.png", d);
+	raw_png(p, 1, 1, PNG_COLOR_TYPE_RGB, 16, rgb16, 3);
+	assert_int_equal(imageio_read_rgb8(p, &w, &h, &px, err, sizeof err), TL_OK);
+	const uint8_t expect16[3] = {255, 128, 0};
+	assert_memory_equal(px, expect16, 3);
+	free(px);
+	/* Our writer round trip, RGBA source (alpha dropped). */
+	snprintf(p, sizeof p, "%s/ours.png", d);
+	assert_int_equal(imageio_write_png_rgb8(p, 2, 1, rgba, err, sizeof err), TL_OK);
+	assert_int_equal(imageio_read_rgb8(p, &w, &h, &px, err, sizeof err), TL_OK);
+	assert_memory_equal(px, expect, 6);
+	free(px);
+	/* Truncated: one message naming the file, nothing printed by libpng. */
+	uint8_t big[64 * 64 * 3];
+	for (size_t i = 0; i < sizeof big; i++)
+		big[i] = (uint8_t)(i * 37 % 251);
+	snprintf(p, sizeof p, "%s/trunc.png", d);
+	assert_int_equal(imageio_write_png_rgb8_packed(p, 64, 64, big, err, sizeof err), TL_OK);
+	assert_int_equal(truncate(p, 200), 0);
+	read_job j = {.path = p};
+	char *printed = stderr_of(read_rgb8_job, &j, d);
+	assert_int_equal(j.rc, TL_ERR_INPUT);
+	assert_non_null(strstr(j.err, "trunc.png"));
+	assert_null(strchr(j.err, '\n'));
+	if (printed[0])
+		fail_msg("the decoder printed to stderr: %s", printed);
+	free(printed);
+	/* Full disk. */
+	snprintf(p, sizeof p, "%s/full", d);
+	mkdir(p, 0755);
+	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=8k tmpfs %s 2>/dev/null", p);
+	if (geteuid() != 0 || system(cmd) != 0) {
+		fprintf(stderr, "test_png_io: full-disk write skipped (needs root to mount a tmpfs)\n");
+		return;
+	}
+	uint8_t *noise = malloc(256 * 256 * 3);
+	uint32_t x = 1;
+	for (size_t i = 0; i < 256 * 256 * 3; i++)
+		noise[i] = (uint8_t)((x = x * 1103515245u + 12345u) >> 24); /* incompressible: far more than 8 KiB */
+	snprintf(p, sizeof p, "%s/full/frame.png", d);
+	int rc = imageio_write_png_rgb8_packed(p, 256, 256, noise, err, sizeof err);
+	free(noise);
+	int exists = tu_file_exists(p);
+	snprintf(p, sizeof p, "%s/full", d);
+	int entries = -1;
+	DIR *dir = opendir(p);
+	if (dir) {
+		entries = 0;
+		for (struct dirent *e; (e = readdir(dir));)
+			entries += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+		closedir(dir);
+	}
+	snprintf(cmd, sizeof cmd, "umount %s/full", d);
+	assert_int_equal(system(cmd), 0);
+	assert_int_equal(rc, TL_ERR_OUTPUT);
+	assert_non_null(strstr(err, "No space"));
+	assert_false(exists);
+	assert_int_equal(entries, 0);
+}
+
 static void test_pairs(void **state)
 {
 	(void)state;
@@ -244,6 +412,8 @@ int main(void)
 		cmocka_unit_test(test_decision_maps),
 		cmocka_unit_test(test_run_bad_input),
 		cmocka_unit_test(test_pairs),
+		cmocka_unit_test(test_large_frame_numbers),
+		cmocka_unit_test(test_png_io),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -11,7 +11,8 @@
  *    (test_private_db_and_admin), RFC 7233 ranges and RFC 7230 framing (test_range, test_framing), per-client
  *    connection limit and idle timeout (test_connection_limit), new studies built aside and never overwriting
  *    (test_create_refuses), import rules and CSV formulas (test_import_rules, test_export_formulas), the links'
- *    base (test_links_served_url), one-line server messages and the page text (test_serve_messages);
+ *    base (test_links_served_url), one-line server messages and the page text (test_serve_messages), no output
+ *    over the study's own files and no partial tally (test_outputs_not_inputs);
  *  - variants with a period (DESIGN section 4): rrc/4, rrc/8 and tarc@8 stay distinct conditions through design,
  *    answers, export, import and tally (test_period_conditions); design's T/period rule on pairs.json
  *    (test_design_period_rule; import's in test_import_rules); studies made before the period column
@@ -1700,6 +1701,87 @@ static void test_cli(void **state)
 	assert_true(tu_file_exists(cmd));
 }
 
+
+/* Issue 12, data loss: no study command writes over the study (export --out S, --pwcmp S, the journal, a symlink or
+ * hard link to S, a tally folder where S sits under an output's name), export's two files are checked before either
+ * is written, and a tally that fails leaves no output: not an empty folder, not the tables written before a full
+ * disk (the full-disk case needs root for a small tmpfs; skipped with a message otherwise). */
+static void test_outputs_not_inputs(void **state)
+{
+	(void)state;
+	const char *dir0 = tu_tmpdir("study_outputs");
+	char dir[4096], db[4200], p[4300], q[4300], args[16384], cmd[16384];
+	snprintf(dir, sizeof dir, "%s", dir0);
+	snprintf(db, sizeof db, "%s/s.db", dir);
+	snprintf(cmd, sizeof cmd, "%s study import --db %s %s/study_ratings.csv", TASLAB_BINARY, db, REF_DIR);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s", out);
+	size_t len0, len1;
+	char *before = tu_read_file(db, &len0);
+	snprintf(p, sizeof p, "%s/link.db", dir);
+	assert_int_equal(symlink("s.db", p), 0);
+	snprintf(p, sizeof p, "%s/hard.db", dir);
+	assert_int_equal(link(db, p), 0);
+	const char *outs[] = {"%s/s.db", "%s/./s.db", "%s/link.db", "%s/hard.db", "%s/s.db-wal", "%s/s.db-shm"};
+	for (size_t i = 0; i < sizeof outs / sizeof *outs; i++) {
+		snprintf(p, sizeof p, outs[i], dir);
+		snprintf(args, sizeof args, "study export --db %s --out %s", db, p);
+		tu_expect_cli_error(args, "is the study database");
+	}
+	/* The database by another name, and --pwcmp: refused before the long file is written. */
+	snprintf(args, sizeof args, "study export --db %s/link.db --out %s/s.db", dir, dir);
+	tu_expect_cli_error(args, "is the study database");
+	snprintf(args, sizeof args, "study export --db %s --out %s/long.csv --pwcmp %s", db, dir, db);
+	tu_expect_cli_error(args, "is the study database");
+	snprintf(args, sizeof args, "study export --db %s --out %s/both.csv --pwcmp %s/./both.csv", db, dir, dir);
+	tu_expect_cli_error(args, "the same file");
+	snprintf(p, sizeof p, "%s/long.csv", dir);
+	assert_false(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/both.csv", dir);
+	assert_false(tu_file_exists(p));
+	/* A tally folder holding the study under one of the tally's file names. */
+	snprintf(p, sizeof p, "%s/t", dir);
+	mkdir(p, 0755);
+	snprintf(q, sizeof q, "%s/t/conditions.csv", dir);
+	snprintf(cmd, sizeof cmd, "cp %s %s", db, q);
+	assert_int_equal(system(cmd), 0);
+	snprintf(args, sizeof args, "study tally --db %s --out %s --bootstrap 10", q, p);
+	tu_expect_cli_error(args, "is the study database");
+	char *copy = tu_read_file(q, &len1);
+	assert_true(len1 == len0 && !memcmp(copy, before, len0));
+	free(copy);
+	assert_int_equal(dir_entries(p), 1);
+	char *after = tu_read_file(db, &len1);
+	assert_true(len1 == len0 && !memcmp(after, before, len0));
+	free(after);
+	free(before);
+	/* A tally that fails (a study without answers) leaves no folder behind. */
+	snprintf(q, sizeof q, "%s/empty.db", dir);
+	sty *s = created(q);
+	commit(s);
+	sty_close(&s);
+	snprintf(args, sizeof args, "study tally --db %s --out %s/none --bootstrap 10", q, dir);
+	tu_expect_cli_error(args, "no answered test trials");
+	snprintf(p, sizeof p, "%s/none", dir);
+	assert_false(tu_file_exists(p));
+	/* A full disk halfway through: none of the tables appear. */
+	snprintf(p, sizeof p, "%s/full", dir);
+	mkdir(p, 0755);
+	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=8k tmpfs %s 2>/dev/null", p);
+	if (geteuid() != 0 || system(cmd) != 0) {
+		fprintf(stderr, "test_outputs_not_inputs: full-disk tally skipped (needs root to mount a tmpfs)\n");
+		return;
+	}
+	snprintf(cmd, sizeof cmd, "%s study tally --db %s --out %s/t --bootstrap 10", TASLAB_BINARY, db, p);
+	int st = tu_run(cmd, out, sizeof out);
+	int entries = dir_entries(p);
+	snprintf(cmd, sizeof cmd, "umount %s", p);
+	assert_int_equal(system(cmd), 0);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, "No space"))
+		fail_msg("tally on a full disk: exit %d, printed:\n%s", st, out);
+	assert_int_equal(entries, 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -1710,7 +1792,7 @@ int main(void)
 		cmocka_unit_test(test_create_refuses), cmocka_unit_test(test_import_rules), cmocka_unit_test(test_export_formulas),
 		cmocka_unit_test(test_links_served_url), cmocka_unit_test(test_serve_messages),
 		cmocka_unit_test(test_period_conditions), cmocka_unit_test(test_design_period_rule),
-		cmocka_unit_test(test_old_study_schema),
+		cmocka_unit_test(test_old_study_schema), cmocka_unit_test(test_outputs_not_inputs),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -50,7 +50,8 @@ static int analyze_validate(void *opts, cli_ctx *ctx)
 	if (!ctx->setup_opts.frames || !o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 				"--scene, --frames and --out are required (see 'taslab %s --help')", ctx->name);
-	/* --out is checked before minutes of analysis: it must be a folder that can be created. */
+	/* --out is checked before minutes of analysis: not a file (the scene, the OCIO config, an earlier result), and
+	 * analyze_main makes sure it can take files before the first frame. */
 	if (tl_is_file(o->out))
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out %s is a file (give a folder)", o->out);
 	return cli_parse_float_list(o->thresholds, "--thresholds: T", 1e-6, 255, o->T, ANALYZE_MAX_T, &o->nT, ctx->err,
@@ -71,8 +72,10 @@ static int analyze_main(void *opts, cli_ctx *ctx)
 	int rc = frames ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	if (!rc)
 		rc = cli_parse_frame_list(ctx->setup_opts.frames, s->end, frames, MAX_FRAMES, &nf, err, err_size);
+	/* Before the analysis, not after it: the folder exists or can be made, and takes files (a read-only file
+	 * system, /proc, missing permissions fail here in a second instead of after minutes). */
 	if (!rc)
-		rc = tl_mkdirs(o->out, err, err_size);
+		rc = tl_check_out_dir(o->out, "--out", err, err_size);
 	analyze_desc ad = {.scene = s->scene, .camera = s->camera, .width = s->width, .height = s->height, .fps = s->fps,
 			   .thresholds = o->T, .threshold_count = o->nT, .inst_step = (float)o->step,
 			   .predictors = predictors, .keep_gradients = o->images, .colour = s->colour};

@@ -11,6 +11,7 @@
 #include "taslab/metrics_diff.h"
 #include "taslab/metrics_flip.h"
 #include "taslab/metrics_runs.h"
+#include "taslab/tl_fs.h"
 
 /* ---- diff ---- */
 
@@ -68,6 +69,21 @@ static void diff_defaults(void *opts, cli_setup_opts *setup)
 	o->ppd = MTR_FLIP_PPD_DEFAULT;
 }
 
+/* A run folder (manifest.json or frames/ in it) must hold exactly its run: no command's --out goes inside one. */
+static int out_outside_runs(const char *out, const char *const *inputs, size_t n, cli_ctx *ctx)
+{
+	for (size_t i = 0; i < n; i++) {
+		char m[4200], f[4200];
+		snprintf(m, sizeof m, "%s/manifest.json", inputs[i]);
+		snprintf(f, sizeof f, "%s/frames", inputs[i]);
+		if ((tl_is_file(m) || tl_is_dir(f)) && tl_path_inside(out, inputs[i]))
+			return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+					"--out %s lies inside the run folder %s, which must hold only its run (write elsewhere)", out,
+					inputs[i]);
+	}
+	return TL_OK;
+}
+
 static int diff_validate(void *opts, cli_ctx *ctx)
 {
 	diff_cli_opts *x = opts;
@@ -80,7 +96,8 @@ static int diff_validate(void *opts, cli_ctx *ctx)
 				"--ref, --test and --out are required (see 'taslab metrics diff --help')");
 	if (strcmp(o->format, "png") && strcmp(o->format, "exr"))
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--format is png or exr, not '%s'", o->format);
-	return TL_OK;
+	const char *inputs[2] = {o->ref, o->test};
+	return out_outside_runs(o->out, inputs, 2, ctx);
 }
 
 static int diff_main(void *opts, cli_ctx *ctx)
@@ -152,7 +169,7 @@ static int runs_validate(void *opts, cli_ctx *ctx)
 	metrics_runs_opts *o = opts;
 	if (!o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out DIR is required (see 'taslab metrics runs --help')");
-	return TL_OK;
+	return out_outside_runs(o->out, ctx->pos, ctx->npos, ctx);
 }
 
 static int runs_main(void *opts, cli_ctx *ctx)
@@ -206,14 +223,14 @@ static const cli_command metrics_runs = {
 
 static const cli_opt jnd_options[] = {
 	{.name = "n", .arg = "N",
-	 .help = "answers in all (> 0)",
-	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, n), .lo = 1e-9, .hi = 1e12},
+	 .help = "answers in all (a whole number > 0)",
+	 .type = CLI_U64, .offset = offsetof(metrics_jnd_opts, n), .lo = 1, .hi = 1e12},
 	{.name = "ref-preferred", .arg = "R",
-	 .help = "answers preferring the reference",
-	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, ref_preferred), .lo = 0, .hi = 1e12},
+	 .help = "answers preferring the reference (a whole number)",
+	 .type = CLI_U64, .offset = offsetof(metrics_jnd_opts, ref_preferred), .lo = 0, .hi = 1e12},
 	{.name = "ties", .arg = "K",
-	 .help = "answers 'same'",
-	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, ties), .lo = 0, .hi = 1e12},
+	 .help = "answers 'same' (a whole number)",
+	 .type = CLI_U64, .offset = offsetof(metrics_jnd_opts, ties), .lo = 0, .hi = 1e12},
 	{.name = "confidence", .arg = "C",
 	 .help = "confidence of the interval (default 0.95)",
 	 .type = CLI_DOUBLE, .offset = offsetof(metrics_jnd_opts, confidence), .lo = 1e-9, .hi = 1 - 1e-9},
@@ -224,15 +241,15 @@ static void jnd_defaults(void *opts, cli_setup_opts *setup)
 {
 	(void)setup;
 	metrics_jnd_opts *o = opts;
-	o->n = -1;
-	o->ref_preferred = -1;
+	o->n = 0;
+	o->ref_preferred = UINT64_MAX;
 	o->confidence = 0.95;
 }
 
 static int jnd_validate(void *opts, cli_ctx *ctx)
 {
 	metrics_jnd_opts *o = opts;
-	if (o->n <= 0 || o->ref_preferred < 0 || o->ref_preferred + o->ties > o->n)
+	if (o->n == 0 || o->ref_preferred == UINT64_MAX || o->ref_preferred + o->ties > o->n)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 				"need --n > 0 and --ref-preferred with 0 <= --ref-preferred + --ties <= --n");
 	return TL_OK;
@@ -242,11 +259,11 @@ static int jnd_main(void *opts, cli_ctx *ctx)
 {
 	metrics_jnd_opts *o = opts;
 	mtr_jnd j;
-	if (mtr_jnd_from_counts(o->ref_preferred, o->ties, o->n, o->confidence, &j))
+	if (mtr_jnd_from_counts((double)o->ref_preferred, (double)o->ties, (double)o->n, o->confidence, &j))
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "counts out of range");
-	printf("{\"n\": %g, \"p_ref\": %.6f, \"p_ref_lo\": %.6f, \"p_ref_hi\": %.6f, \"jnd\": %.6f, \"jnd_lo\": %.6f, "
+	printf("{\"n\": %llu, \"p_ref\": %.6f, \"p_ref_lo\": %.6f, \"p_ref_hi\": %.6f, \"jnd\": %.6f, \"jnd_lo\": %.6f, "
 	       "\"jnd_hi\": %.6f, \"clamped\": %s}\n",
-	       o->n, j.p, j.p_lo, j.p_hi, j.jnd, j.jnd_lo, j.jnd_hi, j.clamped ? "true" : "false");
+	       (unsigned long long)o->n, j.p, j.p_lo, j.p_hi, j.jnd, j.jnd_lo, j.jnd_hi, j.clamped ? "true" : "false");
 	return TL_OK;
 }
 

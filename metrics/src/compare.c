@@ -64,6 +64,8 @@ int mtr_metric_parse(const char *list, uint32_t *mask, char *err, size_t err_siz
 	for (const char *p = list;;) {
 		const char *e = strchr(p, ',');
 		size_t len = e ? (size_t)(e - p) : strlen(p);
+		if (len == 0) /* "maxrgb,,psnr", a trailing comma: a typo, not a metric named "" */
+			return tl_error(err, err_size, TL_ERR_ARG, "--metrics: empty entry in '%s' (known: %s, or all)", list, known);
 		int found = -1;
 		for (int i = 0; i < n && found < 0; i++)
 			if (strlen(mtr_metric_registry[i]->name) == len && !strncmp(mtr_metric_registry[i]->name, p, len))

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "taslab/imageio.h"
+#include "taslab/run.h"
 #include "taslab/metrics_flip.h"
 #include "taslab/tl_clock.h"
 #include "taslab/tl_error.h"
@@ -24,6 +25,7 @@ typedef struct sequence {
 	char dir[4096];
 	char **names; /* sorted file names with the chosen extension */
 	size_t n;
+	uint32_t w, h; /* a run folder's frame size from its manifest; 0 for a folder of images */
 } sequence;
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
@@ -51,6 +53,22 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 	if (!is_dir(path)) {
 		snprintf(err, err_size, "%s: not a folder (give a run folder or a folder of images)", path);
 		return -1;
+	}
+	/* A run folder (DESIGN section 5) holds exactly the frames of its manifest: an incomplete run (no manifest.json),
+	 * frames outside the manifest's range (a stale longer run), missing ones (a --no-png run) and frames of another
+	 * size are refused here or when decoded, instead of being compared. */
+	if (is_dir(frames)) {
+		char manifest[4200];
+		snprintf(manifest, sizeof manifest, "%s/manifest.json", path);
+		if (!tl_is_file(manifest))
+			return tl_error(err, err_size, TL_ERR_INPUT, "%s: a run folder without manifest.json (an incomplete or failed "
+					"render): render it again, or give %s to compare its images as they are", path, frames);
+		run_manifest m;
+		int rc = run_manifest_read(path, &m, err, err_size);
+		if (rc || (rc = run_check_frames(path, &m, ext + 1, err, err_size)))
+			return rc;
+		s->w = m.width;
+		s->h = m.height;
 	}
 	snprintf(s->dir, sizeof s->dir, "%s", is_dir(frames) ? frames : path);
 	DIR *d = opendir(s->dir);
@@ -198,6 +216,14 @@ static void load_pair(loader *l)
 		snprintf(o->err, sizeof o->err, "%s is %ux%u but %s is %ux%u: compare frames of the same size", j[0].path,
 			 o->w, o->h, j[1].path, j[1].w, j[1].h);
 		o->rc = -1;
+	}
+	for (int k = 0; k < 2 && !o->rc; k++) {
+		const sequence *sq = k ? l->rb : l->ra;
+		if (sq->w && (j[k].w != sq->w || j[k].h != sq->h)) {
+			snprintf(o->err, sizeof o->err, "%s: size %ux%u differs from the run's %ux%u (manifest.json); render the run "
+				 "again", j[k].path, j[k].w, j[k].h, sq->w, sq->h);
+			o->rc = -1;
+		}
 	}
 	free(j);
 }

@@ -1,5 +1,6 @@
 /* cmd_clip.c — `taslab clip RUN --out clip.webm`: a run's PNG frames as a bit-exact lossless clip. */
 #include <string.h>
+#include <strings.h>
 
 #include "commands.h"
 #include "taslab/clip.h"
@@ -17,6 +18,11 @@ static int clip_validate(void *opts, cli_ctx *ctx)
 	clip_opts *o = opts;
 	if (!o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out CLIP.webm is required (see 'taslab clip --help')");
+	/* A WebM under another name (a frame's .png of another run, a manifest) is a careless --out, not a clip. */
+	size_t n = strlen(o->out);
+	if (n < 6 || strcasecmp(o->out + n - 5, ".webm"))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out %s: the clip is a WebM file; give a name ending in "
+				".webm", o->out);
 	return TL_OK;
 }
 

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <unistd.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,10 +18,27 @@
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
-static int tonemap_one(const colour *c, const char *in, const char *out, char *err, size_t err_size)
+/* An OpenEXR file by its content (magic number 20000630), whatever its name. */
+static bool is_exr(const char *path)
+{
+	unsigned char m[4] = {0};
+	FILE *f = fopen(path, "rb");
+	size_t n = f ? fread(m, 1, 4, f) : 0;
+	if (f)
+		fclose(f);
+	return n == 4 && m[0] == 0x76 && m[1] == 0x2f && m[2] == 0x31 && m[3] == 0x01;
+}
+
+/* Tone-maps one frame into `out` (a tl_atomic of the set, detached: committed with the others by the caller). */
+static int tonemap_one(const colour *c, const char *in, tl_atomic *out, char *err, size_t err_size)
 {
 	uint32_t w, h;
 	float *px = NULL;
+	/* The input is scene-linear: a PNG (or anything else) is display-referred already, and tone-mapping it again
+	 * gives wrong colours that look like a result. */
+	if (!is_exr(in))
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: not an OpenEXR file; tonemap converts scene-linear EXR frames "
+				"(a PNG is display-referred already)", in);
 	int rc = imageio_read_rgba_float(in, &w, &h, &px, 1, err, err_size);
 	if (rc)
 		return rc;
@@ -36,7 +54,16 @@ static int tonemap_one(const colour *c, const char *in, const char *out, char *e
 			v = v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v);
 			rgb[i * 3 + ch] = (uint8_t)lrintf(v * 255.0f);
 		}
-	rc = imageio_write_png_rgb8_packed(out, w, h, rgb, err, err_size);
+	/* Written to a temporary file now (flushed and closed, so a full disk shows here), renamed with the others only
+	 * when every frame succeeded. The lock is given up: a long run would hold one descriptor per frame. */
+	char path[TL_PATH_MAX];
+	snprintf(path, sizeof path, "%s", out->path);
+	if ((rc = tl_atomic_open(out, path, err, err_size)) == TL_OK) {
+		if ((rc = imageio_write_png_stream(out->f, path, w, h, rgb, err, err_size)))
+			tl_atomic_abort(out);
+		else if ((rc = tl_atomic_detach(out, err, err_size)) == TL_OK)
+			tl_atomic_unlock(out);
+	}
 	free(rgb);
 	free(px);
 	return rc;
@@ -48,6 +75,7 @@ typedef struct tonemap_job {
 	const char *dir, *outd;
 	char **names;
 	size_t n;
+	tl_atomic *outs; /* one per frame: the set committed at the end */
 	atomic_size_t next;
 	atomic_int failed;
 	int rc;
@@ -62,10 +90,14 @@ static void *tonemap_worker(void *arg)
 		size_t i = atomic_fetch_add(&j->next, 1);
 		if (i >= j->n || atomic_load(&j->failed))
 			return NULL;
-		char in[8192], out[8192], err[1024];
+		char in[8192], err[1024];
 		snprintf(in, sizeof in, "%s/%s", j->dir, j->names[i]);
-		snprintf(out, sizeof out, "%s/%.*s.png", j->outd, (int)strlen(j->names[i]) - 4, j->names[i]);
-		int rc = tonemap_one(j->c, in, out, err, sizeof err);
+		int rc = TL_OK;
+		if (snprintf(j->outs[i].path, sizeof j->outs[i].path, "%s/%.*s.png", j->outd, (int)strlen(j->names[i]) - 4,
+			     j->names[i]) >= (int)sizeof j->outs[i].path)
+			rc = tl_error(err, sizeof err, TL_ERR_ARG, "%s: output path too long", j->names[i]);
+		if (!rc)
+			rc = tonemap_one(j->c, in, &j->outs[i], err, sizeof err);
 		if (rc) {
 			pthread_mutex_lock(&j->lock);
 			if (!atomic_exchange(&j->failed, 1)) {
@@ -134,16 +166,26 @@ static int tonemap_main(void *opts, cli_ctx *ctx)
 		goto done;
 	}
 	/* Never write over the inputs: the PNGs of a run's frames folder are the renderer's own frames. */
-	if (tl_same_file(outd, dir) || !strcmp(outd, dir)) {
+	if (tl_same_path(outd, dir)) {
 		rc = tl_error(err, err_size, TL_ERR_ARG,
 			      "--out %s is the folder of the input frames: tone-mapped PNGs would replace the run's own PNGs "
 			      "(choose another --out)", outd);
 		goto done;
 	}
-	if ((rc = tl_mkdirs(outd, err, err_size)))
+	/* The PNGs appear together when every frame is done, or none does (a bad frame, a full disk): a failed
+	 * tonemap leaves the folder as it was, and removes a folder it made. */
+	bool made_dir = !tl_is_dir(outd);
+	tl_atomic *outs = calloc(n, sizeof *outs);
+	if (!outs) {
+		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 		goto done;
+	}
+	if ((rc = tl_mkdirs(outd, err, err_size))) {
+		free(outs);
+		goto done;
+	}
 	qsort(names, n, sizeof *names, cmp_str);
-	tonemap_job job = {.c = c, .dir = dir, .outd = outd, .names = names, .n = n};
+	tonemap_job job = {.c = c, .dir = dir, .outd = outd, .names = names, .n = n, .outs = outs};
 	pthread_mutex_init(&job.lock, NULL);
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	size_t nt = cores < 1 ? 1 : (size_t)cores > n ? n : (size_t)(cores > 16 ? 16 : cores);
@@ -159,6 +201,14 @@ static int tonemap_main(void *opts, cli_ctx *ctx)
 	pthread_mutex_destroy(&job.lock);
 	if (atomic_load(&job.failed)) {
 		rc = tl_error(err, err_size, job.rc, "%s", job.err);
+		tl_atomic_abort_set(outs, n);
+	} else {
+		rc = tl_atomic_commit_set(outs, n, err, err_size);
+	}
+	free(outs);
+	if (rc) {
+		if (made_dir)
+			rmdir(outd);
 		goto done;
 	}
 	fprintf(stderr, "taslab: tone-mapped %zu frame(s) to %s (%s)\n", n, outd, colour_name(c));

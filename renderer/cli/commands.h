@@ -52,7 +52,8 @@ typedef struct metrics_runs_opts {
 } metrics_runs_opts;
 
 typedef struct metrics_jnd_opts {
-	double n, ref_preferred, ties, confidence;
+	uint64_t n, ref_preferred, ties; /* answer counts: whole numbers (ref_preferred UINT64_MAX: not given) */
+	double confidence;
 } metrics_jnd_opts;
 
 typedef struct analyze_opts {

@@ -442,16 +442,17 @@ static void default_text(const cli_opt *t, const void *defaults, char *out, size
 		if (*(const char *const *)f)
 			snprintf(out, n, " (default %s)", *(const char *const *)f);
 		break;
+	/* A value outside the option's range is a "not given" marker, not a default. */
 	case CLI_UINT:
-		if (*(const uint32_t *)f)
+		if (*(const uint32_t *)f && *(const uint32_t *)f <= t->hi)
 			snprintf(out, n, " (default %u)", *(const uint32_t *)f);
 		break;
 	case CLI_U64:
-		if (*(const uint64_t *)f)
+		if (*(const uint64_t *)f && (double)*(const uint64_t *)f <= t->hi)
 			snprintf(out, n, " (default %llu)", (unsigned long long)*(const uint64_t *)f);
 		break;
 	case CLI_DOUBLE:
-		if (*(const double *)f != 0.0)
+		if (*(const double *)f != 0.0 && *(const double *)f >= t->lo && *(const double *)f <= t->hi)
 			snprintf(out, n, " (default %g)", *(const double *)f);
 		break;
 	case CLI_SIZE:

@@ -174,8 +174,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 					"jod.csv, tables.md, fig3.png)\n", ov.out);
 		}
 	} else if (!strcmp(sub, "export")) {
-		if (!(rc = sty_export_long(s, ov.out, err, err_size)) && ov.pwcmp)
-			rc = sty_export_pwcmp(s, ov.pwcmp, err, err_size);
+		/* Both files are checked before either is written (not the database, not each other) and appear together. */
+		rc = sty_export(s, ov.out, ov.pwcmp, err, err_size);
 	} else {
 		size_t rows;
 		if (!(rc = sty_import_long(s, ctx->pos[0], &rows, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {

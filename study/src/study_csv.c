@@ -1,6 +1,8 @@
 /* study_csv.c — ratings in and out: long-format CSV (DESIGN section 7) and pwcmp layout (study.h). */
+#define _DEFAULT_SOURCE /* realpath */
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -54,36 +56,30 @@ const char *sty_csv_cell(const char *s, char *buf, size_t n)
 	return buf;
 }
 
-/* Opens the output (atomic-write helper, tl_fs.h) and the answers query shared by both export formats. The
- * output may not be the study database itself (or its journal): that would replace every answer. */
-static int begin_export(sty *s, const char *path, tl_atomic *out, sqlite3_stmt **st, char *err, size_t err_size)
+int sty_check_output(const sty *s, const char *path, char *err, size_t err_size)
 {
-	char wal[TL_PATH_MAX + 8];
-	snprintf(wal, sizeof wal, "%s-wal", sty_path(s));
-	if (tl_same_file(path, sty_path(s)) || !strcmp(path, sty_path(s)) || tl_same_file(path, wal))
-		return tl_error(err, err_size, TL_ERR_ARG, "%s is the study database: exporting there would replace every answer "
-				"(choose another --out)", path);
-	int rc = tl_atomic_open(out, path, err, err_size);
-	if (rc)
-		return rc;
-	if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, st, NULL)) {
-		tl_atomic_abort(out);
-		return sty_db_fail(s, err, err_size, "export");
-	}
+	/* The database by the name it was opened with and by its real name (SQLite names its journals after the
+	 * file a symlink leads to), and each with the journals SQLite keeps beside it. */
+	static const char *const side[] = {"", "-wal", "-shm", "-journal"};
+	char real[TL_PATH_MAX];
+	const char *names[2] = {sty_path(s), realpath(sty_path(s), real) ? real : NULL};
+	for (int k = 0; k < 2; k++)
+		for (int i = 0; names[k] && i < 4; i++) {
+			char p[TL_PATH_MAX + 16];
+			snprintf(p, sizeof p, "%s%s", names[k], side[i]);
+			if (tl_same_path(path, p))
+				return tl_error(err, err_size, TL_ERR_ARG, "%s is the study database%s: writing there would destroy "
+						"the answers (choose an --out outside the study's files)", path,
+						i ? " journal" : "");
+		}
 	return TL_OK;
 }
 
 /* Column `i` of the answers query as a safe CSV text cell. */
 #define CELL(st, i, buf) sty_csv_cell((const char *)sqlite3_column_text(st, i), buf, sizeof buf)
 
-int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
+static void write_long(sqlite3_stmt *st, FILE *f)
 {
-	tl_atomic out;
-	sqlite3_stmt *st;
-	int rc = begin_export(s, path, &out, &st, err, err_size);
-	if (rc)
-		return rc;
-	FILE *f = out.f;
 	fprintf(f, "%s\n", LONG_HEADER);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
@@ -100,18 +96,10 @@ int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
 			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 9));
 		fputc('\n', f);
 	}
-	sqlite3_finalize(st);
-	return tl_atomic_commit(&out, err, err_size);
 }
 
-int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
+static void write_pwcmp(sqlite3_stmt *st, FILE *f)
 {
-	tl_atomic out;
-	sqlite3_stmt *st;
-	int rc = begin_export(s, path, &out, &st, err, err_size);
-	if (rc)
-		return rc;
-	FILE *f = out.f;
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		/* The condition's name: METHOD, then _T<T> and _N<period> as the method has them (tfr_T8, rrc_N4). */
@@ -133,8 +121,51 @@ int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
 			fprintf(f, "%s,%s,%s,%s,%d\n", obs, cgrp, a, b, answer < 0 ? 1 : 0); /* answer < 0: first clip better */
 		}
 	}
-	sqlite3_finalize(st);
-	return tl_atomic_commit(&out, err, err_size);
+}
+
+int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err, size_t err_size)
+{
+	const char *paths[2] = {long_path, pwcmp_path};
+	void (*writers[2])(sqlite3_stmt *, FILE *) = {write_long, write_pwcmp};
+	int rc = TL_OK;
+	/* Every check before anything is written: neither output is the database or its journal, nor the other. */
+	for (int i = 0; i < 2; i++)
+		if (paths[i] && (rc = sty_check_output(s, paths[i], err, err_size)))
+			return rc;
+	if (long_path && pwcmp_path && tl_same_path(long_path, pwcmp_path))
+		return tl_error(err, err_size, TL_ERR_ARG, "--out and --pwcmp are the same file %s (give two files)", pwcmp_path);
+	tl_atomic out[2] = {0};
+	for (int i = 0; i < 2 && !rc; i++) {
+		if (!paths[i])
+			continue;
+		sqlite3_stmt *st;
+		tl_fs_clean_temps_beside(paths[i]);
+		if ((rc = tl_atomic_open(&out[i], paths[i], err, err_size)))
+			break;
+		if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
+			rc = sty_db_fail(s, err, err_size, "export");
+			break;
+		}
+		writers[i](st, out[i].f);
+		if (sqlite3_finalize(st) != SQLITE_OK)
+			rc = sty_db_fail(s, err, err_size, "export");
+	}
+	/* Both files or neither. */
+	if (rc) {
+		tl_atomic_abort_set(out, 2);
+		return rc;
+	}
+	return tl_atomic_commit_set(out, 2, err, err_size);
+}
+
+int sty_export_long(sty *s, const char *path, char *err, size_t err_size)
+{
+	return sty_export(s, path, NULL, err, err_size);
+}
+
+int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size)
+{
+	return sty_export(s, NULL, path, err, err_size);
 }
 
 /* ------------------------------------------------------------------ import */

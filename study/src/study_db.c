@@ -255,6 +255,7 @@ int sty_create(const char *path, sty **out, char *err, size_t err_size)
 	int rc = check_free(path, err, err_size);
 	if (rc)
 		return rc;
+	tl_fs_clean_temps_beside(path); /* what a design or import killed midway left */
 	sty *s = sty_alloc(path);
 	if (!s)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");

@@ -413,23 +413,42 @@ static void paired_t(const double *x, const double *y, size_t n, double *t, doub
 	*p = isfinite(*t) ? 2 * gsl_cdf_tdist_Q(fabs(*t), *df) : 0;
 }
 
+/* Every file a tally writes into its folder (fig3.png is gnuplot's, drawn from fig3.gp and fig3.csv). */
+static const char *const TALLY_FILES[] = {"observers.csv", "conditions.csv", "anova.csv", "posthoc.csv", "jod.csv",
+					  "tables.md", "fig3.csv", "conditions.json", "anova.json", "fig3.gp", "fig3.png"};
+#define TALLY_SET 9 /* the first nine are written as one set (tl_atomic_commit_set) */
+
 int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 {
 	char path[4200];
 	data d;
 	int rc = TL_ERR_ARG;
+	/* Outputs over inputs: no file of the tally may be the study database or its journal (a --db kept in the --out
+	 * folder under one of these names), checked before anything is written. */
+	for (size_t k = 0; k < sizeof TALLY_FILES / sizeof *TALLY_FILES; k++) {
+		snprintf(path, sizeof path, "%s/%s", td->out, TALLY_FILES[k]);
+		if ((rc = sty_check_output(s, path, err, err_size)))
+			return rc;
+	}
+	/* The files appear together or not at all: every one is written to its temporary file, and they are renamed
+	 * into place only when all are complete (a full disk, a failed query: the folder keeps what it had; a folder
+	 * made for this tally is removed again). */
+	bool made_dir = !tl_is_dir(td->out);
 	if ((rc = tl_mkdirs(td->out, err, err_size)))
 		return rc;
-	tl_atomic obs;
+	tl_fs_clean_temps(td->out);
+	tl_atomic outs[TALLY_SET] = {0};
 	snprintf(path, sizeof path, "%s/observers.csv", td->out);
-	if ((rc = tl_atomic_open(&obs, path, err, err_size)))
+	if ((rc = tl_atomic_open(&outs[0], path, err, err_size))) {
+		if (made_dir)
+			rmdir(td->out);
 		return rc;
-	rc = load(s, td, &d, obs.f, err, err_size);
-	if (rc)
-		tl_atomic_abort(&obs);
-	else
-		rc = tl_atomic_commit(&obs, err, err_size);
+	}
+	rc = load(s, td, &d, outs[0].f, err, err_size);
 	if (rc) {
+		tl_atomic_abort_set(outs, TALLY_SET);
+		if (made_dir)
+			rmdir(td->out);
 		free(d.o), free(d.c), free(d.flagged);
 		return rc;
 	}
@@ -452,12 +471,10 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	}
 	if (nmt)
 		qsort(mts, nmt, sizeof *mts, cmp_variant);
-	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL;
-	const char *names[6] = {"conditions.csv", "anova.csv", "posthoc.csv", "jod.csv", "tables.md", "fig3.csv"};
-	FILE **files[6] = {&fc, &fa, &fp, &fj, &fmd, &ff};
-	tl_atomic outs[6] = {0};
-	for (int k = 0; k < 6; k++) {
-		snprintf(path, sizeof path, "%s/%s", td->out, names[k]);
+	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL, *fcj = NULL, *faj = NULL;
+	FILE **files[TALLY_SET] = {NULL, &fc, &fa, &fp, &fj, &fmd, &ff, &fcj, &faj};
+	for (int k = 1; k < TALLY_SET; k++) {
+		snprintf(path, sizeof path, "%s/%s", td->out, TALLY_FILES[k]);
 		if ((rc = tl_atomic_open(&outs[k], path, err, err_size)))
 			goto close;
 		*files[k] = outs[k].f;
@@ -635,20 +652,18 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 	free(boot);
 	fprintf(fmd, "\nQ: mean reference-relative rating (+2 = reference much better); p_ref: share of answers preferring "
 		     "the reference (ties count half); JND = Phi^-1(p_ref)/Phi^-1(0.75).\n");
-	snprintf(path, sizeof path, "%s/conditions.json", td->out);
-	rc = tl_json_write(path, jc, err, err_size);
-	snprintf(path, sizeof path, "%s/anova.json", td->out);
-	if (!rc)
-		rc = tl_json_write(path, ja, err, err_size);
+	rc = TL_OK;
+	if (tl_json_dump(fcj, jc) || tl_json_dump(faj, ja))
+		rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write the JSON tables", td->out);
 	json_decref(jc);
 	json_decref(ja);
 close:
-	for (int k = 0; k < 6; k++) {
-		if (rc == TL_OK)
-			rc = tl_atomic_commit(&outs[k], err, err_size);
-		else
-			tl_atomic_abort(&outs[k]);
-	}
+	if (rc == TL_OK)
+		rc = tl_atomic_commit_set(outs, TALLY_SET, err, err_size);
+	/* A plot of an earlier tally must not stand beside these tables when this one is not drawn. */
+	snprintf(path, sizeof path, "%s/fig3.png", td->out);
+	if (rc == TL_OK)
+		unlink(path);
 	if (rc == TL_OK && !td->no_plot) {
 		/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). */
 		snprintf(path, sizeof path, "%s/fig3.gp", td->out);
@@ -675,6 +690,11 @@ close:
 		}
 	}
 done:
+	if (rc) {
+		tl_atomic_abort_set(outs, TALLY_SET);
+		if (made_dir)
+			rmdir(td->out); /* only when empty: a folder made for this tally holds nothing now */
+	}
 	free(mts);
 	free(d.o);
 	free(d.c);

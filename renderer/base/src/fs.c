@@ -1,5 +1,5 @@
 /* fs.c — mkdir -p, atomic writes, temp-file cleanup, path checks (tl_fs.h). */
-#define _XOPEN_SOURCE 700 /* realpath */
+#define _GNU_SOURCE /* realpath, mkostemp */
 #include "taslab/tl_fs.h"
 
 #include <dirent.h>
@@ -8,6 +8,7 @@
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -36,6 +37,7 @@ int tl_mkdirs(const char *path, char *err, size_t err_size)
 				break;
 		}
 	}
+	tl_fs_clean_temps(path); /* an output folder: what killed writers left in it goes */
 	return TL_OK;
 }
 
@@ -51,9 +53,18 @@ static void dir_of(const char *path, char *dir, size_t n)
 		snprintf(dir, n, "%.*s", (int)(slash - path), path);
 }
 
+/* Drops the lock of an open temporary file (its flock goes with the descriptor). */
+static void release(tl_atomic *a)
+{
+	if (a->open && a->lock_fd >= 0)
+		close(a->lock_fd);
+	a->lock_fd = -1;
+}
+
 int tl_atomic_open(tl_atomic *a, const char *path, char *err, size_t err_size)
 {
 	memset(a, 0, sizeof *a);
+	a->lock_fd = -1;
 	if (!path || !*path)
 		return tl_error(err, err_size, TL_ERR_ARG, "empty output file name");
 	const char *slash = strrchr(path, '/');
@@ -63,9 +74,43 @@ int tl_atomic_open(tl_atomic *a, const char *path, char *err, size_t err_size)
 	if (snprintf(a->path, sizeof a->path, "%s", path) >= (int)sizeof a->path ||
 	    snprintf(a->tmp, sizeof a->tmp, "%.*s.%s.tmp.XXXXXX", (int)(base - path), path, base) >= (int)sizeof a->tmp)
 		return tl_error(err, err_size, TL_ERR_ARG, "%s: path too long", path);
-	int fd = mkstemp(a->tmp);
+	char pattern[TL_PATH_MAX];
+	snprintf(pattern, sizeof pattern, "%s", a->tmp);
+	int fd = -1;
+	/* The lock lives on its own descriptor, so it outlasts tl_atomic_detach (which closes the stream). A cleaner
+	 * (tl_fs_clean_temps) may have taken the new file for an abandoned one before we locked it: then the name is
+	 * gone or another file's, and we take a new name. */
+	for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
+		snprintf(a->tmp, sizeof a->tmp, "%s", pattern);
+		if ((fd = mkostemp(a->tmp, O_CLOEXEC)) < 0) {
+			int e = errno;
+			char dir[TL_PATH_MAX];
+			dir_of(path, dir, sizeof dir);
+			if (e == ENOENT)
+				return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: the folder %s does not exist (create it "
+						"first)", path, dir);
+			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(e));
+		}
+		struct stat mine, named;
+		if ((a->lock_fd = fcntl(fd, F_DUPFD_CLOEXEC, 0)) < 0 || fstat(fd, &mine) != 0) {
+			int e = errno;
+			if (a->lock_fd >= 0)
+				close(a->lock_fd);
+			close(fd);
+			unlink(a->tmp);
+			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(e));
+		}
+		/* A file system without flock (some cluster ones): no lock, and no cleaner can take the file either. */
+		if (flock(a->lock_fd, LOCK_EX) != 0)
+			break;
+		if (stat(a->tmp, &named) != 0 || named.st_ino != mine.st_ino || named.st_dev != mine.st_dev) {
+			close(a->lock_fd);
+			close(fd);
+			fd = -1;
+		}
+	}
 	if (fd < 0)
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, strerror(errno));
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: temporary files keep vanishing", path);
 	fchmod(fd, 0644);
 	a->open = true;
 	a->f = fdopen(fd, "wb");
@@ -82,10 +127,11 @@ int tl_atomic_detach(tl_atomic *a, char *err, size_t err_size)
 {
 	if (a->f) {
 		int bad = fclose(a->f) != 0;
+		int e = errno;
 		a->f = NULL;
 		if (bad) {
 			tl_atomic_abort(a);
-			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a->path, strerror(errno));
+			return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a->path, strerror(e));
 		}
 	}
 	return TL_OK;
@@ -102,10 +148,9 @@ static void fsync_dir(const char *path)
 	}
 }
 
-int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size)
+/* Everything of a commit but the rename: flush, check every write, fsync, close. 0 or an errno. */
+static int prepare(tl_atomic *a)
 {
-	if (!a->open)
-		return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: commit without an open temporary file", a->path);
 	int e = 0;
 	if (a->f) {
 		if (fflush(a->f) != 0 || ferror(a->f))
@@ -116,21 +161,35 @@ int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size)
 			e = errno ? errno : EIO;
 		a->f = NULL;
 	} else {
-		int fd = open(a->tmp, O_RDONLY);
+		int fd = open(a->tmp, O_RDONLY | O_CLOEXEC);
 		if (fd < 0 || fsync(fd) != 0)
 			e = errno;
 		if (fd >= 0)
 			close(fd);
 	}
+	return e;
+}
+
+int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size)
+{
+	if (!a->open)
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: commit without an open temporary file", a->path);
+	int e = prepare(a);
 	if (!e && rename(a->tmp, a->path) != 0)
 		e = errno;
 	if (e) {
 		tl_atomic_abort(a);
 		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a->path, strerror(e));
 	}
+	release(a);
 	a->open = false;
 	fsync_dir(a->path);
 	return TL_OK;
+}
+
+void tl_atomic_unlock(tl_atomic *a)
+{
+	release(a);
 }
 
 void tl_atomic_abort(tl_atomic *a)
@@ -141,8 +200,41 @@ void tl_atomic_abort(tl_atomic *a)
 	}
 	if (a->open) {
 		unlink(a->tmp);
+		release(a);
 		a->open = false;
 	}
+}
+
+int tl_atomic_commit_set(tl_atomic *a, size_t n, char *err, size_t err_size)
+{
+	for (size_t i = 0; i < n; i++) {
+		int e = a[i].open ? prepare(&a[i]) : 0;
+		if (e) {
+			tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", a[i].path, strerror(e));
+			tl_atomic_abort_set(a, n);
+			return TL_ERR_OUTPUT;
+		}
+	}
+	for (size_t i = 0; i < n; i++) {
+		if (!a[i].open)
+			continue;
+		if (rename(a[i].tmp, a[i].path) != 0) {
+			tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s (the files before it were written)", a[i].path,
+				 strerror(errno));
+			tl_atomic_abort_set(a, n);
+			return TL_ERR_OUTPUT;
+		}
+		release(&a[i]);
+		a[i].open = false;
+		fsync_dir(a[i].path);
+	}
+	return TL_OK;
+}
+
+void tl_atomic_abort_set(tl_atomic *a, size_t n)
+{
+	for (size_t i = 0; i < n; i++)
+		tl_atomic_abort(&a[i]);
 }
 
 int tl_write_file(const char *path, const void *data, size_t size, char *err, size_t err_size)
@@ -221,6 +313,28 @@ static bool is_temp_name(const char *n)
 	return true;
 }
 
+/* Removes temporary file `p` when nobody holds its lock (its writer died), unlinking it while we hold the lock
+ * and only if the name still refers to the file we locked (a writer may have renamed it into place meanwhile). */
+static bool remove_abandoned(const char *p)
+{
+	int fd = open(p, O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
+	if (fd < 0)
+		return false;
+	struct stat locked, named;
+	bool removed = fstat(fd, &locked) == 0 && S_ISREG(locked.st_mode) && flock(fd, LOCK_EX | LOCK_NB) == 0 &&
+		       lstat(p, &named) == 0 && named.st_ino == locked.st_ino && named.st_dev == locked.st_dev &&
+		       unlink(p) == 0;
+	/* SQLite's journals of a study built in a temporary file (sty_create) go with it. */
+	static const char *const side[] = {"-wal", "-shm", "-journal"};
+	for (int i = 0; removed && i < 3; i++) {
+		char j[TL_PATH_MAX + 16];
+		snprintf(j, sizeof j, "%s%s", p, side[i]);
+		unlink(j);
+	}
+	close(fd);
+	return removed;
+}
+
 int tl_fs_clean_temps(const char *dir)
 {
 	DIR *d = opendir(dir);
@@ -230,11 +344,38 @@ int tl_fs_clean_temps(const char *dir)
 	struct dirent *e;
 	char p[TL_PATH_MAX];
 	while ((e = readdir(d)))
-		if (is_temp_name(e->d_name) && snprintf(p, sizeof p, "%s/%s", dir, e->d_name) < (int)sizeof p && tl_is_file(p) &&
-		    unlink(p) == 0)
+		if (is_temp_name(e->d_name) && snprintf(p, sizeof p, "%s/%s", dir, e->d_name) < (int)sizeof p &&
+		    remove_abandoned(p))
 			n++;
 	closedir(d);
 	return n;
+}
+
+int tl_fs_clean_temps_beside(const char *path)
+{
+	char dir[TL_PATH_MAX];
+	if (!path || !*path)
+		return 0;
+	dir_of(path, dir, sizeof dir);
+	return tl_fs_clean_temps(dir);
+}
+
+int tl_check_out_dir(const char *dir, const char *what, char *err, size_t err_size)
+{
+	int rc = tl_mkdirs(dir, err, err_size);
+	if (rc)
+		return rc;
+	char probe[TL_PATH_MAX];
+	if (snprintf(probe, sizeof probe, "%s/.taslab-probe.tmp.XXXXXX", dir) >= (int)sizeof probe)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s %s: path too long", what, dir);
+	int fd = mkostemp(probe, O_CLOEXEC);
+	if (fd < 0)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s %s: cannot write there: %s (choose a writable %s)", what, dir,
+				strerror(errno), what);
+	close(fd);
+	unlink(probe);
+	tl_fs_clean_temps(dir);
+	return TL_OK;
 }
 
 bool tl_is_dir(const char *path)
@@ -283,6 +424,11 @@ static bool resolve(const char *p, char *out)
 		}
 		*slash = 0;
 	}
+}
+
+bool tl_same_path(const char *a, const char *b)
+{
+	return tl_same_file(a, b) || (tl_path_inside(a, b) && tl_path_inside(b, a));
 }
 
 bool tl_path_inside(const char *inner, const char *outer)

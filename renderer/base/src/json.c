@@ -10,6 +10,11 @@
 #define JSON_MAX_BYTES (64u << 20)
 #define JSON_MAX_DEPTH 64
 
+int tl_json_dump(FILE *f, const json_t *value)
+{
+	return value && json_dumpf(value, f, JSON_INDENT(2) | JSON_SORT_KEYS) == 0 && fputc('\n', f) != EOF ? 0 : -1;
+}
+
 int tl_json_write(const char *path, const json_t *value, char *err, size_t err_size)
 {
 	if (!value)
@@ -18,7 +23,7 @@ int tl_json_write(const char *path, const json_t *value, char *err, size_t err_s
 	int rc = tl_atomic_open(&a, path, err, err_size);
 	if (rc)
 		return rc;
-	if (json_dumpf(value, a.f, JSON_INDENT(2) | JSON_SORT_KEYS) != 0 || fputc('\n', a.f) == EOF) {
+	if (tl_json_dump(a.f, value)) {
 		tl_atomic_abort(&a);
 		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write", path);
 	}

@@ -42,6 +42,7 @@ int clip_writer_create(const char *path, uint32_t width, uint32_t height, double
 		snprintf(err, err_size, "out of memory");
 		return TL_ERR_OUTPUT;
 	}
+	tl_fs_clean_temps_beside(path); /* clips of killed encoders */
 	int rc = tl_atomic_open(&w->file, path, err, err_size);
 	if (rc || (rc = tl_atomic_detach(&w->file, err, err_size))) {
 		free(w);

@@ -1,8 +1,9 @@
-// imageio.cpp — thin extern "C" shim over OpenImageIO (see imageio.h).
+// imageio.cpp — thin extern "C" shim over OpenImageIO (see imageio.h); PNGs go through libpng (png.c).
 #include "taslab/imageio.h"
 
 #include <OpenImageIO/imageio.h>
 
+#include "imageio_internal.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
 
@@ -72,17 +73,24 @@ extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t
 extern "C" int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
 				      char *err, size_t err_size)
 {
-	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
-	spec.attribute("oiio:ColorSpace", "sRGB");
-	// Writing 3 channels out of 4-channel pixels: x stride of 4 bytes.
-	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgba8, 4, err, err_size);
+	return imageio_png_write_rgb8(path, width, height, rgba8, 4, err, err_size);
+}
+
+// OpenImageIO associates (premultiplies) alpha on reading unless asked not to: colours are read as stored.
+static std::unique_ptr<ImageInput> open_input(const char *path)
+{
+	ImageSpec config;
+	config.attribute("oiio:UnassociatedAlpha", 1);
+	return ImageInput::open(path, &config);
 }
 
 extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err,
 				 size_t err_size)
 {
 	*rgb = nullptr;
-	auto in = ImageInput::open(path);
+	if (imageio_is_png(path))
+		return imageio_png_read_rgb8(path, width, height, rgb, err, err_size);
+	auto in = open_input(path);
 	if (!in) {
 		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
 		return TL_ERR_INPUT;
@@ -103,9 +111,10 @@ extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *he
 		snprintf(err, err_size, "%s: out of memory", path);
 		return TL_ERR_NOMEM;
 	}
+	// One or two channels (grey, grey + alpha): grey in R, G and B; otherwise the first three.
 	for (size_t i = 0; i < n; i++)
 		for (int c = 0; c < 3; c++)
-			out[i * 3 + c] = all[i * spec.nchannels + (c < spec.nchannels ? c : 0)];
+			out[i * 3 + c] = all[i * spec.nchannels + (spec.nchannels >= 3 ? c : 0)];
 	*width = (uint32_t)spec.width;
 	*height = (uint32_t)spec.height;
 	*rgb = out;
@@ -116,7 +125,31 @@ extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32
 				       int reject_nonfinite, char *err, size_t err_size)
 {
 	*rgba = nullptr;
-	auto in = ImageInput::open(path);
+	if (imageio_is_png(path)) { // code values / 255, alpha 1
+		uint8_t *px = nullptr;
+		uint32_t w, h;
+		int rc = imageio_png_read_rgb8(path, &w, &h, &px, err, err_size);
+		if (rc)
+			return rc;
+		size_t n = (size_t)w * h;
+		float *out = (float *)malloc(n * 4 * sizeof(float));
+		if (!out) {
+			free(px);
+			snprintf(err, err_size, "%s: out of memory", path);
+			return TL_ERR_NOMEM;
+		}
+		for (size_t i = 0; i < n; i++) {
+			for (int c = 0; c < 3; c++)
+				out[i * 4 + c] = px[i * 3 + c] / 255.0f;
+			out[i * 4 + 3] = 1.0f;
+		}
+		free(px);
+		*width = w;
+		*height = h;
+		*rgba = out;
+		return 0;
+	}
+	auto in = open_input(path);
 	if (!in) {
 		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
 		return TL_ERR_INPUT;
@@ -140,8 +173,9 @@ extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32
 		return TL_ERR_NOMEM;
 	}
 	for (size_t i = 0; i < n; i++) {
-		for (int c = 0; c < 4; c++)
-			out[i * 4 + c] = c < nc ? all[i * nc + c] : (c == 3 ? 1.0f : all[i * nc]);
+		for (int c = 0; c < 4; c++) // grey (+ alpha): grey in R, G and B
+			out[i * 4 + c] = c < 3 ? all[i * nc + (nc >= 3 ? c : 0)]
+				       : nc == 2 || nc >= 4 ? all[i * nc + (nc == 2 ? 1 : 3)] : 1.0f;
 		if (reject_nonfinite)
 			for (int c = 0; c < 4; c++)
 				if (!std::isfinite(out[i * 4 + c])) {
@@ -160,9 +194,7 @@ extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32
 extern "C" int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb,
 					     char *err, size_t err_size)
 {
-	ImageSpec spec((int)width, (int)height, 3, TypeDesc::UINT8);
-	spec.attribute("oiio:ColorSpace", "sRGB");
-	return write_atomic(path, "png", spec, TypeDesc::UINT8, rgb, 3, err, err_size);
+	return imageio_png_write_rgb8(path, width, height, rgb, 3, err, err_size);
 }
 
 extern "C" int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err,

@@ -21,9 +21,9 @@ int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size
 						       c->period ? json_integer(c->period) : json_null(), "run", c->run, "clip",
 						       c->clip, "inspect", c->inspect));
 	}
-	json_t *m = json_pack("{s:i, s:s, s:s, s:s, s:s, s:f, s:[i,i], s:[i,i], s:s, s:{s:s, s:s}, s:o}", "taslab_pairs", 1,
+	json_t *m = json_pack("{s:i, s:s, s:s, s:s, s:s, s:f, s:[I,I], s:[i,i], s:s, s:{s:s, s:s}, s:o}", "taslab_pairs", 1,
 			      "scene", s->scene, "scene_path", s->scene_path, "camera", s->camera, "camera_motion",
-			      s->camera_motion, "fps", s->fps, "frames", (int)s->first_frame, (int)s->last_frame, "size",
+			      s->camera_motion, "fps", s->fps, "frames", (json_int_t)s->first_frame, (json_int_t)s->last_frame, "size",
 			      (int)s->width, (int)s->height, "display_transform", s->display_transform, "reference", "run",
 			      s->ref_run, "clip", s->ref_clip, "conditions", conds);
 	int rc = tl_json_write(path, m, err, err_size);
@@ -83,7 +83,7 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 		s->fps = json_number_value(json_object_get(j, "fps"));
 		json_int_t a = json_integer_value(json_array_get(fr, 0)), b = json_integer_value(json_array_get(fr, 1));
 		json_int_t w = json_integer_value(json_array_get(sz, 0)), h = json_integer_value(json_array_get(sz, 1));
-		if (a < 0 || b < a || b > 0x7fffffff || (sz && (w < 1 || h < 1 || w > 16384 || h > 16384)))
+		if (a < 0 || b < a || b > 0xffffffffLL || (sz && (w < 1 || h < 1 || w > 16384 || h > 16384)))
 			bad = "frames or size out of range";
 		s->first_frame = (uint32_t)a, s->last_frame = (uint32_t)b, s->width = (uint32_t)w, s->height = (uint32_t)h;
 	}

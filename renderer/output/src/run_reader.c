@@ -63,7 +63,7 @@ int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_si
 	m->gpu_ms_median = json_number_value(json_object_get(tot, "gpu_ms_median"));
 	m->wall_s = json_number_value(json_object_get(tot, "wall_s"));
 	json_decref(j);
-	if (a < 0 || b < a || b > 0x7fffffff || w < 1 || h < 1 || w > 16384 || h > 16384 || !(m->fps > 0) || m->fps > 1000)
+	if (a < 0 || b < a || b > 0xffffffffLL || w < 1 || h < 1 || w > 16384 || h > 16384 || !(m->fps > 0) || m->fps > 1000)
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: impossible frames, size or fps; render the run again", path);
 	m->first_frame = (uint32_t)a;
 	m->last_frame = (uint32_t)b;
@@ -113,7 +113,9 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 		if (!seen[i])
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: frame %06zu.%s is missing (run frames %u..%u)%s", path,
 				      m->first_frame + i, ext, m->first_frame, m->last_frame,
-				      !strcmp(ext, "png") && !m->png ? "; the run was rendered with --no-png" : "; render the run again");
+				      !strcmp(ext, "png") && !m->png   ? "; the run was rendered with --no-png"
+				      : !strcmp(ext, "exr") && !m->exr ? "; the run was rendered with --no-exr"
+								       : "; render the run again");
 	free(seen);
 	return rc;
 }

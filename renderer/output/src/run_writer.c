@@ -113,12 +113,13 @@ static json_t *inputs_json(const run_info *in)
 	json_t *opts = json_object();
 	for (size_t i = 0; i < in->option_count; i++)
 		json_object_set_new(opts, in->options[i].key, option_json(&in->options[i]));
-	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:[i,i], s:[i,i], s:f}", "scene",
+	/* Frames as 64-bit JSON integers: a frame number is a uint32_t (an int turned frames >= 2^31 negative). */
+	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
 			 in->scene_name, "scene_path", in->scene_path, "camera", in->camera, "camera_motion",
 			 in->camera_motion, "method", in->method, "variant", in->variant, "threshold",
 			 isfinite(in->threshold) ? json_real(in->threshold) : json_null(), "period",
 			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "frames",
-			 (int)in->first_frame, (int)in->last_frame, "size", (int)in->width, (int)in->height, "fps",
+			 (json_int_t)in->first_frame, (json_int_t)in->last_frame, "size", (int)in->width, (int)in->height, "fps",
 			 (double)in->fps);
 }
 
@@ -288,11 +289,11 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 	char created[32];
 	tl_clock_utc(created, sizeof created);
 	const run_info *in = &w->info;
-	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, s:{s:i, s:I, s:I, s:I, s:f, s:f}, s:s}",
+	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
 			      "taslab_version", TASLAB_VERSION_STRING, "created_utc", created, "inputs", w->inputs,
 			      "device", "name", in->device, "driver", in->driver, "validation", in->validation, "outputs",
 			      "exr", in->write_exr, "png", in->write_png, "decisions", in->write_decisions, "display_transform",
-			      in->display_transform ? in->display_transform : "", "totals", "frames", (int)w->frames,
+			      in->display_transform ? in->display_transform : "", "totals", "frames", (json_int_t)w->frames,
 			      "visible_samples", (json_int_t)w->visible_total, "shaded_samples", (json_int_t)w->shaded_total,
 			      "fs_invocations", (json_int_t)w->fs_total, "gpu_ms_median", median, "wall_s", wall_s,
 			      "command", in->command_line ? in->command_line : "");

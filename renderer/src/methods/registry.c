@@ -151,7 +151,9 @@ int method_config_set(method_config *c, const char *option, const char *value, c
 		v = value && *value ? strtod(value, &end) : NAN;
 		if (!value || !*value || *end || !isfinite(v))
 			return tl_error(err, err_size, TL_ERR_ARG, "--%s '%s' is not a number", o->name, value ? value : "");
-		if (o->type == METHOD_OPT_UINT && v != floor(v))
+		/* Whole numbers are written as digits, as every other count of the command line (cli_parse_uint): "2.0"
+		 * and "1e2" are not accepted as 2 and 100. */
+		if (o->type == METHOD_OPT_UINT && (v != floor(v) || strspn(value, "0123456789") != strlen(value)))
 			return tl_error(err, err_size, TL_ERR_ARG, "--%s '%s' is not a whole number", o->name, value);
 		if (o->allowed) {
 			size_t k = 0;

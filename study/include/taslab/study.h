@@ -131,6 +131,13 @@ int sty_export_long(sty *s, const char *path, char *err, size_t err_size);
  * answer, condition names "ref", METHOD_T<T> (tfr_T8, tarc-oracle_T8), METHOD_N<period> (rrc_N4) or METHOD
  * (sa); a tie ("same") is written as two rows, one for each side. */
 int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size);
+/* Both exports at once (either path may be NULL): every output is checked (sty_check_output, and the two are not
+ * the same file) before anything is written, and the two files are committed together or not at all. */
+int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err, size_t err_size);
+/* TL_ERR_ARG when writing `path` would write over the study's own files: the database or its SQLite journals
+ * (-wal, -shm, -journal), by any spelling, symlink or hard link. Every study command with an --out checks its
+ * outputs with it before writing anything. */
+int sty_check_output(const sty *s, const char *path, char *err, size_t err_size);
 /* Imports a long-format ratings file into a new study (sty_create; a study that holds participants is refused);
  * validates every row first and imports nothing if any row is bad (the message names the line). The header is
  * the one sty_export_long writes, or the DESIGN section 7 header without period (files from before the period

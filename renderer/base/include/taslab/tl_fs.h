@@ -4,8 +4,10 @@
  * temporary file in the destination folder, named ".NAME.tmp.XXXXXX" (unique per process and call,
  * mkstemp), every write is checked, the file is flushed and fsync'ed, closed, renamed over NAME, and
  * the folder is fsync'ed. A crash or a full disk therefore never leaves a truncated file under the
- * final name, and a reader sees either the old or the new file. tl_fs_clean_temps removes temporary
- * files that a killed process left behind.
+ * final name, and a reader sees either the old or the new file. While a temporary file is ours we hold
+ * an flock on it (the kernel drops it when the process dies), so tl_fs_clean_temps can tell the
+ * temporary files that a killed process left behind from those a running writer still owns; every
+ * command calls it on its output folders.
  *
  *   tl_atomic a;
  *   if (tl_atomic_open(&a, path, err, n)) return ...;      // a.f: a stdio stream on the temporary file
@@ -28,7 +30,8 @@ extern "C" {
 
 #define TL_PATH_MAX 4096
 
-/* Creates a folder and its parents (mkdir -p). TL_ERR_OUTPUT when a part exists as a file or cannot be
+/* Creates a folder and its parents (mkdir -p) for outputs, and removes the temporary files that killed
+ * writers left in it (tl_fs_clean_temps). TL_ERR_OUTPUT when a part exists as a file or cannot be
  * created. */
 int tl_mkdirs(const char *path, char *err, size_t err_size);
 
@@ -37,6 +40,7 @@ typedef struct tl_atomic {
 	char tmp[TL_PATH_MAX];  /* temporary name in the same folder */
 	FILE *f;                /* open stream on tmp (NULL after tl_atomic_detach) */
 	bool open;              /* tmp exists and is ours */
+	int lock_fd;            /* holds the flock on tmp while open (valid only when open) */
 } tl_atomic;
 
 /* Creates the temporary file for `path` (its folder must exist). TL_ERR_OUTPUT on failure. */
@@ -46,8 +50,18 @@ int tl_atomic_detach(tl_atomic *a, char *err, size_t err_size);
 /* Flushes, checks every write, fsyncs, closes, renames into place and fsyncs the folder. On any failure
  * the temporary file is removed and TL_ERR_OUTPUT returned (ENOSPC and EIO are reported here). */
 int tl_atomic_commit(tl_atomic *a, char *err, size_t err_size);
+/* Gives up the lock of a detached temporary file, for sets of thousands of files (each lock holds a file
+ * descriptor). A cleaner may then take the file for abandoned; the commit then fails with a message. */
+void tl_atomic_unlock(tl_atomic *a);
 /* Discards the temporary file (safe to call after a commit or on a zeroed struct). */
 void tl_atomic_abort(tl_atomic *a);
+
+/* A set of outputs that belong together (a tally's tables, a tone-mapped sequence): every temporary file
+ * is flushed, checked and fsync'ed first, and only when all of them are good are they renamed into place.
+ * On a failure every temporary file of the set is removed and no final name has changed (a rename failing
+ * halfway, which needs a vanished folder, is reported). Zeroed entries are skipped. */
+int tl_atomic_commit_set(tl_atomic *a, size_t n, char *err, size_t err_size);
+void tl_atomic_abort_set(tl_atomic *a, size_t n);
 
 /* Writes `size` bytes to `path` atomically. */
 int tl_write_file(const char *path, const void *data, size_t size, char *err, size_t err_size);
@@ -55,9 +69,18 @@ int tl_write_file(const char *path, const void *data, size_t size, char *err, si
  * than `max_size` bytes. */
 int tl_read_file(const char *path, size_t max_size, char **data, size_t *size, char *err, size_t err_size);
 
-/* Removes the temporary files ".*.tmp.XXXXXX" of tl_atomic (left by a killed process) in `dir`;
- * returns how many were removed. Only names of exactly that shape are touched. */
+/* Removes the temporary files ".*.tmp.XXXXXX" of tl_atomic that a killed process left in `dir`;
+ * returns how many were removed. Only names of exactly that shape are touched, and only when no process
+ * holds their lock (a writer that is still running keeps its file); SQLite's -wal, -shm and -journal files
+ * beside a removed one go with it. */
 int tl_fs_clean_temps(const char *dir);
+/* tl_fs_clean_temps on the folder of the file `path`. */
+int tl_fs_clean_temps_beside(const char *path);
+
+/* Checks, before any long work, that folder `dir` can take outputs: creates it (and its parents) and
+ * creates and removes a temporary file in it, so a read-only file system, missing permissions or an
+ * unusable path fail now. TL_ERR_OUTPUT with one line naming `what` (e.g. "--out"). */
+int tl_check_out_dir(const char *dir, const char *what, char *err, size_t err_size);
 
 bool tl_is_dir(const char *path);
 bool tl_is_file(const char *path);
@@ -66,6 +89,9 @@ bool tl_is_file(const char *path);
  * existing parent is resolved). Used so that no command writes over its own inputs. */
 bool tl_same_file(const char *a, const char *b);
 bool tl_path_inside(const char *inner, const char *outer);
+/* True when a and b are the same file: the same existing file (tl_same_file: symlinks, hard links,
+ * other spellings) or, when they do not exist yet, the same path after resolving their parents. */
+bool tl_same_path(const char *a, const char *b);
 
 #ifdef __cplusplus
 }

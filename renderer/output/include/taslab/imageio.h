@@ -1,14 +1,18 @@
-/* imageio.h — image files through OpenImageIO (C shim over the C++ API).
+/* imageio.h — image files: EXR and others through OpenImageIO (C shim over the C++ API), PNG through libpng.
  *
  * Writers are atomic: the file is written under a temporary name in the same folder and renamed
- * into place, so an interrupted run never leaves a truncated image under the final name.
- * Errors: negative return and a one-line message in `err`.
+ * into place, so an interrupted run never leaves a truncated image under the final name; PNG writes
+ * are checked to the last byte (a full disk is an error, not a truncated file).
+ * Readers give colours as stored: an image with alpha is never premultiplied (alpha is dropped by the
+ * 8-bit reader), grey is copied to R, G and B. Errors: negative return and a one-line message in `err`,
+ * nothing printed by the decoder library.
  */
 #ifndef TASLAB_IMAGEIO_H
 #define TASLAB_IMAGEIO_H
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "taslab/tl_error.h"
 
@@ -27,15 +31,20 @@ int imageio_write_exr_half(const char *path, uint32_t width, uint32_t height, co
 /* 8-bit RGB PNG from RGBA8 pixels (alpha dropped: display frames are opaque). */
 int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8, char *err,
 			   size_t err_size);
-/* Reads any image OpenImageIO can read as 8-bit RGB; *rgb is malloc'ed (caller frees). */
+/* Reads a PNG, or any image OpenImageIO can read, as 8-bit RGB; *rgb is malloc'ed (caller frees). */
 int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size);
-/* Reads an image as float RGBA (missing channels: RGB from the first channel, alpha 1); *rgba is malloc'ed.
+/* Reads an image as float RGBA (missing channels: RGB from the first channel, alpha 1; a PNG as code values
+ * / 255); *rgba is malloc'ed.
  * Fails with a message naming the first non-finite pixel when `reject_nonfinite` is set. */
 int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
 			    char *err, size_t err_size);
 /* 8-bit RGB PNG from RGB8 pixels. */
 int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb, char *err,
 				  size_t err_size);
+/* The same PNG into an open stream (e.g. a tl_atomic's, for files committed as a set); `path` names it in
+ * messages. The caller checks the stream's flush and close (tl_atomic_detach / commit). */
+int imageio_write_png_stream(FILE *f, const char *path, uint32_t width, uint32_t height, const uint8_t *rgb, char *err,
+			     size_t err_size);
 /* Reads a string attribute of an image's header into `value` (empty if absent). */
 int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size);
 
