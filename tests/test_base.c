@@ -193,6 +193,18 @@ static void test_clean_temps(void **state)
 	close(ready[1]);
 }
 
+/* Fails unless the files f0.txt and f1.txt of `d` hold `text`. */
+static void expect_set_contents(const char *d, const char *text)
+{
+	char p[4096];
+	for (int i = 0; i < 2; i++) {
+		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
+		char *t = tu_read_file(p, NULL);
+		assert_string_equal(t, text);
+		free(t);
+	}
+}
+
 /* A set appears together: nothing under a final name before the commit, all after it; an abort leaves the old files. */
 static void test_atomic_set(void **state)
 {
@@ -208,23 +220,16 @@ static void test_atomic_set(void **state)
 	}
 	tl_atomic_abort_set(set, 3);
 	assert_int_equal(count_entries(d), 2);
+	expect_set_contents(d, "old");
 	for (int i = 0; i < 2; i++) {
 		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
-		char *t = tu_read_file(p, NULL);
-		assert_string_equal(t, "old");
-		free(t);
 		assert_int_equal(tl_atomic_open(&set[i], p, err, sizeof err), TL_OK);
 		fputs("new", set[i].f);
 	}
 	assert_int_equal(tl_atomic_detach(&set[1], err, sizeof err), TL_OK); /* detached members commit too */
 	assert_int_equal(tl_atomic_commit_set(set, 3, err, sizeof err), TL_OK); /* set[2] zeroed: skipped */
 	assert_int_equal(count_entries(d), 2);
-	for (int i = 0; i < 2; i++) {
-		snprintf(p, sizeof p, "%s/f%d.txt", d, i);
-		char *t = tu_read_file(p, NULL);
-		assert_string_equal(t, "new");
-		free(t);
-	}
+	expect_set_contents(d, "new");
 }
 
 /* An output folder is checked before the work: created when missing, refused when it cannot take a file
