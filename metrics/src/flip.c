@@ -38,11 +38,16 @@
  *
  * Implementation notes (speed): all filters are applied separably, vertical pass first then horizontal, over
  * column strips of at most STRIP_W output pixels so the working set stays in L2. The vertical pass of one output
- * row reads its (2R+1) converted input rows from a ring buffer (each input row is converted once per strip). Inner
- * loops are written over fixed-size chunks of VW floats with no branches so that gcc -O2 vectorises them; the
- * transcendental functions (pow, cbrt, sqrt) are replaced by vectorisable float approximations accurate to a few
- * 1e-7 relative (the per-pixel result stays within ~5e-6 of a double-precision evaluation). For integral inputs the
- * sRGB EOTF is a 256-entry table. On x86-64 the hot functions also get an AVX2 clone (see FLIP_TARGET_CLONES).
+ * row reads its (2R+1) converted input rows from a ring buffer (each input row is converted once per strip; the
+ * next row's part is prefetched, as the hardware prefetcher does not follow a strip's row-to-row stride). Each
+ * pass runs one loop per input plane, each as long as its own kernels (the achromatic and red-green CSFs are
+ * narrow, see kernel_reach), written with GCC vector extensions so that accumulators and pointers stay in
+ * registers. No per-pixel branches; the transcendental functions are division-free float approximations
+ * (Newton iterations for x^(-1/5) and x^(-1/3), series for log2/exp2; each within 1e-6 relative, measured) and
+ * sqrt is the hardware instruction (-fno-math-errno). On x86-64 the hot functions get AVX-512 and AVX2+FMA
+ * clones (FLIP_TARGET_CLONES) with fused multiply-adds (-ffp-contract=fast): clones round differently in the
+ * last bits (a machine always picks the same one, so results are reproducible on it); every clone stays within
+ * 1e-7 of the reference means (tests/test_metrics.c; the baseline clone checked by hand).
  */
 #include "taslab/metrics_flip.h"
 #include "taslab/tl_error.h"
@@ -60,14 +65,14 @@
 #endif
 
 /* Chunk width of the vectorised loops (floats). All row buffers are padded to a multiple of it. */
-#define VW 8
-/* On x86-64 Linux with gcc, the hot row functions are compiled twice, for AVX2 and for the baseline ISA, and the
- * variant is picked at load time (ifunc). Plain C everywhere else, with -DFLIP_NO_CLONES, and under ThreadSanitizer
- * (whose runtime is not initialised yet when ifunc resolvers run). Both variants give the same results: no FMA
- * contraction in ISO C mode, and vectorisation does not reorder floating-point operations. */
+#define VW 16
+/* On x86-64 Linux with gcc, the hot row functions are compiled three times, for AVX-512 (x86-64-v4), AVX2 + FMA
+ * (x86-64-v3) and the baseline ISA, and the variant is picked at load time (ifunc). Plain C everywhere else, with
+ * -DFLIP_NO_CLONES, and under ThreadSanitizer (whose runtime is not initialised yet when ifunc resolvers run). The
+ * variants differ only in rounding (FMA contraction), by ~1e-8 on the means. */
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) &&                           \
     !defined(FLIP_NO_CLONES) && !defined(__SANITIZE_THREAD__)
-#define FLIP_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
+#define FLIP_TARGET_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define FLIP_TARGET_CLONES
 #endif
@@ -106,7 +111,9 @@ static const double RGB2XYZ[9] = {
 
 struct mtr_flip {
 	double ppd;
-	int r;  /* CSF kernel radius */
+	int r;  /* CSF kernel radius (the blue-yellow kernels use all of it) */
+	int ry; /* achromatic CSF taps used: the rest weigh too little to change a float sum (see kernel_reach) */
+	int rx; /* red-green CSF taps used */
 	int fr; /* feature kernel radius */
 	int R;  /* max(r, fr): ring height is 2R+1, horizontal halo is R */
 	/* Half kernels, index k = |offset|, length R+1, zero beyond their own radius. */
@@ -120,7 +127,6 @@ struct mtr_flip {
 	float cmax_lo;     /* p_c * c_max */
 	float slope_lo;    /* p_t / (p_c c_max) */
 	float slope_hi;    /* (1 - p_t) / (c_max - p_c c_max) */
-	float srgb_lut[256];
 };
 
 static void set_err(char *err, size_t err_size, const char *fmt, ...)
@@ -157,10 +163,6 @@ static void mat3_mul(const double *a, const double *b, double *o)
 			o[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
 }
 
-static double srgb_eotf(double c)
-{
-	return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
 
 /* CIELAB companding function f(t). */
 static double lab_f(double t)
@@ -185,6 +187,22 @@ static void rgb_to_hunt_lab(const double rgb[3], double lab[3])
 }
 
 /* ---- creation ---- */
+
+/* Number of taps of the half kernel w[0..r] (unit sum over -r..r) that matter in single precision: the outer taps
+ * are dropped while their total weight on both sides stays below 2^-27 of the kernel's (7.5e-9: less than a
+ * float's rounding of any filtered value, whose magnitude is at most ~1; the 2D kernel loses at most twice that). */
+static int kernel_reach(const float *w, int r)
+{
+	double total = w[0], tail = 0.0;
+	for (int k = 1; k <= r; k++)
+		total += 2.0 * w[k];
+	int n = r;
+	while (n > 0 && tail + 2.0 * w[n] <= 0x1p-27 * total) {
+		tail += 2.0 * w[n];
+		n--;
+	}
+	return n;
+}
 
 int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size)
 {
@@ -258,6 +276,15 @@ int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size)
 		}
 	}
 
+	/* The achromatic and red-green Gaussians are narrow (sigma ~1.0 and ~1.1 pixels at 67 ppd) but get the
+	 * blue-yellow radius; their outer taps are cut where they can no longer change a single-precision result. */
+	f->ry = kernel_reach(f->wy, r);
+	f->rx = kernel_reach(f->wcx, r);
+	for (int k = f->ry + 1; k <= R; k++)
+		f->wy[k] = 0.0f;
+	for (int k = f->rx + 1; k <= R; k++)
+		f->wcx[k] = 0.0f;
+
 	/* Feature kernels (feature pipeline): Gaussian g, -x g, (x^2/sigma^2 - 1) g. The 2D detectors are products
 	 * with a Gaussian in the other direction; normalising g to unit sum and the positive / negative lobes of the
 	 * derivatives to +1 / -1 in 1D gives the same 2D normalisation. */
@@ -317,8 +344,6 @@ int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size)
 		f->slope_lo = (float)(FLIP_PT / (FLIP_PC * cmax));
 		f->slope_hi = (float)((1.0 - FLIP_PT) / (cmax - FLIP_PC * cmax));
 	}
-	for (int i = 0; i < 256; i++)
-		f->srgb_lut[i] = (float)srgb_eotf(i / 255.0);
 	*out = f;
 	return 0;
 }
@@ -396,30 +421,15 @@ static inline float fast_exp2(float x)
 	return p * bits_to_float((uint32_t)(n + 127) << 23);
 }
 
-/* Cube root of a positive normal float: bit-level initial guess (~4 % error) refined by two Halley steps
- * (cubic convergence; relative error < 3e-7, measured). */
+/* Cube root of a positive normal float in [0.008856, 1] (the CIELAB range it is used on): z = t^(-1/3) from a
+ * bit-level guess and three Newton steps z <- z (4 - t z^3) / 3 (no division), then t z^2; relative error
+ * < 3.3e-7 over that range (measured against cbrt() in double). */
 static inline float fast_cbrt(float t)
 {
-	float y = bits_to_float(float_to_bits(t) / 3u + 0x2a5137a0u);
-	float y3 = y * y * y;
-	y = y * (y3 + 2.0f * t) / (2.0f * y3 + t);
-	y3 = y * y * y;
-	y = y * (y3 + 2.0f * t) / (2.0f * y3 + t);
-	return y;
-}
-
-/* Square root of a non-negative float via Newton-refined reciprocal square root (3 steps from the bit-level guess;
- * relative error < 2e-7, measured). Used instead of sqrtf() in the vectorised loops because sqrtf() keeps an errno
- * branch for negative arguments (C's default math-errno semantics), which prevents vectorisation. Exactly 0 for x = 0.
- */
-static inline float fast_sqrt(float x)
-{
-	float r = bits_to_float(0x5f375a86u - (float_to_bits(x) >> 1));
-	float hx = 0.5f * x;
-	r = r * (1.5f - hx * r * r);
-	r = r * (1.5f - hx * r * r);
-	r = r * (1.5f - hx * r * r);
-	return x * r;
+	float z = bits_to_float(0x54a0f000u - float_to_bits(t) / 3u);
+	for (int i = 0; i < 3; i++)
+		z = z * (1.33333333f - 0.333333333f * t * (z * z * z));
+	return t * z * z;
 }
 
 /* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
@@ -435,13 +445,19 @@ static inline float clamp01(float v)
 	return select_f(v < 1.0f, v, 1.0f);
 }
 
-/* sRGB EOTF (IEC 61966-2-1) for values in 0..1: linear segment below 0.04045, else ((c + 0.055) / 1.055)^2.4
- * (relative error < 1e-6, measured). Used for non-integral inputs; integral ones use the exact table. */
+/* sRGB EOTF (IEC 61966-2-1) for values in 0..1: linear segment below 0.04045, else b^2.4 with b = (c + 0.055) / 1.055,
+ * computed as b^3 z^3 with z = b^(-1/5) from a bit-level guess and three Newton steps z <- z (6 - b z^5) / 5
+ * (no division, no log/exp; relative error < 7e-7 over [0.04045, 1], measured against pow() in double). */
 static inline float srgb_eotf_fast(float v)
 {
-	float base = (v + 0.055f) * (1.0f / 1.055f);
-	base = select_f(base > 0.01f, base, 0.01f); /* keep the unused branch finite */
-	float hi = fast_exp2(2.4f * fast_log2(base));
+	float b = v * (1.0f / 1.055f) + (0.055f / 1.055f);
+	b = select_f(b > 0.01f, b, 0.01f); /* keep the unused branch finite */
+	float z = bits_to_float(0x4c25e800u - float_to_bits(b) / 5u);
+	for (int i = 0; i < 3; i++) {
+		float z2 = z * z;
+		z = z * (1.2f - 0.2f * b * (z2 * z2 * z));
+	}
+	float hi = (b * b * b) * (z * z * z);
 	return select_f(v <= 0.04045f, v * (1.0f / 12.92f), hi);
 }
 
@@ -467,6 +483,7 @@ typedef struct {
 	float *vbuf; /* 2 images x V_N vertically filtered planes */
 	float *hbuf; /* 2 images x H_N planes: filtered Y, Cx, Cz, edge/point responses, then L, a', b' */
 	float *err;  /* one row of errors */
+	float *lin;  /* one row of linear RGB, interleaved (3 swp floats) */
 } scratch;
 
 /* Vertically filtered planes: CSF-filtered Y, Cx, Cz (two Gaussians), and Y/Yn filtered with the feature Gaussian,
@@ -483,113 +500,121 @@ static inline float *ring_plane(const scratch *s, int R, uint32_t src_row, int i
 
 /* Colour pipeline, colour space transform: n packed sRGB pixels (0..255) -> linear RGB (sRGB EOTF) -> the three
  * opponent planes Y/Yn = (Yy + 16) / 116, X/Xn - Y/Yn = Cx / 500, Y/Yn - Z/Zn = Cz / 200 (YyCxCz up to constant
- * scale and offset, which the unit-sum CSF filters commute with). Y/Yn is also the feature pipeline's input. */
-FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *rgb, uint32_t n, float *restrict py,
-                                           float *restrict pcx, float *restrict pcz)
+ * scale and offset, which the unit-sum CSF filters commute with). Y/Yn is also the feature pipeline's input.
+ * One vectorised loop for every input (integral 8-bit values or not): the EOTF formula costs less than a table
+ * lookup, which x86 can only do with gathers. */
+FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *restrict rgb, uint32_t n, float *restrict lin,
+                                           float *restrict py, float *restrict pcx, float *restrict pcz)
 {
-	const float *m = f->lin2opp;
-	/* Integral 0..255 inputs take the table; anything else the (vectorised) EOTF formula.
-	 * Chunks of VW pixels keep the loops vectorisable at -O2 (no epilogue inside); a scalar tail follows. */
-	const uint32_t nv = n / VW * VW;
-	int integral = 1;
-	for (uint32_t i = 0; i < 3 * nv; i += VW) {
-		int ok = 1;
-		for (int u = 0; u < VW; u++) {
-			float v = rgb[i + (uint32_t)u];
-			int inr = (v >= 0.0f) & (v <= 255.0f);
-			float c = select_f(inr, v, 0.0f); /* keeps the conversion below defined */
-			ok &= inr & ((float)(int)c == c);
-		}
-		integral &= ok;
-	}
-	for (uint32_t i = 3 * nv; i < 3 * n; i++) {
-		float v = rgb[i];
-		integral &= (v >= 0.0f) & (v <= 255.0f) && (float)(int)v == v;
-	}
-	if (integral) {
-		for (uint32_t i = 0; i < n; i++) {
-			float r = f->srgb_lut[(int)rgb[3 * i]], g = f->srgb_lut[(int)rgb[3 * i + 1]],
-			      b = f->srgb_lut[(int)rgb[3 * i + 2]];
-			py[i] = m[0] * r + m[1] * g + m[2] * b;
-			pcx[i] = m[3] * r + m[4] * g + m[5] * b;
-			pcz[i] = m[6] * r + m[7] * g + m[8] * b;
-		}
-		return;
-	}
-	/* Fractional inputs: de-interleave into the output planes (scalar), then the vectorised EOTF + matrix. */
-	for (uint32_t i = 0; i < n; i++) {
-		py[i] = rgb[3 * i];
-		pcx[i] = rgb[3 * i + 1];
-		pcz[i] = rgb[3 * i + 2];
-	}
-	for (uint32_t i = 0; i < nv; i += VW)
-		for (int u = 0; u < VW; u++) {
-			const uint32_t p = i + (uint32_t)u;
-			float r = srgb_eotf_fast(py[p] * (1.0f / 255.0f));
-			float g = srgb_eotf_fast(pcx[p] * (1.0f / 255.0f));
-			float b = srgb_eotf_fast(pcz[p] * (1.0f / 255.0f));
-			py[p] = m[0] * r + m[1] * g + m[2] * b;
-			pcx[p] = m[3] * r + m[4] * g + m[5] * b;
-			pcz[p] = m[6] * r + m[7] * g + m[8] * b;
-		}
-	for (uint32_t i = nv; i < n; i++) {
-		float r = srgb_eotf_fast(py[i] * (1.0f / 255.0f));
-		float g = srgb_eotf_fast(pcx[i] * (1.0f / 255.0f));
-		float b = srgb_eotf_fast(pcz[i] * (1.0f / 255.0f));
-		py[i] = m[0] * r + m[1] * g + m[2] * b;
-		pcx[i] = m[3] * r + m[4] * g + m[5] * b;
-		pcz[i] = m[6] * r + m[7] * g + m[8] * b;
+	const float m0 = f->lin2opp[0], m1 = f->lin2opp[1], m2 = f->lin2opp[2], m3 = f->lin2opp[3], m4 = f->lin2opp[4],
+	            m5 = f->lin2opp[5], m6 = f->lin2opp[6], m7 = f->lin2opp[7], m8 = f->lin2opp[8];
+	/* The EOTF over the interleaved values (dense vectors), then the matrix, which de-interleaves. */
+	for (uint32_t i = 0; i < 3 * n; i++)
+		lin[i] = srgb_eotf_fast(rgb[i] * (1.0f / 255.0f));
+	for (uint32_t p = 0; p < n; p++) {
+		const float r = lin[3 * p], g = lin[3 * p + 1], b = lin[3 * p + 2];
+		py[p] = m0 * r + m1 * g + m2 * b;
+		pcx[p] = m3 * r + m4 * g + m5 * b;
+		pcz[p] = m6 * r + m7 * g + m8 * b;
 	}
 }
 
+/* The filter loops are written with GCC's vector extensions (8 floats, one AVX register; two SSE registers in the
+ * baseline clone), two vectors (VW = 16 floats) per accumulator so that independent multiply-adds overlap. Loads
+ * and stores go through an unaligned, may-alias vector type. */
+typedef float v8f __attribute__((vector_size(32)));
+typedef float v8f_u __attribute__((vector_size(32), aligned(4), may_alias));
+#define LD8(p) (*(const v8f_u *)(const void *)(p))
+#define ST8(p, v) (*(v8f_u *)(void *)(p) = (v))
+
 /* Vertical pass of the separable filters for one output row (colour pipeline: CSF spatial filtering; feature
- * pipeline: edge / point detection), buffer columns [j0, j1) (multiples of VW). ry/rcx/rcz[k], k = 0..2R, are the
- * opponent planes of source rows clamp(y - R + k); symmetric kernels fold the taps at -k and +k, the antisymmetric
- * first derivative takes their difference. Outputs are the V_N vertically filtered planes. */
-FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, int R, float *const *ry, float *const *rcx,
-                                             float *const *rcz, size_t j0, size_t j1, float *restrict oy,
-                                             float *restrict ocx, float *restrict ocz1, float *restrict ocz2,
-                                             float *restrict og, float *restrict odg, float *restrict oddg)
+ * pipeline: edge / point detection), buffer columns [j0, j1) (multiples of VW). ry/rcx/rcz[R + k], |k| <= R, are
+ * the opponent planes of source rows clamp(y + k); symmetric kernels fold the taps at -k and +k, the antisymmetric
+ * first derivative takes their difference. o[V_*] are the V_N vertically filtered planes. One loop per input plane,
+ * each tap loop as long as its own kernels (few live accumulators and pointers: they stay in registers). */
+FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry, float *const *rcx,
+                                             float *const *rcz, size_t j0, size_t j1, float *const *o)
 {
+	const int R = f->R, kyf = f->ry < f->fr ? f->ry : f->fr;
 	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
 	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
+	/* Y/Yn: the achromatic CSF and the three feature kernels share the folded taps. */
 	for (size_t j = j0; j < j1; j += VW) {
-		float ay[VW], ag[VW], ad[VW], add[VW], ax[VW], az1[VW], az2[VW];
-		const float *cy = ry[R] + j, *cx = rcx[R] + j, *cz = rcz[R] + j;
-		for (int v = 0; v < VW; v++) {
-			ay[v] = wy[0] * cy[v];
-			ag[v] = fg[0] * cy[v];
-			ad[v] = 0.0f;
-			add[v] = fdd[0] * cy[v];
-			ax[v] = wcx[0] * cx[v];
-			az1[v] = wz1[0] * cz[v];
-			az2[v] = wz2[0] * cz[v];
+		v8f ay[2], ag[2], ad[2], add[2];
+		for (int h = 0; h < 2; h++) {
+			v8f c = LD8(ry[R] + j + 8 * h);
+			ay[h] = wy[0] * c;
+			ag[h] = fg[0] * c;
+			ad[h] = c * 0.0f;
+			add[h] = fdd[0] * c;
 		}
-		for (int k = 1; k <= R; k++) {
-			const float *ym = ry[R - k] + j, *yp = ry[R + k] + j;
-			const float *xm = rcx[R - k] + j, *xp = rcx[R + k] + j;
-			const float *zm = rcz[R - k] + j, *zp = rcz[R + k] + j;
-			const float a = wy[k], b = fg[k], c = fdg[k], d = fdd[k], e = wcx[k], g1 = wz1[k], g2 = wz2[k];
-			for (int v = 0; v < VW; v++) {
-				float s = ym[v] + yp[v], dd = yp[v] - ym[v];
-				float sx = xm[v] + xp[v], sz = zm[v] + zp[v];
-				ay[v] += a * s;
-				ag[v] += b * s;
-				ad[v] += c * dd;
-				add[v] += d * s;
-				ax[v] += e * sx;
-				az1[v] += g1 * sz;
-				az2[v] += g2 * sz;
+		int k = 1;
+		for (; k <= kyf; k++) {
+			const float *m = ry[R - k] + j, *p = ry[R + k] + j;
+			const float a = wy[k], b = fg[k], d = fdg[k], e = fdd[k];
+			for (int h = 0; h < 2; h++) {
+				v8f vm = LD8(m + 8 * h), vp = LD8(p + 8 * h), sm = vm + vp, df = vp - vm;
+				ay[h] += a * sm;
+				ag[h] += b * sm;
+				ad[h] += d * df;
+				add[h] += e * sm;
 			}
 		}
-		for (int v = 0; v < VW; v++) {
-			oy[j + v] = ay[v];
-			og[j + v] = ag[v];
-			odg[j + v] = ad[v];
-			oddg[j + v] = add[v];
-			ocx[j + v] = ax[v];
-			ocz1[j + v] = az1[v];
-			ocz2[j + v] = az2[v];
+		for (int k2 = k; k2 <= f->fr; k2++) {
+			const float *m = ry[R - k2] + j, *p = ry[R + k2] + j;
+			const float b = fg[k2], d = fdg[k2], e = fdd[k2];
+			for (int h = 0; h < 2; h++) {
+				v8f vm = LD8(m + 8 * h), vp = LD8(p + 8 * h), sm = vm + vp, df = vp - vm;
+				ag[h] += b * sm;
+				ad[h] += d * df;
+				add[h] += e * sm;
+			}
+		}
+		for (int k2 = k; k2 <= f->ry; k2++) {
+			const float *m = ry[R - k2] + j, *p = ry[R + k2] + j;
+			for (int h = 0; h < 2; h++)
+				ay[h] += wy[k2] * (LD8(m + 8 * h) + LD8(p + 8 * h));
+		}
+		for (int h = 0; h < 2; h++) {
+			ST8(o[V_Y] + j + 8 * h, ay[h]);
+			ST8(o[V_G] + j + 8 * h, ag[h]);
+			ST8(o[V_DG] + j + 8 * h, ad[h]);
+			ST8(o[V_DDG] + j + 8 * h, add[h]);
+		}
+	}
+	/* Cx / 500: the red-green CSF. */
+	for (size_t j = j0; j < j1; j += VW) {
+		v8f ax[2];
+		for (int h = 0; h < 2; h++)
+			ax[h] = wcx[0] * LD8(rcx[R] + j + 8 * h);
+		for (int k = 1; k <= f->rx; k++) {
+			const float *m = rcx[R - k] + j, *p = rcx[R + k] + j;
+			for (int h = 0; h < 2; h++)
+				ax[h] += wcx[k] * (LD8(m + 8 * h) + LD8(p + 8 * h));
+		}
+		for (int h = 0; h < 2; h++)
+			ST8(o[V_CX] + j + 8 * h, ax[h]);
+	}
+	/* Cz / 200: the blue-yellow CSF, two Gaussians (filtered separately, summed after the horizontal pass). */
+	for (size_t j = j0; j < j1; j += VW) {
+		v8f a1[2], a2[2];
+		for (int h = 0; h < 2; h++) {
+			v8f c = LD8(rcz[R] + j + 8 * h);
+			a1[h] = wz1[0] * c;
+			a2[h] = wz2[0] * c;
+		}
+		for (int k = 1; k <= f->r; k++) {
+			const float *m = rcz[R - k] + j, *p = rcz[R + k] + j;
+			const float b1 = wz1[k], b2 = wz2[k];
+			for (int h = 0; h < 2; h++) {
+				v8f sm = LD8(m + 8 * h) + LD8(p + 8 * h);
+				a1[h] += b1 * sm;
+				a2[h] += b2 * sm;
+			}
+		}
+		for (int h = 0; h < 2; h++) {
+			ST8(o[V_CZ1] + j + 8 * h, a1[h]);
+			ST8(o[V_CZ2] + j + 8 * h, a2[h]);
 		}
 	}
 }
@@ -597,52 +622,91 @@ FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, int R, float *co
 /* Horizontal pass of the separable filters: output i in [0, n) (n multiple of VW) reads the vertically filtered
  * planes at i + R + offset (the R halo columns were filled by clamp-to-edge). Produces the CSF-filtered Y, Cx,
  * Cz = (Cz Gaussian 1 + Cz Gaussian 2) and the detectors: edge x = d/dx (x) Gaussian (y), edge y = Gaussian (x)
- * d/dy (y), and likewise for the points with the second derivative. */
-FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, int R, const float *restrict v, size_t swp, size_t n,
-                                               float *restrict h)
+ * d/dy (y), and likewise for the points with the second derivative. Four loops with at most four input streams
+ * each, so that pointers and accumulators stay in registers. */
+FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, const float *v, size_t swp, size_t n, float *h)
 {
+	const int R = f->R, rxy = f->ry > f->rx ? f->ry : f->rx;
 	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
 	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
 	const float *iy = v + V_Y * swp + R, *ix = v + V_CX * swp + R, *iz1 = v + V_CZ1 * swp + R,
 	            *iz2 = v + V_CZ2 * swp + R, *ig = v + V_G * swp + R, *id = v + V_DG * swp + R,
 	            *idd = v + V_DDG * swp + R;
+	/* Achromatic and red-green CSFs (wy, wcx are zero beyond their own radius). */
 	for (size_t i = 0; i < n; i += VW) {
-		float ay[VW], ax[VW], az[VW], aex[VW], aey[VW], apx[VW], apy[VW];
-		for (int u = 0; u < VW; u++) {
-			size_t p = i + (size_t)u;
-			ay[u] = wy[0] * iy[p];
-			ax[u] = wcx[0] * ix[p];
-			az[u] = wz1[0] * iz1[p] + wz2[0] * iz2[p];
-			aex[u] = 0.0f;
-			aey[u] = fg[0] * id[p];
-			apx[u] = fdd[0] * ig[p];
-			apy[u] = fg[0] * idd[p];
+		v8f ay[2], ax[2];
+		for (int u = 0; u < 2; u++) {
+			ay[u] = wy[0] * LD8(iy + i + 8 * u);
+			ax[u] = wcx[0] * LD8(ix + i + 8 * u);
 		}
-		for (int k = 1; k <= R; k++) {
-			const float a = wy[k], b = wcx[k], c1 = wz1[k], c2 = wz2[k], g = fg[k], d = fdg[k], dd = fdd[k];
-			/* Left (-k) and right (+k) taps; the R halo columns keep every index inside the row buffer. */
-			const ptrdiff_t lo = (ptrdiff_t)i - k, hi = (ptrdiff_t)i + k;
-			const float *yl = iy + lo, *yh = iy + hi, *xl = ix + lo, *xh = ix + hi, *z1l = iz1 + lo, *z1h = iz1 + hi,
-			            *z2l = iz2 + lo, *z2h = iz2 + hi, *gl = ig + lo, *gh = ig + hi, *dl = id + lo, *dh = id + hi,
-			            *ddl = idd + lo, *ddh = idd + hi;
-			for (int u = 0; u < VW; u++) {
-				ay[u] += a * (yl[u] + yh[u]);
-				ax[u] += b * (xl[u] + xh[u]);
-				az[u] += c1 * (z1l[u] + z1h[u]) + c2 * (z2l[u] + z2h[u]);
-				aex[u] += d * (gh[u] - gl[u]);
-				apx[u] += dd * (gl[u] + gh[u]);
-				aey[u] += g * (dl[u] + dh[u]);
-				apy[u] += g * (ddl[u] + ddh[u]);
+		for (int k = 1; k <= rxy; k++) {
+			const float a = wy[k], b = wcx[k];
+			for (int u = 0; u < 2; u++) {
+				ay[u] += a * (LD8(iy + i + 8 * u - k) + LD8(iy + i + 8 * u + k));
+				ax[u] += b * (LD8(ix + i + 8 * u - k) + LD8(ix + i + 8 * u + k));
 			}
 		}
-		for (int u = 0; u < VW; u++) {
-			h[H_Y * swp + i + u] = ay[u];
-			h[H_CX * swp + i + u] = ax[u];
-			h[H_CZ * swp + i + u] = az[u];
-			h[H_EX * swp + i + u] = aex[u];
-			h[H_EY * swp + i + u] = aey[u];
-			h[H_PX * swp + i + u] = apx[u];
-			h[H_PY * swp + i + u] = apy[u];
+		for (int u = 0; u < 2; u++) {
+			ST8(h + H_Y * swp + i + 8 * u, ay[u]);
+			ST8(h + H_CX * swp + i + 8 * u, ax[u]);
+		}
+	}
+	/* Blue-yellow CSF: the two Gaussians in their own accumulators, summed at the end. */
+	for (size_t i = 0; i < n; i += VW) {
+		v8f a1[2], a2[2];
+		for (int u = 0; u < 2; u++) {
+			a1[u] = wz1[0] * LD8(iz1 + i + 8 * u);
+			a2[u] = wz2[0] * LD8(iz2 + i + 8 * u);
+		}
+		for (int k = 1; k <= f->r; k++) {
+			const float c1 = wz1[k], c2 = wz2[k];
+			for (int u = 0; u < 2; u++) {
+				a1[u] += c1 * (LD8(iz1 + i + 8 * u - k) + LD8(iz1 + i + 8 * u + k));
+				a2[u] += c2 * (LD8(iz2 + i + 8 * u - k) + LD8(iz2 + i + 8 * u + k));
+			}
+		}
+		for (int u = 0; u < 2; u++)
+			ST8(h + H_CZ * swp + i + 8 * u, a1[u] + a2[u]);
+	}
+	/* Feature pipeline, x derivatives of the vertically Gaussian-filtered plane: edges (first derivative,
+	 * antisymmetric) and points (second derivative). */
+	for (size_t i = 0; i < n; i += VW) {
+		v8f ae[2], ap[2];
+		for (int u = 0; u < 2; u++) {
+			v8f c = LD8(ig + i + 8 * u);
+			ae[u] = c * 0.0f;
+			ap[u] = fdd[0] * c;
+		}
+		for (int k = 1; k <= f->fr; k++) {
+			const float d = fdg[k], dd = fdd[k];
+			for (int u = 0; u < 2; u++) {
+				v8f gl = LD8(ig + i + 8 * u - k), gh = LD8(ig + i + 8 * u + k);
+				ae[u] += d * (gh - gl);
+				ap[u] += dd * (gl + gh);
+			}
+		}
+		for (int u = 0; u < 2; u++) {
+			ST8(h + H_EX * swp + i + 8 * u, ae[u]);
+			ST8(h + H_PX * swp + i + 8 * u, ap[u]);
+		}
+	}
+	/* y derivatives: the vertical first / second derivative planes filtered with the Gaussian along x. */
+	for (size_t i = 0; i < n; i += VW) {
+		v8f ae[2], ap[2];
+		for (int u = 0; u < 2; u++) {
+			ae[u] = fg[0] * LD8(id + i + 8 * u);
+			ap[u] = fg[0] * LD8(idd + i + 8 * u);
+		}
+		for (int k = 1; k <= f->fr; k++) {
+			const float g = fg[k];
+			for (int u = 0; u < 2; u++) {
+				ae[u] += g * (LD8(id + i + 8 * u - k) + LD8(id + i + 8 * u + k));
+				ap[u] += g * (LD8(idd + i + 8 * u - k) + LD8(idd + i + 8 * u + k));
+			}
+		}
+		for (int u = 0; u < 2; u++) {
+			ST8(h + H_EY * swp + i + 8 * u, ae[u]);
+			ST8(h + H_PY * swp + i + 8 * u, ap[u]);
 		}
 	}
 }
@@ -688,7 +752,7 @@ FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *rest
 			/* HyAB distance, then ^q_c and the compression re-mapping into [0,1]. */
 			float dl = hr[H_L * swp + p] - ht[H_L * swp + p];
 			float da = hr[H_A * swp + p] - ht[H_A * swp + p], db = hr[H_B * swp + p] - ht[H_B * swp + p];
-			float hy = fabsf(dl) + fast_sqrt(da * da + db * db);
+			float hy = fabsf(dl) + sqrtf(da * da + db * db);
 			float dc = fast_exp2((float)FLIP_QC * fast_log2(select_f(hy > 1e-30f, hy, 1e-30f)));
 			dc = select_f(hy > 0.0f, dc, 0.0f);
 			dc = select_f(dc < cmax_lo, slope_lo * dc, (float)FLIP_PT + (dc - cmax_lo) * slope_hi);
@@ -697,9 +761,9 @@ FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *rest
 			      py1 = hr[H_PY * swp + p];
 			float ex2 = ht[H_EX * swp + p], ey2 = ht[H_EY * swp + p], px2 = ht[H_PX * swp + p],
 			      py2 = ht[H_PY * swp + p];
-			float de = fabsf(fast_sqrt(ex1 * ex1 + ey1 * ey1) - fast_sqrt(ex2 * ex2 + ey2 * ey2));
-			float dp = fabsf(fast_sqrt(px1 * px1 + py1 * py1) - fast_sqrt(px2 * px2 + py2 * py2));
-			float df = fast_sqrt(select_f(de > dp, de, dp) * 0.707106781f);
+			float de = fabsf(sqrtf(ex1 * ex1 + ey1 * ey1) - sqrtf(ex2 * ex2 + ey2 * ey2));
+			float dp = fabsf(sqrtf(px1 * px1 + py1 * py1) - sqrtf(px2 * px2 + py2 * py2));
+			float df = sqrtf(select_f(de > dp, de, dp) * 0.707106781f);
 			/* Final error dE_c^(1 - dE_f); 0^0 = 1 as with pow(). */
 			float ex = 1.0f - df;
 			float e = fast_exp2(ex * fast_log2(select_f(dc > 1e-30f, dc, 1e-30f)));
@@ -726,9 +790,10 @@ static void *band_worker(void *arg)
 	s.vbuf = calloc(2 * V_N * s.swp, sizeof(float));
 	s.hbuf = calloc(2 * H_N * s.swp, sizeof(float));
 	s.err = calloc(s.swp, sizeof(float));
+	s.lin = calloc(3 * s.swp, sizeof(float));
 	float **rp = malloc(sizeof(float *) * 6 * (size_t)(2 * R + 1));
 	job->sum = 0.0;
-	if (!s.ring || !s.vbuf || !s.hbuf || !s.err || !rp) {
+	if (!s.ring || !s.vbuf || !s.hbuf || !s.err || !s.lin || !rp) {
 		job->status = -2;
 		goto done;
 	}
@@ -748,10 +813,18 @@ static void *band_worker(void *arg)
 			/* Convert the input rows that enter the vertical window of row y (clamped to the image). */
 			const uint32_t last = (uint64_t)y + (uint64_t)R < H ? y + (uint32_t)R : H - 1;
 			for (; next_src <= last; next_src++)
-				for (int im = 0; im < 2; im++)
-					convert_row(f, job->img[im] + ((size_t)next_src * W + cx0) * 3, cx1 - cx0,
+				for (int im = 0; im < 2; im++) {
+					/* The strip's part of the row after this one is not a stream the hardware prefetcher
+					 * follows (one image row apart): fetch it while this row is converted. */
+					if (next_src + 1 < H) {
+						const char *nx = (const char *)(job->img[im] + ((size_t)(next_src + 1) * W + cx0) * 3);
+						for (size_t b = 0; b < (size_t)(cx1 - cx0) * 3 * sizeof(float); b += 64)
+							__builtin_prefetch(nx + b);
+					}
+					convert_row(f, job->img[im] + ((size_t)next_src * W + cx0) * 3, cx1 - cx0, s.lin,
 					            ring_plane(&s, R, next_src, im, 0) + jv0, ring_plane(&s, R, next_src, im, 1) + jv0,
 					            ring_plane(&s, R, next_src, im, 2) + jv0);
+				}
 			for (int im = 0; im < 2; im++) {
 				float **ry = rp + (size_t)(3 * im) * (size_t)(2 * R + 1);
 				float **rcx = ry + (2 * R + 1), **rcz = rcx + (2 * R + 1);
@@ -763,8 +836,10 @@ static void *band_worker(void *arg)
 					rcz[k] = ring_plane(&s, R, cy, im, 2);
 				}
 				float *v = s.vbuf + (size_t)im * V_N * s.swp;
-				vertical_pass(f, R, ry, rcx, rcz, ja, jb, v + V_Y * s.swp, v + V_CX * s.swp, v + V_CZ1 * s.swp,
-				              v + V_CZ2 * s.swp, v + V_G * s.swp, v + V_DG * s.swp, v + V_DDG * s.swp);
+				float *vo[V_N];
+				for (int pl = 0; pl < V_N; pl++)
+					vo[pl] = v + (size_t)pl * s.swp;
+				vertical_pass(f, ry, rcx, rcz, ja, jb, vo);
 				/* Clamp-to-edge columns: replicate the first / last image column into the halo. */
 				for (int pl = 0; pl < V_N; pl++) {
 					float *row = v + (size_t)pl * s.swp;
@@ -773,7 +848,7 @@ static void *band_worker(void *arg)
 					for (size_t j = jv1; j < swr + 2 * (size_t)R; j++)
 						row[j] = row[jv1 - 1];
 				}
-				horizontal_pass(f, R, v, s.swp, swr, s.hbuf + (size_t)im * H_N * s.swp);
+				horizontal_pass(f, v, s.swp, swr, s.hbuf + (size_t)im * H_N * s.swp);
 			}
 			for (int im = 0; im < 2; im++) {
 				float *h = s.hbuf + (size_t)im * H_N * s.swp;
@@ -797,6 +872,7 @@ done:
 	free(s.vbuf);
 	free(s.hbuf);
 	free(s.err);
+	free(s.lin);
 	free(rp);
 	return NULL;
 }
