@@ -619,6 +619,31 @@ FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry
 	}
 }
 
+/* Two planes, each with its own symmetric kernel (half kernels w1, w2, taps 1..r): o1[i] = sum_k w1[|k|] p1[i + k],
+ * likewise o2, i in [0, n) (multiple of VW); p1, p2 have r readable values either side. */
+static inline void hfilter_pair(const float *p1, const float *w1, const float *p2, const float *w2, int r, size_t n,
+                                float *o1, float *o2)
+{
+	for (size_t i = 0; i < n; i += VW) {
+		v8f a1[2], a2[2];
+		for (int u = 0; u < 2; u++) {
+			a1[u] = w1[0] * LD8(p1 + i + 8 * u);
+			a2[u] = w2[0] * LD8(p2 + i + 8 * u);
+		}
+		for (int k = 1; k <= r; k++) {
+			const float c1 = w1[k], c2 = w2[k];
+			for (int u = 0; u < 2; u++) {
+				a1[u] += c1 * (LD8(p1 + i + 8 * u - k) + LD8(p1 + i + 8 * u + k));
+				a2[u] += c2 * (LD8(p2 + i + 8 * u - k) + LD8(p2 + i + 8 * u + k));
+			}
+		}
+		for (int u = 0; u < 2; u++) {
+			ST8(o1 + i + 8 * u, a1[u]);
+			ST8(o2 + i + 8 * u, a2[u]);
+		}
+	}
+}
+
 /* Horizontal pass of the separable filters: output i in [0, n) (n multiple of VW) reads the vertically filtered
  * planes at i + R + offset (the R halo columns were filled by clamp-to-edge). Produces the CSF-filtered Y, Cx,
  * Cz = (Cz Gaussian 1 + Cz Gaussian 2) and the detectors: edge x = d/dx (x) Gaussian (y), edge y = Gaussian (x)
@@ -633,24 +658,7 @@ FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, const float *v
 	            *iz2 = v + V_CZ2 * swp + R, *ig = v + V_G * swp + R, *id = v + V_DG * swp + R,
 	            *idd = v + V_DDG * swp + R;
 	/* Achromatic and red-green CSFs (wy, wcx are zero beyond their own radius). */
-	for (size_t i = 0; i < n; i += VW) {
-		v8f ay[2], ax[2];
-		for (int u = 0; u < 2; u++) {
-			ay[u] = wy[0] * LD8(iy + i + 8 * u);
-			ax[u] = wcx[0] * LD8(ix + i + 8 * u);
-		}
-		for (int k = 1; k <= rxy; k++) {
-			const float a = wy[k], b = wcx[k];
-			for (int u = 0; u < 2; u++) {
-				ay[u] += a * (LD8(iy + i + 8 * u - k) + LD8(iy + i + 8 * u + k));
-				ax[u] += b * (LD8(ix + i + 8 * u - k) + LD8(ix + i + 8 * u + k));
-			}
-		}
-		for (int u = 0; u < 2; u++) {
-			ST8(h + H_Y * swp + i + 8 * u, ay[u]);
-			ST8(h + H_CX * swp + i + 8 * u, ax[u]);
-		}
-	}
+	hfilter_pair(iy, wy, ix, wcx, rxy, n, h + H_Y * swp, h + H_CX * swp);
 	/* Blue-yellow CSF: the two Gaussians in their own accumulators, summed at the end. */
 	for (size_t i = 0; i < n; i += VW) {
 		v8f a1[2], a2[2];
@@ -691,24 +699,7 @@ FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, const float *v
 		}
 	}
 	/* y derivatives: the vertical first / second derivative planes filtered with the Gaussian along x. */
-	for (size_t i = 0; i < n; i += VW) {
-		v8f ae[2], ap[2];
-		for (int u = 0; u < 2; u++) {
-			ae[u] = fg[0] * LD8(id + i + 8 * u);
-			ap[u] = fg[0] * LD8(idd + i + 8 * u);
-		}
-		for (int k = 1; k <= f->fr; k++) {
-			const float g = fg[k];
-			for (int u = 0; u < 2; u++) {
-				ae[u] += g * (LD8(id + i + 8 * u - k) + LD8(id + i + 8 * u + k));
-				ap[u] += g * (LD8(idd + i + 8 * u - k) + LD8(idd + i + 8 * u + k));
-			}
-		}
-		for (int u = 0; u < 2; u++) {
-			ST8(h + H_EY * swp + i + 8 * u, ae[u]);
-			ST8(h + H_PY * swp + i + 8 * u, ap[u]);
-		}
-	}
+	hfilter_pair(id, fg, idd, fg, f->fr, n, h + H_EY * swp, h + H_PY * swp);
 }
 
 /* Filtered opponent values -> linear RGB clamped to [0,1] -> Hunt-adjusted CIELAB (colour pipeline):
