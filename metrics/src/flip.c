@@ -52,6 +52,8 @@
 #include "taslab/metrics_flip.h"
 #include "taslab/tl_error.h"
 
+#include "flip_math.h"
+
 #include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -357,110 +359,6 @@ void mtr_flip_destroy(mtr_flip **f)
 	*f = NULL;
 }
 
-/* ---- vectorisable float approximations ---- */
-
-static inline float bits_to_float(uint32_t u)
-{
-	float x;
-	memcpy(&x, &u, sizeof x);
-	return x;
-}
-
-static inline uint32_t float_to_bits(float x)
-{
-	uint32_t u;
-	memcpy(&u, &x, sizeof u);
-	return u;
-}
-
-/* Branch-free select (c ? a : b) through bit masks. A plain ?: whose operands are floating-point expressions is
- * not if-converted by gcc under the default -ftrapping-math (the arithmetic could trap if speculated), which blocks
- * vectorisation; this form is. */
-static inline float select_f(int c, float a, float b)
-{
-	uint32_t m = 0u - (uint32_t)(c != 0);
-	return bits_to_float((float_to_bits(a) & m) | (float_to_bits(b) & ~m));
-}
-
-/* log2(x) for positive normal x; error within ~1 ulp of the result (measured < 1.1e-6 absolute for |log2 x| <= 20,
- * < 2e-7 near x = 1). Mantissa reduced to [sqrt(1/2), sqrt(2)), then
- * ln(m) = 2 atanh(s), s = (m-1)/(m+1), by its odd series up to s^9. */
-static inline float fast_log2(float x)
-{
-	uint32_t u = float_to_bits(x);
-	int32_t e = (int32_t)((u >> 23) & 0xffu) - 127;
-	float m = bits_to_float((u & 0x007fffffu) | 0x3f800000u);
-	int big = m > 1.41421356f;
-	m = select_f(big, m * 0.5f, m);
-	e += big;
-	float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
-	float p = 1.0f / 9.0f;
-	p = p * s2 + 1.0f / 7.0f;
-	p = p * s2 + 1.0f / 5.0f;
-	p = p * s2 + 1.0f / 3.0f;
-	p = p * s2 + 1.0f;
-	return (float)e + s * p * 2.88539008f; /* 2 / ln 2 */
-}
-
-/* 2^x, x clamped to [-126, 127]; relative error < 1e-7 (measured). n = round(x), 2^f for f in [-0.5, 0.5] by Taylor
- * series. */
-static inline float fast_exp2(float x)
-{
-	x = select_f(x > -126.0f, x, -126.0f); /* also maps NaN to -126 */
-	x = select_f(x < 127.0f, x, 127.0f);
-	int32_t n = (int32_t)(x + 127.5f) - 127; /* floor(x + 0.5); argument positive so truncation is floor */
-	float t = (x - (float)n) * 0.693147181f;
-	float p = 1.0f / 5040.0f;
-	p = p * t + 1.0f / 720.0f;
-	p = p * t + 1.0f / 120.0f;
-	p = p * t + 1.0f / 24.0f;
-	p = p * t + 1.0f / 6.0f;
-	p = p * t + 0.5f;
-	p = p * t + 1.0f;
-	p = p * t + 1.0f;
-	return p * bits_to_float((uint32_t)(n + 127) << 23);
-}
-
-/* Cube root of a positive normal float in [0.008856, 1] (the CIELAB range it is used on): z = t^(-1/3) from a
- * bit-level guess and three Newton steps z <- z (4 - t z^3) / 3 (no division), then t z^2; relative error
- * < 3.3e-7 over that range (measured against cbrt() in double). */
-static inline float fast_cbrt(float t)
-{
-	float z = bits_to_float(0x54a0f000u - float_to_bits(t) / 3u);
-	for (int i = 0; i < 3; i++)
-		z = z * (1.33333333f - 0.333333333f * t * (z * z * z));
-	return t * z * z;
-}
-
-/* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
-static inline float lab_f_fast(float t)
-{
-	float cr = fast_cbrt(select_f(t > 0.008856f, t, 0.008856f)); /* keep the unused branch finite */
-	return select_f(t > 0.00885645168f, cr, t * 7.78703704f + 0.137931034f);
-}
-
-static inline float clamp01(float v)
-{
-	v = select_f(v > 0.0f, v, 0.0f);
-	return select_f(v < 1.0f, v, 1.0f);
-}
-
-/* sRGB EOTF (IEC 61966-2-1) for values in 0..1: linear segment below 0.04045, else b^2.4 with b = (c + 0.055) / 1.055,
- * computed as b^3 z^3 with z = b^(-1/5) from a bit-level guess and three Newton steps z <- z (6 - b z^5) / 5
- * (no division, no log/exp; relative error < 7e-7 over [0.04045, 1], measured against pow() in double). */
-static inline float srgb_eotf_fast(float v)
-{
-	float b = v * (1.0f / 1.055f) + (0.055f / 1.055f);
-	b = select_f(b > 0.01f, b, 0.01f); /* keep the unused branch finite */
-	float z = bits_to_float(0x4c25e800u - float_to_bits(b) / 5u);
-	for (int i = 0; i < 3; i++) {
-		float z2 = z * z;
-		z = z * (1.2f - 0.2f * b * (z2 * z2 * z));
-	}
-	float hi = (b * b * b) * (z * z * z);
-	return select_f(v <= 0.04045f, v * (1.0f / 12.92f), hi);
-}
-
 /* ---- per-thread work ---- */
 
 typedef struct {
@@ -535,7 +433,7 @@ typedef float v8f_u __attribute__((vector_size(32), aligned(4), may_alias));
 FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry, float *const *rcx,
                                              float *const *rcz, size_t j0, size_t j1, float *const *o)
 {
-	const int R = f->R, kyf = f->ry < f->fr ? f->ry : f->fr;
+	const int R = f->R, kyf = f->ry > f->fr ? f->ry : f->fr; /* wy and the feature kernels are 0 beyond their radii */
 	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
 	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
 	/* Y/Yn: the achromatic CSF and the three feature kernels share the folded taps. */
@@ -545,11 +443,10 @@ FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry
 			v8f c = LD8(ry[R] + j + 8 * h);
 			ay[h] = wy[0] * c;
 			ag[h] = fg[0] * c;
-			ad[h] = c * 0.0f;
+			ad[h] = (v8f){0};
 			add[h] = fdd[0] * c;
 		}
-		int k = 1;
-		for (; k <= kyf; k++) {
+		for (int k = 1; k <= kyf; k++) {
 			const float *m = ry[R - k] + j, *p = ry[R + k] + j;
 			const float a = wy[k], b = fg[k], d = fdg[k], e = fdd[k];
 			for (int h = 0; h < 2; h++) {
@@ -559,21 +456,6 @@ FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry
 				ad[h] += d * df;
 				add[h] += e * sm;
 			}
-		}
-		for (int k2 = k; k2 <= f->fr; k2++) {
-			const float *m = ry[R - k2] + j, *p = ry[R + k2] + j;
-			const float b = fg[k2], d = fdg[k2], e = fdd[k2];
-			for (int h = 0; h < 2; h++) {
-				v8f vm = LD8(m + 8 * h), vp = LD8(p + 8 * h), sm = vm + vp, df = vp - vm;
-				ag[h] += b * sm;
-				ad[h] += d * df;
-				add[h] += e * sm;
-			}
-		}
-		for (int k2 = k; k2 <= f->ry; k2++) {
-			const float *m = ry[R - k2] + j, *p = ry[R + k2] + j;
-			for (int h = 0; h < 2; h++)
-				ay[h] += wy[k2] * (LD8(m + 8 * h) + LD8(p + 8 * h));
 		}
 		for (int h = 0; h < 2; h++) {
 			ST8(o[V_Y] + j + 8 * h, ay[h]);
@@ -682,7 +564,7 @@ FLIP_TARGET_CLONES static void horizontal_pass(const mtr_flip *f, const float *v
 		v8f ae[2], ap[2];
 		for (int u = 0; u < 2; u++) {
 			v8f c = LD8(ig + i + 8 * u);
-			ae[u] = c * 0.0f;
+			ae[u] = (v8f){0};
 			ap[u] = fdd[0] * c;
 		}
 		for (int k = 1; k <= f->fr; k++) {
