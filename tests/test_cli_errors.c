@@ -1,6 +1,7 @@
 /* test_cli_errors.c — the taslab binary as a user runs it: bad input gives one line on stderr and a
  * non-zero exit and leaves no manifest.json; a good run completes with validation on and is
- * byte-for-byte reproducible (PNG and EXR, rendered a second apart); analyze refuses an --out that takes no files before it starts. */
+ * byte-for-byte reproducible (PNG and EXR, rendered a second apart); analyze refuses an --out that takes no files before it starts;
+ * without the OpenImageIO module (taslab_oiio.so) an EXR write fails with one line naming it, and PNG-only work runs. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -168,6 +169,41 @@ static void test_help_and_version(void **state)
 	assert_non_null(strstr(out, "unknown command"));
 }
 
+/* The OpenImageIO module is loaded only for EXR and non-PNG images (imageio_oiio.h): pointed at a missing file, a
+ * render that writes EXR stops with one line saying what to do and leaves no manifest; PNG-only rendering and
+ * metrics diff on the PNGs need nothing from it. */
+static void test_oiio_module(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("cli_oiio");
+	char cmd[8192], p[4096];
+	const char *env = "TASLAB_OIIO_MODULE=/nonexistent/taslab_oiio.so";
+	snprintf(cmd, sizeof cmd, "%s %s render --scene turntable --size 32x18 --frames 20 --device lavapipe --quiet --out %s/exr",
+		 env, TASLAB_BINARY, dir);
+	int st = tu_run(cmd, out, sizeof out);
+	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, "000020.exr") || !strstr(out, "TASLAB_OIIO_MODULE") ||
+	    !strstr(out, "/nonexistent/taslab_oiio.so"))
+		fail_msg("'%s' gave %d:\n%s\nexpected one line naming the EXR and TASLAB_OIIO_MODULE", cmd, st, out);
+	snprintf(p, sizeof p, "%s/exr/manifest.json", dir);
+	assert_false(tu_file_exists(p));
+	for (int i = 0; i < 2; i++) {
+		snprintf(cmd, sizeof cmd,
+			 "%s %s render --scene turntable --size 32x18 --frames 20:22 --device lavapipe --no-exr --quiet %s "
+			 "--out %s/png%d",
+			 env, TASLAB_BINARY, i ? "--trivial-shading" : "", dir, i);
+		st = tu_run(cmd, out, sizeof out);
+		if (st != 0)
+			fail_msg("'%s' failed (%d):\n%s", cmd, st, out);
+	}
+	snprintf(cmd, sizeof cmd, "%s %s metrics diff --ref %s/png0/frames --test %s/png1/frames --out %s/diff", env,
+		 TASLAB_BINARY, dir, dir, dir);
+	st = tu_run(cmd, out, sizeof out);
+	if (st != 0)
+		fail_msg("'%s' failed (%d):\n%s", cmd, st, out);
+	snprintf(p, sizeof p, "%s/diff/summary.json", dir);
+	assert_true(tu_file_exists(p));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -175,6 +211,7 @@ int main(void)
 		cmocka_unit_test(test_good_run_reproducible),
 		cmocka_unit_test(test_analyze_out_first),
 		cmocka_unit_test(test_help_and_version),
+		cmocka_unit_test(test_oiio_module),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,11 +1,10 @@
-// imageio.cpp — thin extern "C" shim over OpenImageIO (see imageio.h); PNGs go through libpng (png.c).
-#include "taslab/imageio.h"
+// oiio_module.cpp — the OpenImageIO half of imageio.h as a loadable module (taslab_oiio.so; imageio_oiio.h says
+// why): EXR writing and reading of every format but PNG (png.c), as a thin shim over the C++ API.
+#include "imageio_oiio.h"
 
 #include <OpenImageIO/imageio.h>
 
-#include "imageio_internal.h"
 #include "taslab/tl_error.h"
-#include "taslab/tl_fs.h"
 
 #include <cmath>
 #include <cstdio>
@@ -25,36 +24,9 @@ static std::string first_line(std::string e)
 	return e.empty() ? std::string("unknown error") : e;
 }
 
-// Written by file name to the atomic-write helper's temporary file, which is fsync'ed and renamed into
-// place only when OpenImageIO reports success for the pixels and for closing (tl_fs.h).
-static int write_atomic(const char *path, const char *format, const ImageSpec &spec, TypeDesc type,
-			const void *pixels, stride_t xstride, char *err, size_t err_size)
-{
-	tl_atomic a;
-	int rc = tl_atomic_open(&a, path, err, err_size);
-	if (rc || (rc = tl_atomic_detach(&a, err, err_size)))
-		return rc;
-	auto out = ImageOutput::create(format);
-	if (!out) {
-		tl_atomic_abort(&a);
-		return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: OpenImageIO has no %s writer: %s", path, format,
-				first_line(OIIO::geterror()).c_str());
-	}
-	if (!out->open(a.tmp, spec)) {
-		tl_atomic_abort(&a);
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write: %s", path, first_line(out->geterror()).c_str());
-	}
-	bool ok = out->write_image(type, pixels, xstride);
-	ok = out->close() && ok;
-	if (!ok) {
-		tl_atomic_abort(&a);
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: write failed: %s", path, first_line(out->geterror()).c_str());
-	}
-	return tl_atomic_commit(&a, err, err_size);
-}
-
-extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t height, const uint16_t *rgba_half,
-				      const imageio_attr *attrs, size_t attr_count, char *err, size_t err_size)
+// Written by file name to `tmp`, the caller's atomic-write temporary, which the caller commits only on success.
+static int write_exr_half(const char *tmp, const char *path, uint32_t width, uint32_t height, const uint16_t *rgba_half,
+			  const imageio_attr *attrs, size_t attr_count, char *err, size_t err_size)
 {
 	ImageSpec spec((int)width, (int)height, 4, TypeDesc::HALF);
 	spec.channelnames = {"R", "G", "B", "A"};
@@ -67,13 +39,22 @@ extern "C" int imageio_write_exr_half(const char *path, uint32_t width, uint32_t
 	spec.attribute("DateTime", "");
 	for (size_t i = 0; i < attr_count; i++)
 		spec.attribute(attrs[i].name, attrs[i].value);
-	return write_atomic(path, "openexr", spec, TypeDesc::HALF, rgba_half, AutoStride, err, err_size);
-}
-
-extern "C" int imageio_write_png_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *rgba8,
-				      char *err, size_t err_size)
-{
-	return imageio_png_write_rgb8(path, width, height, rgba8, 4, err, err_size);
+	auto out = ImageOutput::create("openexr");
+	if (!out) {
+		snprintf(err, err_size, "%s: OpenImageIO has no openexr writer: %s", path, first_line(OIIO::geterror()).c_str());
+		return TL_ERR_INTERNAL;
+	}
+	if (!out->open(tmp, spec)) {
+		snprintf(err, err_size, "%s: cannot write: %s", path, first_line(out->geterror()).c_str());
+		return TL_ERR_OUTPUT;
+	}
+	bool ok = out->write_image(TypeDesc::HALF, rgba_half);
+	ok = out->close() && ok;
+	if (!ok) {
+		snprintf(err, err_size, "%s: write failed: %s", path, first_line(out->geterror()).c_str());
+		return TL_ERR_OUTPUT;
+	}
+	return 0;
 }
 
 // OpenImageIO associates (premultiplies) alpha on reading unless asked not to: colours are read as stored.
@@ -84,12 +65,9 @@ static std::unique_ptr<ImageInput> open_input(const char *path)
 	return ImageInput::open(path, &config);
 }
 
-extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err,
-				 size_t err_size)
+static int read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size)
 {
 	*rgb = nullptr;
-	if (imageio_is_png(path))
-		return imageio_png_read_rgb8(path, width, height, rgb, err, err_size);
 	auto in = open_input(path);
 	if (!in) {
 		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
@@ -121,34 +99,10 @@ extern "C" int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *he
 	return 0;
 }
 
-extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba,
-				       int reject_nonfinite, char *err, size_t err_size)
+static int read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
+			   char *err, size_t err_size)
 {
 	*rgba = nullptr;
-	if (imageio_is_png(path)) { // code values / 255, alpha 1
-		uint8_t *px = nullptr;
-		uint32_t w, h;
-		int rc = imageio_png_read_rgb8(path, &w, &h, &px, err, err_size);
-		if (rc)
-			return rc;
-		size_t n = (size_t)w * h;
-		float *out = (float *)malloc(n * 4 * sizeof(float));
-		if (!out) {
-			free(px);
-			snprintf(err, err_size, "%s: out of memory", path);
-			return TL_ERR_NOMEM;
-		}
-		for (size_t i = 0; i < n; i++) {
-			for (int c = 0; c < 3; c++)
-				out[i * 4 + c] = px[i * 3 + c] / 255.0f;
-			out[i * 4 + 3] = 1.0f;
-		}
-		free(px);
-		*width = w;
-		*height = h;
-		*rgba = out;
-		return 0;
-	}
 	auto in = open_input(path);
 	if (!in) {
 		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
@@ -191,14 +145,7 @@ extern "C" int imageio_read_rgba_float(const char *path, uint32_t *width, uint32
 	return 0;
 }
 
-extern "C" int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb,
-					     char *err, size_t err_size)
-{
-	return imageio_png_write_rgb8(path, width, height, rgb, 3, err, err_size);
-}
-
-extern "C" int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err,
-				 size_t err_size)
+static int read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size)
 {
 	auto in = ImageInput::open(path);
 	if (!in) {
@@ -209,3 +156,8 @@ extern "C" int imageio_read_attr(const char *path, const char *name, char *value
 	snprintf(value, value_size, "%s", v.c_str());
 	return 0;
 }
+
+// The module's one exported symbol (imageio_oiio.h).
+extern "C" __attribute__((visibility("default"))) const imageio_oiio_api taslab_oiio_api = {
+    IMAGEIO_OIIO_VERSION, write_exr_half, read_rgb8, read_rgba_float, read_attr,
+};
