@@ -4,7 +4,9 @@
  *  - LDR-FLIP alone (mtr_flip_compute with its error map) on 1 and 2 threads, against NVIDIA's FLIP tool's 1.14 s /
  *    0.60 s per 1080p pair on this kind of 2-core machine (../shared/reference/flip/README.md);
  *  - a plain multithreaded read of the same four float buffers (vectorised, independent partial sums: the least any
- *    comparison must do) and the comparison's speed as a share of it.
+ *    comparison must do) and the comparison's speed as a share of it;
+ *  - the roofline: the machine's vector arithmetic peak on the same threads (independent multiply-add and add chains in
+ *    the filters' mix) and the time the exact separable filters of FLIP and SSIM alone would take at that peak.
  *   bench_metrics [--runs N] [--threads N] [A.png B.png]
  * Older binaries (before the plug-in registry) print only the first lines; scripts/bench-metrics parses by key. */
 #include <math.h>
@@ -69,6 +71,72 @@ static void *read_part(void *p)
 		s += acc[u];
 	r->sum = s;
 	return NULL;
+}
+
+/* ---- roofline: vector arithmetic peak ---- */
+
+typedef float pv16 __attribute__((vector_size(64)));
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(__SANITIZE_THREAD__)
+#define PEAK_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define PEAK_CLONES
+#endif
+#define PEAK_ITERS 20000000L
+#define PEAK_CHAINS 12
+
+/* 12 independent chains of 16-float operations (one AVX-512 instruction; two AVX2 ones), 7 multiply-add and 5 add
+ * (42 % adds: the mix of the filters counted in filter_ops), enough in flight to cover the latencies. Counted in
+ * lane-operations, a multiply-add once, as in filter_ops. (On this kind of machine, AMD Zen 4, 16-lane instructions
+ * gave 191 G lane-operations/s on 2 threads where 8-lane ones gave 154 G: the wider one is the peak.) */
+PEAK_CLONES __attribute__((optimize("fp-contract=fast"))) static void *peak_part(void *p)
+{
+	pv16 a[PEAK_CHAINS];
+	const pv16 m = (pv16){0} + 0.999f, c = (pv16){0} + 1e-3f;
+	volatile float seed = 0.5f; /* opaque start values: no chain can be folded at compile time */
+	for (int i = 0; i < PEAK_CHAINS; i++)
+		a[i] = (pv16){0} + seed * (float)(i + 1);
+	for (long n = 0; n < PEAK_ITERS; n++) {
+		for (int i = 0; i < 7; i++)
+			a[i] = a[i] * m + c;
+		for (int i = 7; i < PEAK_CHAINS; i++)
+			a[i] = a[i] + c;
+	}
+	float s = 0;
+	for (int i = 0; i < PEAK_CHAINS; i++)
+		s += a[i][0];
+	*(float *)p = s;
+	return NULL;
+}
+
+/* Lane-operations per second on nt threads (median of runs). */
+static double peak_ops(int nt, int runs, double *t)
+{
+	for (int r = 0; r < runs; r++) {
+		pthread_t th[64];
+		float res[64];
+		double t0 = now();
+		for (int k = 1; k < nt; k++)
+			pthread_create(&th[k], NULL, peak_part, &res[k]);
+		peak_part(&res[0]);
+		for (int k = 1; k < nt; k++)
+			pthread_join(th[k], NULL);
+		t[r] = now() - t0;
+	}
+	return (double)nt * PEAK_ITERS * PEAK_CHAINS * 16 / median(t, runs);
+}
+
+/* Lane-operations per pixel of a pair that the exact separable filters need at least, with symmetric taps folded
+ * (a tap pair costs one add or subtract, shared by every kernel filtering the same plane, and one multiply-add per
+ * kernel; the centre one multiply), radii as flip.c and metric_ssim.c use them at 67.02 pixels per degree:
+ *   FLIP, per image: vertical pass: Y/Yn with the achromatic CSF (radius 6) and the feature Gaussian, first and
+ *   second derivative (radius 9): 9 sums + 9 differences + 7 + 10 + 9 + 10 = 54; Cx (radius 7): 7 + 8 = 15; Cz, two
+ *   Gaussians (radius 10): 10 + 11 + 11 = 32. Horizontal pass: Y 6 + 7 = 13; Cx 15; Cz 2 x 21 + 1 = 43; the Gaussian
+ *   plane's x derivatives 9 + 9 + 9 + 10 = 37; the two derivative planes' Gaussians 2 x 19 = 38. 247 per image.
+ *   SSIM (radius 5), per channel: products a^2 + b^2 and ab, 3; 4 quantities x 2 passes x (5 + 6) = 88. 91 x 3.
+ * Colour conversions, the final formulas, maxrgb, psnr, flicker and pooling are not counted: a lower bound. */
+static double filter_ops(void)
+{
+	return 2 * 247 + 3 * 91;
 }
 
 int main(int argc, char **argv)
@@ -217,6 +285,15 @@ int main(int argc, char **argv)
 	}
 	mtr_flip_destroy(&f);
 	free(map);
+	{
+		double peak = peak_ops(nt, runs < 5 ? runs : 5, t);
+		double floor_s = filter_ops() * w * h / peak;
+		printf("peak_gops %.1f  (vector lane-operations per second on %d threads: multiply-add and add chains)\n",
+		       peak / 1e9, nt);
+		printf("floor_filters_ms %.2f  (FLIP's and SSIM's exact filters alone, %.0f operations per pixel, at that peak: "
+		       "the whole compute at %.1f%% of the plain read at best)\n",
+		       floor_s * 1e3, filter_ops(), 100.0 * t_read / floor_s);
+	}
 #endif
 	for (int k = 0; k < 4; k++)
 		free(buf[k]);
