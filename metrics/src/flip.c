@@ -377,8 +377,8 @@ typedef struct {
 /* Per-thread scratch. Planes are rows of `swp` floats. */
 typedef struct {
 	size_t swp;
-	float *ring; /* (2R+1) row slots x 2 images x 3 opponent planes (Y/Yn, Cx/500, Cz/200) */
-	float *vbuf; /* 2 images x V_N vertically filtered planes */
+	float *ring; /* (2R+2) row slots x 2 images x 3 opponent planes (Y/Yn, Cx/500, Cz/200) */
+	float *vbuf; /* 2 output rows x 2 images x V_N vertically filtered planes */
 	float *hbuf; /* 2 images x H_N planes: filtered Y, Cx, Cz, edge/point responses, then L, a', b' */
 	float *err;  /* one row of errors */
 	float *lin;  /* one row of linear RGB, interleaved (3 swp floats) */
@@ -392,7 +392,7 @@ enum { H_Y, H_CX, H_CZ, H_EX, H_EY, H_PX, H_PY, H_L, H_A, H_B, H_N };
 
 static inline float *ring_plane(const scratch *s, int R, uint32_t src_row, int im, int plane)
 {
-	size_t slot = src_row % (uint32_t)(2 * R + 1);
+	size_t slot = src_row % (uint32_t)(2 * R + 2);
 	return s->ring + ((slot * 2 + (size_t)im) * 3 + (size_t)plane) * s->swp;
 }
 
@@ -497,6 +497,106 @@ FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry
 		for (int h = 0; h < 2; h++) {
 			ST8(o[V_CZ1] + j + 8 * h, a1[h]);
 			ST8(o[V_CZ2] + j + 8 * h, a2[h]);
+		}
+	}
+}
+
+/* The vertical pass for two output rows y and y + 1 at once (o0, o1), bit for bit what vertical_pass gives for each:
+ * ry/rcx/rcz[R + k], -R <= k <= R + 1, are the planes of source rows clamp(y + k). Tap k of row y pairs source rows
+ * y - k and y + k, tap k of row y + 1 pairs y + 1 - k and y + 1 + k; going outwards, each step loads the two new rows
+ * y - k and y + 1 + k and reuses the two of the step before (y + k = y + 1 + (k - 1), y + 1 - k = y - (k - 1)), so
+ * the 2R + 2 ring rows are read once for both outputs: half the ring traffic of two single passes (the ring is read
+ * from L2, whose bandwidth bounds this pass; the same change made SSIM's vertical pass 14 % faster). */
+FLIP_TARGET_CLONES static void vertical_pass2(const mtr_flip *f, float *const *ry, float *const *rcx,
+                                              float *const *rcz, size_t j0, size_t j1, float *const *o0,
+                                              float *const *o1)
+{
+	const int R = f->R, kyf = f->ry > f->fr ? f->ry : f->fr;
+	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
+	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
+	/* Y/Yn: achromatic CSF and the three feature kernels, one 8-float vector per accumulator (eight of them). */
+	for (size_t j = j0; j < j1; j += 8) {
+		const v8f c0 = LD8(ry[R] + j), c1 = LD8(ry[R + 1] + j);
+		v8f ay0 = wy[0] * c0, ag0 = fg[0] * c0, ad0 = (v8f){0}, add0 = fdd[0] * c0;
+		v8f ay1 = wy[0] * c1, ag1 = fg[0] * c1, ad1 = (v8f){0}, add1 = fdd[0] * c1;
+		v8f mprev = c0, pprev = c1;
+		for (int k = 1; k <= kyf; k++) {
+			const v8f m = LD8(ry[R - k] + j), p = LD8(ry[R + 1 + k] + j);
+			const float a = wy[k], b = fg[k], d = fdg[k], e = fdd[k];
+			const v8f sm0 = m + pprev, df0 = pprev - m, sm1 = mprev + p, df1 = p - mprev;
+			ay0 += a * sm0;
+			ag0 += b * sm0;
+			ad0 += d * df0;
+			add0 += e * sm0;
+			ay1 += a * sm1;
+			ag1 += b * sm1;
+			ad1 += d * df1;
+			add1 += e * sm1;
+			mprev = m;
+			pprev = p;
+		}
+		ST8(o0[V_Y] + j, ay0);
+		ST8(o0[V_G] + j, ag0);
+		ST8(o0[V_DG] + j, ad0);
+		ST8(o0[V_DDG] + j, add0);
+		ST8(o1[V_Y] + j, ay1);
+		ST8(o1[V_G] + j, ag1);
+		ST8(o1[V_DG] + j, ad1);
+		ST8(o1[V_DDG] + j, add1);
+	}
+	/* Cx / 500: the red-green CSF. */
+	for (size_t j = j0; j < j1; j += VW) {
+		v8f a0[2], a1[2], mprev[2], pprev[2];
+		for (int h = 0; h < 2; h++) {
+			mprev[h] = LD8(rcx[R] + j + 8 * h);
+			pprev[h] = LD8(rcx[R + 1] + j + 8 * h);
+			a0[h] = wcx[0] * mprev[h];
+			a1[h] = wcx[0] * pprev[h];
+		}
+		for (int k = 1; k <= f->rx; k++) {
+			const float w = wcx[k];
+			for (int h = 0; h < 2; h++) {
+				const v8f m = LD8(rcx[R - k] + j + 8 * h), p = LD8(rcx[R + 1 + k] + j + 8 * h);
+				a0[h] += w * (m + pprev[h]);
+				a1[h] += w * (mprev[h] + p);
+				mprev[h] = m;
+				pprev[h] = p;
+			}
+		}
+		for (int h = 0; h < 2; h++) {
+			ST8(o0[V_CX] + j + 8 * h, a0[h]);
+			ST8(o1[V_CX] + j + 8 * h, a1[h]);
+		}
+	}
+	/* Cz / 200: the blue-yellow CSF's two Gaussians. */
+	for (size_t j = j0; j < j1; j += VW) {
+		v8f a0[2], b0[2], a1[2], b1[2], mprev[2], pprev[2];
+		for (int h = 0; h < 2; h++) {
+			mprev[h] = LD8(rcz[R] + j + 8 * h);
+			pprev[h] = LD8(rcz[R + 1] + j + 8 * h);
+			a0[h] = wz1[0] * mprev[h];
+			b0[h] = wz2[0] * mprev[h];
+			a1[h] = wz1[0] * pprev[h];
+			b1[h] = wz2[0] * pprev[h];
+		}
+		for (int k = 1; k <= f->r; k++) {
+			const float w1 = wz1[k], w2 = wz2[k];
+			for (int h = 0; h < 2; h++) {
+				const v8f m = LD8(rcz[R - k] + j + 8 * h), p = LD8(rcz[R + 1 + k] + j + 8 * h);
+				const v8f sm0 = m + pprev[h], sm1 = mprev[h] + p;
+				a0[h] += w1 * sm0;
+				b0[h] += w2 * sm0;
+				a1[h] += w1 * sm1;
+				b1[h] += w2 * sm1;
+				mprev[h] = m;
+				pprev[h] = p;
+			}
+		}
+		for (int h = 0; h < 2; h++) {
+			ST8(o0[V_CZ1] + j + 8 * h, a0[h]);
+			ST8(o0[V_CZ2] + j + 8 * h, b0[h]);
+			ST8(o1[V_CZ1] + j + 8 * h, a1[h]);
+			ST8(o1[V_CZ2] + j + 8 * h, b1[h]);
 		}
 	}
 }
@@ -659,12 +759,12 @@ static void *band_worker(void *arg)
 	const uint32_t sw_max = W < STRIP_W ? W : STRIP_W;
 	scratch s;
 	s.swp = round_up(round_up(sw_max, VW) + 2 * (size_t)R, VW);
-	s.ring = calloc((size_t)(2 * R + 1) * 6 * s.swp, sizeof(float));
-	s.vbuf = calloc(2 * V_N * s.swp, sizeof(float));
+	s.ring = calloc((size_t)(2 * R + 2) * 6 * s.swp, sizeof(float));
+	s.vbuf = calloc(2 * 2 * V_N * s.swp, sizeof(float));
 	s.hbuf = calloc(2 * H_N * s.swp, sizeof(float));
 	s.err = calloc(s.swp, sizeof(float));
 	s.lin = calloc(3 * s.swp, sizeof(float));
-	float **rp = malloc(sizeof(float *) * 6 * (size_t)(2 * R + 1));
+	float **rp = malloc(sizeof(float *) * 6 * (size_t)(2 * R + 2));
 	job->sum = 0.0;
 	if (!s.ring || !s.vbuf || !s.hbuf || !s.err || !s.lin || !rp) {
 		job->status = -2;
@@ -682,9 +782,12 @@ static void *band_worker(void *arg)
 		const size_t ja = jv0 / VW * VW, jb = round_up(jv1, VW);
 		const size_t swr = round_up(sw, VW);
 		uint32_t next_src = job->y0 > (uint32_t)R ? job->y0 - (uint32_t)R : 0u;
-		for (uint32_t y = job->y0; y < job->y1; y++) {
-			/* Convert the input rows that enter the vertical window of row y (clamped to the image). */
-			const uint32_t last = (uint64_t)y + (uint64_t)R < H ? y + (uint32_t)R : H - 1;
+		/* Output rows two at a time (vertical_pass2); a band's odd last row alone (vertical_pass). */
+		for (uint32_t y = job->y0; y < job->y1; y += 2) {
+			const uint32_t nrows = y + 1 < job->y1 ? 2u : 1u;
+			/* Convert the input rows that enter the vertical windows of the rows (clamped to the image). */
+			const uint64_t want = (uint64_t)y + (nrows - 1) + (uint64_t)R;
+			const uint32_t last = want < H ? (uint32_t)want : H - 1;
 			for (; next_src <= last; next_src++)
 				for (int im = 0; im < 2; im++) {
 					/* The strip's part of the row after this one is not a stream the hardware prefetcher
@@ -699,44 +802,53 @@ static void *band_worker(void *arg)
 					            ring_plane(&s, R, next_src, im, 2) + jv0);
 				}
 			for (int im = 0; im < 2; im++) {
-				float **ry = rp + (size_t)(3 * im) * (size_t)(2 * R + 1);
-				float **rcx = ry + (2 * R + 1), **rcz = rcx + (2 * R + 1);
-				for (int k = 0; k <= 2 * R; k++) {
+				float **ry = rp + (size_t)(3 * im) * (size_t)(2 * R + 2);
+				float **rcx = ry + (2 * R + 2), **rcz = rcx + (2 * R + 2);
+				for (int k = 0; k < 2 * R + (int)nrows; k++) {
 					int64_t sy = (int64_t)y - R + k; /* clamp-to-edge rows */
 					uint32_t cy = sy < 0 ? 0u : (sy >= (int64_t)H ? H - 1 : (uint32_t)sy);
 					ry[k] = ring_plane(&s, R, cy, im, 0);
 					rcx[k] = ring_plane(&s, R, cy, im, 1);
 					rcz[k] = ring_plane(&s, R, cy, im, 2);
 				}
-				float *v = s.vbuf + (size_t)im * V_N * s.swp;
-				float *vo[V_N];
-				for (int pl = 0; pl < V_N; pl++)
-					vo[pl] = v + (size_t)pl * s.swp;
-				vertical_pass(f, ry, rcx, rcz, ja, jb, vo);
-				/* Clamp-to-edge columns: replicate the first / last image column into the halo. */
-				for (int pl = 0; pl < V_N; pl++) {
-					float *row = v + (size_t)pl * s.swp;
-					for (size_t j = 0; j < jv0; j++)
-						row[j] = row[jv0];
-					for (size_t j = jv1; j < swr + 2 * (size_t)R; j++)
-						row[j] = row[jv1 - 1];
+				float *vo[2][V_N];
+				for (uint32_t t = 0; t < 2; t++)
+					for (int pl = 0; pl < V_N; pl++)
+						vo[t][pl] = s.vbuf + ((size_t)(2 * im + (int)t) * V_N + (size_t)pl) * s.swp;
+				if (nrows == 2)
+					vertical_pass2(f, ry, rcx, rcz, ja, jb, vo[0], vo[1]);
+				else
+					vertical_pass(f, ry, rcx, rcz, ja, jb, vo[0]);
+			}
+			for (uint32_t t = 0; t < nrows; t++) {
+				const uint32_t yt = y + t;
+				for (int im = 0; im < 2; im++) {
+					float *v = s.vbuf + (size_t)(2 * im + (int)t) * V_N * s.swp;
+					/* Clamp-to-edge columns: replicate the first / last image column into the halo. */
+					for (int pl = 0; pl < V_N; pl++) {
+						float *row = v + (size_t)pl * s.swp;
+						for (size_t j = 0; j < jv0; j++)
+							row[j] = row[jv0];
+						for (size_t j = jv1; j < swr + 2 * (size_t)R; j++)
+							row[j] = row[jv1 - 1];
+					}
+					horizontal_pass(f, v, s.swp, swr, s.hbuf + (size_t)im * H_N * s.swp);
 				}
-				horizontal_pass(f, v, s.swp, swr, s.hbuf + (size_t)im * H_N * s.swp);
+				for (int im = 0; im < 2; im++) {
+					float *h = s.hbuf + (size_t)im * H_N * s.swp;
+					hunt_lab_row(f, h + H_Y * s.swp, h + H_CX * s.swp, h + H_CZ * s.swp, h + H_L * s.swp,
+					             h + H_A * s.swp, h + H_B * s.swp, swr);
+				}
+				finalize_row(f, s.hbuf, s.hbuf + H_N * s.swp, s.swp, swr, s.err);
+				double rs = 0.0;
+				for (size_t i = 0; i < sw; i++)
+					rs += (double)s.err[i];
+				job->sum += rs;
+				if (job->map)
+					memcpy(job->map + (size_t)yt * W + x0, s.err, sw * sizeof(float));
+				if (job->row_fn)
+					job->row_fn(job->row_ctx, job->band, yt, x0, s.err, sw);
 			}
-			for (int im = 0; im < 2; im++) {
-				float *h = s.hbuf + (size_t)im * H_N * s.swp;
-				hunt_lab_row(f, h + H_Y * s.swp, h + H_CX * s.swp, h + H_CZ * s.swp, h + H_L * s.swp, h + H_A * s.swp,
-				             h + H_B * s.swp, swr);
-			}
-			finalize_row(f, s.hbuf, s.hbuf + H_N * s.swp, s.swp, swr, s.err);
-			double rs = 0.0;
-			for (size_t i = 0; i < sw; i++)
-				rs += (double)s.err[i];
-			job->sum += rs;
-			if (job->map)
-				memcpy(job->map + (size_t)y * W + x0, s.err, sw * sizeof(float));
-			if (job->row_fn)
-				job->row_fn(job->row_ctx, job->band, y, x0, s.err, sw);
 		}
 	}
 	job->status = 0;
