@@ -750,6 +750,23 @@ static size_t round_up(size_t v, size_t m)
 	return (v + m - 1) / m * m;
 }
 
+/* Sum of a row of errors in double, in 8 independent partial sums (a single running sum is a chain of dependent
+ * adds, 4 cycles per pixel; the lanes vectorise). A fixed order: the same row gives the same bits. */
+static double row_sum(const float *e, size_t n)
+{
+	double acc[8] = {0};
+	size_t i = 0;
+	for (; i + 8 <= n; i += 8)
+		for (int u = 0; u < 8; u++)
+			acc[u] += (double)e[i + (size_t)u];
+	double s = 0.0;
+	for (; i < n; i++)
+		s += (double)e[i];
+	for (int u = 0; u < 8; u++)
+		s += acc[u];
+	return s;
+}
+
 static void *band_worker(void *arg)
 {
 	band_job *job = arg;
@@ -840,10 +857,7 @@ static void *band_worker(void *arg)
 					             h + H_A * s.swp, h + H_B * s.swp, swr);
 				}
 				finalize_row(f, s.hbuf, s.hbuf + H_N * s.swp, s.swp, swr, s.err);
-				double rs = 0.0;
-				for (size_t i = 0; i < sw; i++)
-					rs += (double)s.err[i];
-				job->sum += rs;
+				job->sum += row_sum(s.err, sw);
 				if (job->map)
 					memcpy(job->map + (size_t)yt * W + x0, s.err, sw * sizeof(float));
 				if (job->row_fn)
