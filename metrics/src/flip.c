@@ -128,6 +128,7 @@ struct mtr_flip {
 	float rgb2xyzn[9]; /* linear RGB -> (X/Xn, Y/Yn, Z/Zn) */
 	float cmax_lo;     /* p_c * c_max */
 	float slope_lo;    /* p_t / (p_c c_max) */
+	float log2_slope_lo;
 	float slope_hi;    /* (1 - p_t) / (c_max - p_c c_max) */
 };
 
@@ -344,6 +345,7 @@ int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size)
 		double cmax = pow(hy, FLIP_QC);
 		f->cmax_lo = (float)(FLIP_PC * cmax);
 		f->slope_lo = (float)(FLIP_PT / (FLIP_PC * cmax));
+		f->log2_slope_lo = (float)log2(FLIP_PT / (FLIP_PC * cmax));
 		f->slope_hi = (float)((1.0 - FLIP_PT) / (cmax - FLIP_PC * cmax));
 	}
 	*out = f;
@@ -718,7 +720,7 @@ FLIP_TARGET_CLONES static void hunt_lab_row(const mtr_flip *f, const float *rest
 FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *restrict hr, const float *restrict ht,
                                             size_t swp, size_t n, float *restrict out)
 {
-	const float cmax_lo = f->cmax_lo, slope_lo = f->slope_lo, slope_hi = f->slope_hi;
+	const float cmax_lo = f->cmax_lo, slope_lo = f->slope_lo, slope_hi = f->slope_hi, log2_slope_lo = f->log2_slope_lo;
 	for (size_t i = 0; i < n; i += VW) {
 		for (int u = 0; u < VW; u++) {
 			const size_t p = i + (size_t)u;
@@ -726,9 +728,22 @@ FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *rest
 			float dl = hr[H_L * swp + p] - ht[H_L * swp + p];
 			float da = hr[H_A * swp + p] - ht[H_A * swp + p], db = hr[H_B * swp + p] - ht[H_B * swp + p];
 			float hy = fabsf(dl) + sqrtf(da * da + db * db);
-			float dc = fast_exp2((float)FLIP_QC * fast_log2(select_f(hy > 1e-30f, hy, 1e-30f)));
+			const float lq = (float)FLIP_QC * fast_log2(select_f(hy > 1e-30f, hy, 1e-30f)); /* log2 hy^q_c */
+			const float pq = fast_exp2(lq);
+			const int lower = pq < cmax_lo;
+			float dc = select_f(lower, slope_lo * pq, (float)FLIP_PT + (pq - cmax_lo) * slope_hi);
 			dc = select_f(hy > 0.0f, dc, 0.0f);
-			dc = select_f(dc < cmax_lo, slope_lo * dc, (float)FLIP_PT + (dc - cmax_lo) * slope_hi);
+			/* log2 dc for the final error's power, without a second fast_log2: below the knee
+			 * log2(slope_lo hy^q_c) = log2 slope_lo + q_c log2 hy; above it dc is in [p_t, 1], where
+			 * log2(1 + x), x = dc - 1 in [-0.05, 0], is its series to x^6 (error < 2e-10). */
+			const float x = dc - 1.0f;
+			float ls = -1.0f / 6.0f;
+			ls = ls * x + 0.2f;
+			ls = ls * x - 0.25f;
+			ls = ls * x + 1.0f / 3.0f;
+			ls = ls * x - 0.5f;
+			ls = ls * x + 1.0f;
+			const float ldc = select_f(lower, log2_slope_lo + lq, ls * x * 1.44269504f); /* 1 / ln 2 */
 			/* Feature pipeline: edge and point magnitudes, difference, / sqrt(2), ^q_f (q_f = 0.5 -> sqrt). */
 			float ex1 = hr[H_EX * swp + p], ey1 = hr[H_EY * swp + p], px1 = hr[H_PX * swp + p],
 			      py1 = hr[H_PY * swp + p];
@@ -739,7 +754,7 @@ FLIP_TARGET_CLONES static void finalize_row(const mtr_flip *f, const float *rest
 			float df = sqrtf(select_f(de > dp, de, dp) * 0.707106781f);
 			/* Final error dE_c^(1 - dE_f); 0^0 = 1 as with pow(). */
 			float ex = 1.0f - df;
-			float e = fast_exp2(ex * fast_log2(select_f(dc > 1e-30f, dc, 1e-30f)));
+			float e = fast_exp2(ex * ldc);
 			out[p] = select_f(dc > 0.0f, e, select_f(ex == 0.0f, 1.0f, 0.0f));
 		}
 	}
