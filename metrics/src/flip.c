@@ -37,14 +37,15 @@
  * ~1e-9, while mirror (with or without edge repeat) and zero padding are off by 3e-4..8e-3.
  *
  * Implementation notes (speed): all filters are applied separably, vertical pass first then horizontal, over
- * column strips of at most STRIP_W output pixels so the working set stays in L2. The vertical pass of one output
- * row reads its (2R+1) converted input rows from a ring buffer (each input row is converted once per strip; the
- * next row's part is prefetched, as the hardware prefetcher does not follow a strip's row-to-row stride). Each
+ * column strips of at most STRIP_W output pixels so the working set stays in L2. The vertical pass makes two output
+ * rows at a time from their 2R+2 converted input rows in a ring buffer, each loaded once for both (each input row
+ * is converted once per strip; the next row's part is prefetched, as the hardware prefetcher does not follow a
+ * strip's row-to-row stride). Each
  * pass runs one loop per input plane, each as long as its own kernels (the achromatic and red-green CSFs are
  * narrow, see kernel_reach), written with GCC vector extensions so that accumulators and pointers stay in
  * registers. No per-pixel branches; the transcendental functions are division-free float approximations
- * (Newton iterations for x^(-1/5) and x^(-1/3), series for log2/exp2; each within 1e-6 relative, measured) and
- * sqrt is the hardware instruction (-fno-math-errno). On x86-64 the hot functions get AVX-512 and AVX2+FMA
+ * (a polynomial and an 8-entry table for the sRGB EOTF, Newton iterations for x^(-1/3), series for log2/exp2; each
+ * within 1e-6 relative, measured) and sqrt is the hardware instruction (-fno-math-errno). On x86-64 the hot functions get AVX-512 and AVX2+FMA
  * clones (FLIP_TARGET_CLONES) with fused multiply-adds (-ffp-contract=fast): clones round differently in the
  * last bits (a machine always picks the same one, so results are reproducible on it); every clone stays within
  * 1e-7 of the reference means (tests/test_metrics.c; the baseline clone checked by hand).
@@ -409,9 +410,27 @@ FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *restr
 	const float m0 = f->lin2opp[0], m1 = f->lin2opp[1], m2 = f->lin2opp[2], m3 = f->lin2opp[3], m4 = f->lin2opp[4],
 	            m5 = f->lin2opp[5], m6 = f->lin2opp[6], m7 = f->lin2opp[7], m8 = f->lin2opp[8];
 	/* The EOTF over the interleaved values (dense vectors), then the matrix, which de-interleaves. */
-	for (uint32_t i = 0; i < 3 * n; i++)
+	uint32_t i = 0;
+	for (; i + 8 <= 3 * n; i += 8)
+		srgb_eotf8(rgb + i, 1.0f / 255.0f, lin + i);
+	for (; i < 3 * n; i++)
 		lin[i] = srgb_eotf_fast(rgb[i] * (1.0f / 255.0f));
-	for (uint32_t p = 0; p < n; p++) {
+	/* Eight pixels at a time: their 24 interleaved values de-interleaved by register permutes (gcc turns the
+	 * stride-3 loads of the plain loop into scalar inserts). */
+	const v8i mr = {0, 3, 6, 9, 12, 15, 0, 0}, mr2 = {0, 1, 2, 3, 4, 5, 10, 13};
+	const v8i mg = {1, 4, 7, 10, 13, 0, 0, 0}, mg2 = {0, 1, 2, 3, 4, 8, 11, 14};
+	const v8i mb = {2, 5, 8, 11, 14, 0, 0, 0}, mb2 = {0, 1, 2, 3, 4, 9, 12, 15};
+	uint32_t p = 0;
+	for (; p + 8 <= n; p += 8) {
+		const v8f A = LD8(lin + 3 * p), B = LD8(lin + 3 * p + 8), C = LD8(lin + 3 * p + 16);
+		const v8f r = __builtin_shuffle(__builtin_shuffle(A, B, mr), C, mr2);
+		const v8f g = __builtin_shuffle(__builtin_shuffle(A, B, mg), C, mg2);
+		const v8f b = __builtin_shuffle(__builtin_shuffle(A, B, mb), C, mb2);
+		ST8(py + p, m0 * r + m1 * g + m2 * b);
+		ST8(pcx + p, m3 * r + m4 * g + m5 * b);
+		ST8(pcz + p, m6 * r + m7 * g + m8 * b);
+	}
+	for (; p < n; p++) {
 		const float r = lin[3 * p], g = lin[3 * p + 1], b = lin[3 * p + 2];
 		py[p] = m0 * r + m1 * g + m2 * b;
 		pcx[p] = m3 * r + m4 * g + m5 * b;
@@ -422,10 +441,7 @@ FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *restr
 /* The filter loops are written with GCC's vector extensions (8 floats, one AVX register; two SSE registers in the
  * baseline clone), two vectors (VW = 16 floats) per accumulator so that independent multiply-adds overlap. Loads
  * and stores go through an unaligned, may-alias vector type. */
-typedef float v8f __attribute__((vector_size(32)));
-typedef float v8f_u __attribute__((vector_size(32), aligned(4), may_alias));
-#define LD8(p) (*(const v8f_u *)(const void *)(p))
-#define ST8(p, v) (*(v8f_u *)(void *)(p) = (v))
+/* (v8f, LD8, ST8: flip_math.h) */
 
 /* Vertical pass of the separable filters for one output row (colour pipeline: CSF spatial filtering; feature
  * pipeline: edge / point detection), buffer columns [j0, j1) (multiples of VW). ry/rcx/rcz[R + k], |k| <= R, are
