@@ -37,8 +37,9 @@ int mtr_flip_create(double ppd, mtr_flip **out, char *err, size_t err_size);
 void mtr_flip_destroy(mtr_flip **f);
 
 /* FLIP error of `test_rgb` against `ref_rgb`. Inputs are display-referred sRGB values on the 0..255 scale, packed
- * RGB (3 floats per pixel, row-major, no padding); values need not be integral. `map` (optional, width*height floats)
- * receives the per-pixel error in [0,1]; `*mean` (required) receives the mean per-pixel error, accumulated in double.
+ * RGB (3 floats per pixel, row-major, no padding); values need not be integral and are clamped to 0..255 (NaN to 0).
+ * `map` (optional, width*height floats) receives the per-pixel error in [0,1]; `*mean` (required) receives the mean
+ * per-pixel error, accumulated in double.
  * `threads` <= 0 uses all online cores (pthreads, one band of rows each). Any size >= 1x1 works; borders are
  * clamp-to-edge. Returns 0, or TL_ERR_ARG (zero size, NULL input) / TL_ERR_NOMEM with one line in `err`. */
 int mtr_flip_compute(const mtr_flip *f, uint32_t width, uint32_t height, const float *ref_rgb, const float *test_rgb,
