@@ -694,6 +694,31 @@ static void test_flip_sizes_and_errors(void **state)
 		free(b);
 		free(map);
 	}
+	/* Out-of-range inputs are clamped to 0..255 (metrics_flip.h): a pair with values below 0, above 255, infinite
+	 * and NaN gives the same map, bit for bit, as the pair clamped by hand (NaN as 0). 33x19 pixels: 8-value vector
+	 * chunks and scalar tails. */
+	{
+		const uint32_t w = 33, h = 19;
+		const size_t n = 3 * (size_t)w * h;
+		float *a = malloc(sizeof(float) * n), *b = malloc(sizeof(float) * n), *ac = malloc(sizeof(float) * n),
+		      *bc = malloc(sizeof(float) * n), *m1 = malloc(sizeof(float) * w * h), *m2 = malloc(sizeof(float) * w * h);
+		const float odd[] = {-7.5f, 300.0f, INFINITY, -INFINITY, NAN, 255.5f, -0.0f, 1e30f};
+		for (size_t i = 0; i < n; i++) {
+			seed = seed * 1103515245u + 12345u;
+			a[i] = (float)((seed >> 16) % 256);
+			b[i] = i % 5 == 0 ? odd[(i / 5) % 8] : 255.0f - a[i];
+		}
+		for (size_t i = 0; i < n; i++) {
+			ac[i] = a[i];
+			bc[i] = isnan(b[i]) ? 0.0f : (b[i] < 0 ? 0.0f : (b[i] > 255 ? 255.0f : b[i]));
+		}
+		double e1 = -1, e2 = -2;
+		assert_int_equal(mtr_flip_compute(f, w, h, a, b, m1, 1, &e1, err, sizeof err), 0);
+		assert_int_equal(mtr_flip_compute(f, w, h, ac, bc, m2, 1, &e2, err, sizeof err), 0);
+		assert_true(e1 > 0 && e1 == e2);
+		assert_memory_equal(m1, m2, sizeof(float) * w * h);
+		free(a), free(b), free(ac), free(bc), free(m1), free(m2);
+	}
 	/* Bad input: one-line messages, tl_err codes. */
 	float px[3] = {1, 2, 3};
 	double mean;
