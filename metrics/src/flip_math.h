@@ -1,6 +1,6 @@
 /* flip_math.h — branch-free float approximations for flip.c's vectorised row loops (private to metrics/src).
- * Each is plain C that gcc vectorises: no calls, no branches (selects through bit masks), Newton iterations without
- * division where one converges (cube root, fifth root); fast_log2 keeps one division. Accuracies
+ * Scalar ones are plain C that gcc vectorises (no calls, no branches: selects through bit masks); the 8-float ones
+ * (GCC vector extensions) look up small tables with a register permute. fast_log2 keeps one division. Accuracies
  * are stated per function, measured against double-precision libm over the ranges flip.c uses. */
 #ifndef TASLAB_FLIP_MATH_H
 #define TASLAB_FLIP_MATH_H
@@ -70,24 +70,6 @@ static inline float fast_exp2(float x)
 	return p * bits_to_float((uint32_t)(n + 127) << 23);
 }
 
-/* Cube root of a positive normal float in [0.008856, 1] (the CIELAB range it is used on): z = t^(-1/3) from a
- * bit-level guess and three Newton steps z <- z (4 - t z^3) / 3 (no division), then t z^2; relative error
- * < 3.3e-7 over that range (measured against cbrt() in double). */
-static inline float fast_cbrt(float t)
-{
-	float z = bits_to_float(0x54a0f000u - float_to_bits(t) / 3u);
-	for (int i = 0; i < 3; i++)
-		z = z * (1.33333333f - 0.333333333f * t * (z * z * z));
-	return t * z * z;
-}
-
-/* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
-static inline float lab_f_fast(float t)
-{
-	float cr = fast_cbrt(select_f(t > 0.008856f, t, 0.008856f)); /* keep the unused branch finite */
-	return select_f(t > 0.00885645168f, cr, t * 7.78703704f + 0.137931034f);
-}
-
 static inline float clamp01(float v)
 {
 	v = select_f(v > 0.0f, v, 0.0f);
@@ -142,9 +124,44 @@ typedef float v8f_u __attribute__((vector_size(32), aligned(4), may_alias));
 #define LD8(p) (*(const v8f_u *)(const void *)(p))
 #define ST8(p, v) (*(v8f_u *)(void *)(p) = (v))
 
-/* Lane-wise c ? a : b for a comparison mask c (all bits set or clear per lane). A macro: functions taking or
- * returning 32-byte vectors change the ABI in the baseline clone (gcc -Wpsabi). */
+/* Lane-wise c ? a : b for a comparison mask c (all bits set or clear per lane). (Static functions with vector
+ * arguments are fine in every clone; flip.c is built with -Wno-psabi, whose note concerns exported ones.) */
 #define SELECT8(c, a, b) ((v8f)(((c) & (v8i)(a)) | (~(c) & (v8i)(b))))
+
+static inline v8f clamp01_8(v8f v)
+{
+	const v8f zero = {0}, one = zero + 1.0f;
+	v = SELECT8(v > zero, v, zero); /* also NaN -> 0 */
+	return SELECT8(v < one, v, one);
+}
+
+/* Cube root for t in [0.008856, 1] (the CIELAB range it is used on): t = m 2^e, m in [1, 2), e in [-7, 0];
+ * cbrt(t) = cbrt(m) 2^(e/3), cbrt(m) by a degree-6 polynomial in 2m - 3 (its Chebyshev interpolant on [1, 2]),
+ * 2^(e/3) from an 8-entry table (a register permute). Relative error < 3.3e-7 (measured against cbrt() in double);
+ * no division or iteration. */
+static inline v8f cbrt8(v8f t)
+{
+	const v8f zero = {0};
+	const v8f tab = {0.198425129f, 0.25f, 0.314980268f, 0.396850258f, 0.5f, 0.629960537f, 0.793700516f, 1.0f};
+	const v8i u = (v8i)t;
+	const v8f x = 2.0f * (v8f)((u & 0x007fffff) | 0x3f800000) - 3.0f;
+	v8f p = zero - 4.223959331284277e-05f;
+	p = p * x + 0.00016145936388056725f;
+	p = p * x - 0.0005787980044260621f;
+	p = p * x + 0.0026071437168866396f;
+	p = p * x - 0.014132625423371792f;
+	p = p * x + 0.1271917223930359f;
+	p = p * x + 1.1447142362594604f;
+	return p * __builtin_shuffle(tab, ((u >> 23) - 120) & 7);
+}
+
+/* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
+static inline v8f lab_f8(v8f t)
+{
+	const v8f zero = {0}, lo = zero + 0.008856f;
+	const v8f cr = cbrt8(SELECT8(t > lo, t, lo)); /* keep the unused branch in the table's range */
+	return SELECT8(t > 0.00885645168f, cr, t * 7.78703704f + 0.137931034f);
+}
 
 /* srgb_eotf_fast on 8 values out[i] = EOTF(in[i] * scale), the same operations in the same order (the table lookup
  * is a register permute). */
