@@ -23,9 +23,14 @@
 #define HIST_SHIFT 11            /* keep 12 mantissa bits */
 #define HIST_BINS (((0x3F800000u - HIST_LO_BITS) >> HIST_SHIFT) + 1) /* up to and including 1.0 */
 
+/* A bin's count and sum side by side: binning a value touches one cache line, not two. */
+typedef struct flip_bin {
+	uint64_t count;
+	double sum;
+} flip_bin;
+
 typedef struct flip_hist {
-	uint64_t count[HIST_BINS];
-	double sum[HIST_BINS];
+	flip_bin bin[HIST_BINS];
 } flip_hist;
 
 typedef struct flip_state {
@@ -57,11 +62,11 @@ static void bin_row(void *p, int band, uint32_t y, uint32_t x0, const float *err
 	float lo = s->bmin[band], hi = s->bmax[band];
 	for (size_t i = 0; i < n; i++) {
 		const float v = err[i];
-		const uint32_t k = hist_bin(v);
-		h->count[k]++;
-		h->sum[k] += v;
-		lo = fminf(lo, v);
-		hi = fmaxf(hi, v);
+		flip_bin *b = &h->bin[hist_bin(v)];
+		b->count++;
+		b->sum += v;
+		lo = v < lo ? v : lo; /* errors are never NaN: plain compares, not fminf / fmaxf calls */
+		hi = v > hi ? v : hi;
 	}
 	s->bmin[band] = lo;
 	s->bmax[band] = hi;
@@ -72,14 +77,14 @@ static void hist_weighted(const flip_hist *h, double *q1, double *median, double
 {
 	double total = 0;
 	for (uint32_t k = 0; k < HIST_BINS; k++)
-		total += h->sum[k];
+		total += h->bin[k].sum;
 	const double ps[3] = {0.25, 0.5, 0.75};
 	double *res[3] = {q1, median, q3}, run = 0;
 	int q = 0;
 	for (uint32_t k = 0; k < HIST_BINS && q < 3; k++) {
-		run += h->sum[k];
+		run += h->bin[k].sum;
 		while (q < 3 && run > ps[q] * total)
-			*res[q++] = h->sum[k] / (double)h->count[k];
+			*res[q++] = h->bin[k].sum / (double)h->bin[k].count;
 	}
 	for (; q < 3; q++)
 		*res[q] = 0.0;
@@ -116,8 +121,8 @@ static int flip_compute(void *state, const mtr_pair *p, mtr_frame_stats *out, ch
 	/* Per-frame pooled statistics from this frame's histogram; the histogram then joins the clip's. */
 	for (int t = 1; t < nt; t++)
 		for (uint32_t k = 0; k < HIST_BINS; k++) {
-			s->frame[0]->count[k] += s->frame[t]->count[k];
-			s->frame[0]->sum[k] += s->frame[t]->sum[k];
+			s->frame[0]->bin[k].count += s->frame[t]->bin[k].count;
+			s->frame[0]->bin[k].sum += s->frame[t]->bin[k].sum;
 		}
 	float lo = s->bmin[0], hi = s->bmax[0];
 	for (int t = 1; t < nt; t++) {
@@ -125,8 +130,8 @@ static int flip_compute(void *state, const mtr_pair *p, mtr_frame_stats *out, ch
 		hi = fmaxf(hi, s->bmax[t]);
 	}
 	for (uint32_t k = 0; k < HIST_BINS; k++) {
-		s->clip->count[k] += s->frame[0]->count[k];
-		s->clip->sum[k] += s->frame[0]->sum[k];
+		s->clip->bin[k].count += s->frame[0]->bin[k].count;
+		s->clip->bin[k].sum += s->frame[0]->bin[k].sum;
 	}
 	s->fmin = fminf(s->fmin, lo);
 	s->fmax = fmaxf(s->fmax, hi);
