@@ -413,8 +413,12 @@ FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *restr
 	uint32_t i = 0;
 	for (; i + 8 <= 3 * n; i += 8)
 		srgb_eotf8(rgb + i, 1.0f / 255.0f, lin + i);
-	for (; i < 3 * n; i++)
-		lin[i] = srgb_eotf_fast(rgb[i] * (1.0f / 255.0f));
+	if (i < 3 * n) { /* the row's last values, through the same 8-value function */
+		float in8[8] = {0}, out8[8];
+		memcpy(in8, rgb + i, (3 * n - i) * sizeof(float));
+		srgb_eotf8(in8, 1.0f / 255.0f, out8);
+		memcpy(lin + i, out8, (3 * n - i) * sizeof(float));
+	}
 	/* Eight pixels at a time: their 24 interleaved values de-interleaved by register permutes (gcc turns the
 	 * stride-3 loads of the plain loop into scalar inserts). */
 	const v8i mr = {0, 3, 6, 9, 12, 15, 0, 0}, mr2 = {0, 1, 2, 3, 4, 5, 10, 13};

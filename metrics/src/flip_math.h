@@ -70,17 +70,11 @@ static inline float fast_exp2(float x)
 	return p * bits_to_float((uint32_t)(n + 127) << 23);
 }
 
-static inline float clamp01(float v)
-{
-	v = select_f(v > 0.0f, v, 0.0f);
-	return select_f(v < 1.0f, v, 1.0f);
-}
-
 /* sRGB EOTF (IEC 61966-2-1) for values in 0..1 (clamped into it): linear segment below 0.04045, else b^2.4 with
  * b = (c + 0.055) / 1.055 in [0.09, 1]. Written b = m 2^e with m in [1, 2): b^2.4 = m^2.4 2^(2.4 e), m^2.4 by a
  * degree-6 polynomial in t = 2m - 3 (its Chebyshev interpolant on [1, 2]) and 2^(2.4 e), e in [-7, 0], from an
- * 8-entry table (one register permute in the vector form, srgb_eotf8). No division, log/exp or iteration; relative
- * error < 5e-7 over [0.04045, 1] (measured against pow() in double). */
+ * 8-entry table (one register permute; srgb_eotf8 below). No division, log/exp or iteration; relative error < 5e-7
+ * over [0.04045, 1] (measured against pow() in double). */
 #define EOTF_C0 2.6461777687072754f
 #define EOTF_C1 2.1169426441192627f
 #define EOTF_C2 0.4939531087875366f
@@ -97,24 +91,6 @@ static inline float clamp01(float v)
 #define EOTF_T5 0.0358968228f
 #define EOTF_T6 0.189464569f
 #define EOTF_T7 1.0f
-
-static inline float srgb_eotf_fast(float v)
-{
-	static const float tab[8] = {EOTF_T0, EOTF_T1, EOTF_T2, EOTF_T3, EOTF_T4, EOTF_T5, EOTF_T6, EOTF_T7};
-	v = clamp01(v);
-	const float b = select_f(v > 0.04045f, v * (1.0f / 1.055f) + (0.055f / 1.055f), 0.5f); /* b in (0.09, 1] */
-	const uint32_t u = float_to_bits(b);
-	const float t = 2.0f * bits_to_float((u & 0x007fffffu) | 0x3f800000u) - 3.0f;
-	float p = EOTF_C6;
-	p = p * t + EOTF_C5;
-	p = p * t + EOTF_C4;
-	p = p * t + EOTF_C3;
-	p = p * t + EOTF_C2;
-	p = p * t + EOTF_C1;
-	p = p * t + EOTF_C0;
-	const float hi = p * tab[((u >> 23) - 120u) & 7u]; /* e + 7 */
-	return select_f(v <= 0.04045f, v * (1.0f / 12.92f), hi);
-}
 
 /* ---- 8-float vectors (GCC vector extensions) ---- */
 
@@ -163,8 +139,7 @@ static inline v8f lab_f8(v8f t)
 	return SELECT8(t > 0.00885645168f, cr, t * 7.78703704f + 0.137931034f);
 }
 
-/* srgb_eotf_fast on 8 values out[i] = EOTF(in[i] * scale), the same operations in the same order (the table lookup
- * is a register permute). */
+/* The sRGB EOTF (see EOTF_C0 above) of 8 values: out[i] = EOTF(in[i] * scale). */
 static inline void srgb_eotf8(const float *in, float scale, float *out)
 {
 	v8f v = LD8(in) * scale;

@@ -29,6 +29,23 @@
 #define MTR_TARGET_CLONES
 #endif
 
+/* Sum of n floats in 8 independent float partial sums (gcc vectorises them without reassociating, so the result does
+ * not depend on the ISA), the tail and the lanes added in double. Used for row sums by the pixel pass and SSIM. */
+static inline double mtr_lane_sum(const float *restrict v, size_t n)
+{
+	float acc[8] = {0};
+	size_t x = 0;
+	for (; x + 8 <= n; x += 8)
+		for (int u = 0; u < 8; u++)
+			acc[u] += v[x + (size_t)u];
+	double s = 0;
+	for (; x < n; x++)
+		s += v[x];
+	for (int u = 0; u < 8; u++)
+		s += acc[u];
+	return s;
+}
+
 /* ---- the shared pixel pass (pixel.c) ---- */
 enum {
 	MTR_PASS_MAXRGB = 1u,  /* d = max-RGB difference: map, sum, max and where, exceed_T counts, histogram */

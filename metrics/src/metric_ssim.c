@@ -63,7 +63,7 @@ static inline void vfilter2(float *const *rows, float *restrict out0, float *res
 }
 
 /* Eq. 13 over one output row of one channel from its vertically filtered quantities (mu_a, mu_b, E[a^2 + b^2],
- * E[ab] at v, v + owp, ...); the row's sum in 8 independent partial sums, then double. */
+ * E[ab] at v, v + owp, ...); the row's sum through mtr_lane_sum. */
 static inline double ssim_row(const float *v, size_t owp, uint32_t ow, float *restrict srow)
 {
 	const float C1 = (0.01f * 255) * (0.01f * 255), C2 = (0.03f * 255) * (0.03f * 255);
@@ -74,17 +74,7 @@ static inline double ssim_row(const float *v, size_t owp, uint32_t ow, float *re
 		const float ua = ma[x] + 128.0f, ub = mb[x] + 128.0f;
 		srow[x] = ((2 * ua * ub + C1) * (2 * cov + C2)) / ((ua * ua + ub * ub + C1) * (vsum + C2));
 	}
-	float acc[VW] = {0};
-	uint32_t x = 0;
-	for (; x + VW <= ow; x += VW)
-		for (int u = 0; u < VW; u++)
-			acc[u] += srow[x + (uint32_t)u];
-	double row = 0;
-	for (; x < ow; x++)
-		row += srow[x];
-	for (int u = 0; u < VW; u++)
-		row += acc[u];
-	return row;
+	return mtr_lane_sum(srow, ow);
 }
 
 MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t y1)

@@ -2,7 +2,7 @@
  *
  * Per row: a branch-free loop over x computes d = max-RGB difference (paper sec. 3, DESIGN section 3), the
  * squared channel differences (PSNR's MSE) and the flicker term max_c |(a - a_prev) - (b - b_prev)| (DESIGN
- * section 6) into row buffers and lane accumulators (VW independent partial sums: gcc vectorises them at -O3
+ * section 6) into row buffers, summed by mtr_lane_sum (8 independent partial sums: gcc vectorises them at -O3
  * without reassociating, so results do not depend on the ISA); a second loop over the L1-resident row counts
  * exceedances and the 256-bin histogram of floor(d) and finds the row maximum. Which quantities are computed is
  * decided per call, outside the loops (specialised by constant flags), so no per-pixel branch remains.
@@ -14,7 +14,6 @@
 
 #include "metric.h"
 
-#define VW 8 /* lanes of the partial sums */
 
 typedef struct pass_ctx {
 	const mtr_image *a, *b, *ap, *bp;
@@ -38,22 +37,6 @@ static inline float max3(float a, float b, float c)
 	return m > c ? m : c;
 }
 
-/* Sum of n floats in VW independent partial sums (vectorised, deterministic order), in double at the end. */
-static inline double lane_sum(const float *restrict v, size_t n)
-{
-	float acc[VW] = {0};
-	size_t x = 0;
-	for (; x + VW <= n; x += VW)
-		for (int u = 0; u < VW; u++)
-			acc[u] += v[x + (size_t)u];
-	double s = 0;
-	for (; x < n; x++)
-		s += v[x];
-	for (int u = 0; u < VW; u++)
-		s += acc[u];
-	return s;
-}
-
 /* d, squared error and flicker of one row into d[], sq[], fl[] (plain loops over x: gcc vectorises the stride-3
  * loads with permutes), then their row sums through s[3]. */
 static inline void row_kernel(const float *restrict a, const float *restrict b, const float *restrict ap,
@@ -69,9 +52,9 @@ static inline void row_kernel(const float *restrict a, const float *restrict b, 
 			fl[x] = max3(fabsf(dr - (ap[3 * x] - bp[3 * x])), fabsf(dg - (ap[3 * x + 1] - bp[3 * x + 1])),
 				     fabsf(db - (ap[3 * x + 2] - bp[3 * x + 2])));
 	}
-	s[0] = lane_sum(d, w);
-	s[1] = want_sq ? lane_sum(sq, w) : 0;
-	s[2] = want_fl ? lane_sum(fl, w) : 0;
+	s[0] = mtr_lane_sum(d, w);
+	s[1] = want_sq ? mtr_lane_sum(sq, w) : 0;
+	s[2] = want_fl ? mtr_lane_sum(fl, w) : 0;
 }
 
 MTR_TARGET_CLONES static void pass_band(void *p, int band, uint32_t y0, uint32_t y1)
