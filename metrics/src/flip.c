@@ -442,96 +442,22 @@ FLIP_TARGET_CLONES static void convert_row(const mtr_flip *f, const float *restr
 	}
 }
 
-/* The filter loops are written with GCC's vector extensions (8 floats, one AVX register; two SSE registers in the
- * baseline clone), two vectors (VW = 16 floats) per accumulator so that independent multiply-adds overlap. Loads
- * and stores go through an unaligned, may-alias vector type. */
-/* (v8f, LD8, ST8: flip_math.h) */
+/* The filter loops are written with GCC's vector extensions (v8f, LD8, ST8 in flip_math.h: 8 floats, one AVX
+ * register; two SSE registers in the baseline clone), mostly two vectors (VW = 16 floats) per accumulator so that
+ * independent multiply-adds overlap. Loads and stores go through an unaligned, may-alias vector type. */
 
-/* Vertical pass of the separable filters for one output row (colour pipeline: CSF spatial filtering; feature
- * pipeline: edge / point detection), buffer columns [j0, j1) (multiples of VW). ry/rcx/rcz[R + k], |k| <= R, are
- * the opponent planes of source rows clamp(y + k); symmetric kernels fold the taps at -k and +k, the antisymmetric
- * first derivative takes their difference. o[V_*] are the V_N vertically filtered planes. One loop per input plane,
- * each tap loop as long as its own kernels (few live accumulators and pointers: they stay in registers). */
-FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry, float *const *rcx,
-                                             float *const *rcz, size_t j0, size_t j1, float *const *o)
-{
-	const int R = f->R, kyf = f->ry > f->fr ? f->ry : f->fr; /* wy and the feature kernels are 0 beyond their radii */
-	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
-	const float *fg = f->fg, *fdg = f->fdg, *fdd = f->fddg;
-	/* Y/Yn: the achromatic CSF and the three feature kernels share the folded taps. */
-	for (size_t j = j0; j < j1; j += VW) {
-		v8f ay[2], ag[2], ad[2], add[2];
-		for (int h = 0; h < 2; h++) {
-			v8f c = LD8(ry[R] + j + 8 * h);
-			ay[h] = wy[0] * c;
-			ag[h] = fg[0] * c;
-			ad[h] = (v8f){0};
-			add[h] = fdd[0] * c;
-		}
-		for (int k = 1; k <= kyf; k++) {
-			const float *m = ry[R - k] + j, *p = ry[R + k] + j;
-			const float a = wy[k], b = fg[k], d = fdg[k], e = fdd[k];
-			for (int h = 0; h < 2; h++) {
-				v8f vm = LD8(m + 8 * h), vp = LD8(p + 8 * h), sm = vm + vp, df = vp - vm;
-				ay[h] += a * sm;
-				ag[h] += b * sm;
-				ad[h] += d * df;
-				add[h] += e * sm;
-			}
-		}
-		for (int h = 0; h < 2; h++) {
-			ST8(o[V_Y] + j + 8 * h, ay[h]);
-			ST8(o[V_G] + j + 8 * h, ag[h]);
-			ST8(o[V_DG] + j + 8 * h, ad[h]);
-			ST8(o[V_DDG] + j + 8 * h, add[h]);
-		}
-	}
-	/* Cx / 500: the red-green CSF. */
-	for (size_t j = j0; j < j1; j += VW) {
-		v8f ax[2];
-		for (int h = 0; h < 2; h++)
-			ax[h] = wcx[0] * LD8(rcx[R] + j + 8 * h);
-		for (int k = 1; k <= f->rx; k++) {
-			const float *m = rcx[R - k] + j, *p = rcx[R + k] + j;
-			for (int h = 0; h < 2; h++)
-				ax[h] += wcx[k] * (LD8(m + 8 * h) + LD8(p + 8 * h));
-		}
-		for (int h = 0; h < 2; h++)
-			ST8(o[V_CX] + j + 8 * h, ax[h]);
-	}
-	/* Cz / 200: the blue-yellow CSF, two Gaussians (filtered separately, summed after the horizontal pass). */
-	for (size_t j = j0; j < j1; j += VW) {
-		v8f a1[2], a2[2];
-		for (int h = 0; h < 2; h++) {
-			v8f c = LD8(rcz[R] + j + 8 * h);
-			a1[h] = wz1[0] * c;
-			a2[h] = wz2[0] * c;
-		}
-		for (int k = 1; k <= f->r; k++) {
-			const float *m = rcz[R - k] + j, *p = rcz[R + k] + j;
-			const float b1 = wz1[k], b2 = wz2[k];
-			for (int h = 0; h < 2; h++) {
-				v8f sm = LD8(m + 8 * h) + LD8(p + 8 * h);
-				a1[h] += b1 * sm;
-				a2[h] += b2 * sm;
-			}
-		}
-		for (int h = 0; h < 2; h++) {
-			ST8(o[V_CZ1] + j + 8 * h, a1[h]);
-			ST8(o[V_CZ2] + j + 8 * h, a2[h]);
-		}
-	}
-}
-
-/* The vertical pass for two output rows y and y + 1 at once (o0, o1), bit for bit what vertical_pass gives for each:
- * ry/rcx/rcz[R + k], -R <= k <= R + 1, are the planes of source rows clamp(y + k). Tap k of row y pairs source rows
+/* Vertical pass of the separable filters (colour pipeline: CSF spatial filtering; feature pipeline: edge / point
+ * detection) for two output rows y and y + 1 at once (o0, o1: their V_N vertically filtered planes), buffer columns
+ * [j0, j1) (multiples of VW). ry/rcx/rcz[R + k], -R <= k <= R + 1, are the opponent planes of source rows
+ * clamp(y + k). Symmetric kernels fold the taps at -k and +k, the antisymmetric first derivative takes their
+ * difference; one loop per input plane, each as long as its own kernels. Tap k of row y pairs source rows
  * y - k and y + k, tap k of row y + 1 pairs y + 1 - k and y + 1 + k; going outwards, each step loads the two new rows
  * y - k and y + 1 + k and reuses the two of the step before (y + k = y + 1 + (k - 1), y + 1 - k = y - (k - 1)), so
  * the 2R + 2 ring rows are read once for both outputs: half the ring traffic of two single passes (the ring is read
  * from L2, whose bandwidth bounds this pass; the same change made SSIM's vertical pass 14 % faster). */
-FLIP_TARGET_CLONES static void vertical_pass2(const mtr_flip *f, float *const *ry, float *const *rcx,
-                                              float *const *rcz, size_t j0, size_t j1, float *const *o0,
-                                              float *const *o1)
+FLIP_TARGET_CLONES static void vertical_pass(const mtr_flip *f, float *const *ry, float *const *rcx,
+                                             float *const *rcz, size_t j0, size_t j1, float *const *o0,
+                                             float *const *o1)
 {
 	const int R = f->R, kyf = f->ry > f->fr ? f->ry : f->fr;
 	const float *wy = f->wy, *wcx = f->wcx, *wz1 = f->wcz1, *wz2 = f->wcz2;
@@ -844,7 +770,7 @@ static void *band_worker(void *arg)
 		const size_t ja = jv0 / VW * VW, jb = round_up(jv1, VW);
 		const size_t swr = round_up(sw, VW);
 		uint32_t next_src = job->y0 > (uint32_t)R ? job->y0 - (uint32_t)R : 0u;
-		/* Output rows two at a time (vertical_pass2); a band's odd last row alone (vertical_pass). */
+		/* Output rows two at a time (vertical_pass). */
 		for (uint32_t y = job->y0; y < job->y1; y += 2) {
 			const uint32_t nrows = y + 1 < job->y1 ? 2u : 1u;
 			/* Convert the input rows that enter the vertical windows of the rows (clamped to the image). */
@@ -877,10 +803,12 @@ static void *band_worker(void *arg)
 				for (uint32_t t = 0; t < 2; t++)
 					for (int pl = 0; pl < V_N; pl++)
 						vo[t][pl] = s.vbuf + ((size_t)(2 * im + (int)t) * V_N + (size_t)pl) * s.swp;
-				if (nrows == 2)
-					vertical_pass2(f, ry, rcx, rcz, ja, jb, vo[0], vo[1]);
-				else
-					vertical_pass(f, ry, rcx, rcz, ja, jb, vo[0]);
+				if (nrows == 1) { /* a band's odd last row: the pair's second row is computed and not used */
+					ry[2 * R + 1] = ry[2 * R];
+					rcx[2 * R + 1] = rcx[2 * R];
+					rcz[2 * R + 1] = rcz[2 * R];
+				}
+				vertical_pass(f, ry, rcx, rcz, ja, jb, vo[0], vo[1]);
 			}
 			for (uint32_t t = 0; t < nrows; t++) {
 				const uint32_t yt = y + t;
