@@ -118,7 +118,7 @@ struct mtr_flip {
 	int ry; /* achromatic CSF taps used: the rest weigh too little to change a float sum (see kernel_reach) */
 	int rx; /* red-green CSF taps used */
 	int fr; /* feature kernel radius */
-	int R;  /* max(r, fr): ring height is 2R+1, horizontal halo is R */
+	int R;  /* max(r, fr): ring height is 2R+2 (two output rows at a time), horizontal halo is R */
 	/* Half kernels, index k = |offset|, length R+1, zero beyond their own radius. */
 	float *wy, *wcx, *wcz1, *wcz2; /* CSF: achromatic, red-green, blue-yellow (two Gaussians) */
 	float *fg, *fdg, *fddg;        /* feature: Gaussian, first derivative (weight at +k; -k is its negative),

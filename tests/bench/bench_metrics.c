@@ -154,6 +154,8 @@ int main(int argc, char **argv)
 	}
 	if (runs < 1 || runs > 99)
 		runs = 9;
+	if (nt > 64) /* thread arrays below hold 64 */
+		nt = 64;
 	if (nt <= 0) {
 		long cores = sysconf(_SC_NPROCESSORS_ONLN);
 		nt = cores > 0 ? (int)(cores < 64 ? cores : 64) : 1;

@@ -2,8 +2,10 @@
  * OpenImageIO in the module taslab_oiio.so (oiio_module.cpp), opened on the first call that needs it, so that the
  * commands that never meet an EXR do not pay OpenImageIO's ~0.2 s of library loading (imageio_oiio.h).
  *
- * The module is looked for, in order: $TASLAB_OIIO_MODULE (a file; then only there), next to the running executable,
- * and in the build folder it was built into (TASLAB_MODULE_DIR, for tests and tools built elsewhere in the tree). */
+ * The module is looked for, in order: $TASLAB_OIIO_MODULE (a file path; then only there — a bare name without a '/'
+ * is searched on the library path, as dlopen does), next to the running executable, and in the build folder it was
+ * built into (TASLAB_MODULE_DIR, for tests and tools built elsewhere in the tree). When none loads, the message
+ * gives the first real loading error, else says where it looked. */
 #define _GNU_SOURCE
 #include "taslab/imageio.h"
 
@@ -68,8 +70,9 @@ static void oiio_load(void)
 	}
 	snprintf(path, sizeof path, "%s/%s", TASLAB_MODULE_DIR, IMAGEIO_OIIO_FILE);
 	if (access(path, F_OK) != 0) {
-		snprintf(oiio_why, sizeof oiio_why, "%s not found next to the executable or in %s", IMAGEIO_OIIO_FILE,
-			 TASLAB_MODULE_DIR);
+		if (!oiio_why[0]) /* else keep why the module next to the executable would not load */
+			snprintf(oiio_why, sizeof oiio_why, "%s not found next to the executable or in %s",
+				 IMAGEIO_OIIO_FILE, TASLAB_MODULE_DIR);
 		return;
 	}
 	oiio_api = try_open(path, oiio_why, sizeof oiio_why);

@@ -4,8 +4,8 @@
  * Why a module: OpenImageIO 2.4 as Debian builds it pulls in ~260 shared libraries whose loading and symbol binding
  * cost ~0.2 s per process (measured: an empty program linked with it takes 0.21 s, taslab --version took 0.23 s).
  * Most commands never touch an EXR (PNG goes through libpng, png.c), so they no longer pay it. The module exports
- * one symbol, IMAGEIO_OIIO_SYMBOL, a table of the functions below; the version field guards against a stale module
- * from another build. Semantics are those of the same-named imageio.h functions, except that the EXR writer
+ * one symbol of its own, IMAGEIO_OIIO_SYMBOL, a table of the functions below; the version field guards against a
+ * stale module from another build. Semantics are those of the same-named imageio.h functions, except that the EXR writer
  * writes to `tmp` (the caller's atomic-write temporary, tl_fs.h) and names `path` in messages. */
 #ifndef TASLAB_IMAGEIO_OIIO_H
 #define TASLAB_IMAGEIO_OIIO_H
