@@ -115,8 +115,8 @@ MTR_TARGET_CLONES static void ssim_band(void *p, int band, uint32_t y0, uint32_t
 		/* Output row o = r - 2R is ready. Odd positions in the band finish a pair (o - 1, o); the band's last row,
 		 * if at an even position, goes alone (its pair partner would be outside the band). */
 		const uint32_t o = r - 2 * SSIM_R;
-		const int pair = ((o - y0) & 1u) == 1u, last_alone = !pair && o + 1 == y1;
-		if (!pair && !last_alone)
+		const int pair = ((o - y0) & 1u) == 1u;
+		if (!pair && o + 1 != y1)
 			continue;
 		const uint32_t o0 = pair ? o - 1 : o;
 		double rs[2][3] = {{0}}; /* row sums, added to the total row by row as a one-row pass would */

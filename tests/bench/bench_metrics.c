@@ -76,7 +76,8 @@ static void *read_part(void *p)
 /* ---- roofline: vector arithmetic peak ---- */
 
 typedef float pv16 __attribute__((vector_size(64)));
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(__SANITIZE_THREAD__)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) &&                           \
+	!defined(__SANITIZE_THREAD__)
 #define PEAK_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define PEAK_CLONES
