@@ -1,4 +1,5 @@
 /* test_cli_options.c — option parsing of the taslab CLI (no process spawned). */
+#include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -258,6 +259,66 @@ static void test_help_from_tables(void **state)
 	}
 }
 
+/* s with every run of white space (line breaks of wrapped help included) as one space; malloc'ed. */
+static char *flatten(const char *s)
+{
+	char *flat = malloc(strlen(s) + 1), *w = flat;
+	assert_non_null(flat);
+	for (const char *r = s; *r; r++)
+		if (!(isspace((unsigned char)*r) && w > flat && w[-1] == ' '))
+			*w++ = isspace((unsigned char)*r) ? ' ' : *r;
+	*w = 0;
+	return flat;
+}
+
+/* `render --help` lists every method with its own options under it (DESIGN section 4: help from the option tables),
+ * each with that method's help text, default and range: --max-age is 1..119 for tfr and 0..65535 for tarc. */
+static void test_render_help_per_method(void **state)
+{
+	(void)state;
+	char *text = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&text, &len);
+	cli_print_help(f, cli_find_command("render"));
+	fclose(f);
+	size_t n;
+	const method_info *const *m = method_list(&n);
+	for (size_t i = 0; i < n; i++) {
+		char head[32];
+		snprintf(head, sizeof head, "\n  %-6s ", m[i]->name);
+		const char *sec = strstr(text, head), *end = NULL;
+		if (!sec)
+			fail_msg("render --help lacks method %s", m[i]->name);
+		if (i + 1 < n) {
+			snprintf(head, sizeof head, "\n  %-6s ", m[i + 1]->name);
+			end = strstr(sec, head);
+		}
+		char *section = strndup(sec, end ? (size_t)(end - sec) : strlen(sec));
+		char *flat = flatten(section); /* the help wraps */
+		for (size_t k = 0; k < m[i]->option_count; k++) {
+			const method_option *o = &m[i]->options[k];
+			char want[256], desc[160];
+			method_option_describe(o, desc, sizeof desc);
+			snprintf(want, sizeof want, "--%s", o->name);
+			if (!strstr(flat, want))
+				fail_msg("render --help: %s lacks --%s", m[i]->name, o->name);
+			if (*desc) {
+				snprintf(want, sizeof want, "[%s]", desc);
+				if (!strstr(flat, want))
+					fail_msg("render --help: %s --%s lacks '%s'", m[i]->name, o->name, want);
+			}
+		}
+		free(flat);
+		free(section);
+	}
+	char *flat = flatten(text);
+	assert_non_null(strstr(flat, "[default 119; 1..119]"));                 /* tfr --max-age */
+	assert_non_null(strstr(flat, "[default 0; 0..65535]"));                 /* tarc --max-age */
+	assert_non_null(strstr(flat, "[as /N; default 4; one of 1, 2, 4, 8]")); /* rrc, sau --period */
+	free(flat);
+	free(text);
+}
+
 static void test_analysis_lists(void **state)
 {
 	(void)state;
@@ -305,7 +366,7 @@ int main(void)
 		cmocka_unit_test(test_render_options), cmocka_unit_test(test_pair_options),
 		cmocka_unit_test(test_tool_options), cmocka_unit_test(test_metrics_options),
 		cmocka_unit_test(test_analyze_options), cmocka_unit_test(test_study_options),
-		cmocka_unit_test(test_help_from_tables), cmocka_unit_test(test_resolve_scene),
+		cmocka_unit_test(test_help_from_tables), cmocka_unit_test(test_render_help_per_method), cmocka_unit_test(test_resolve_scene),
 		cmocka_unit_test(test_analysis_lists),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

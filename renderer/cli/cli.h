@@ -121,6 +121,9 @@ const cli_command *cli_find_command(const char *name);
 int cli_parse_command(const cli_command *c, int argc, char **argv, void *opts, cli_ctx *ctx);
 /* Help generated from the tables. */
 void cli_print_help(FILE *out, const cli_command *c);
+/* One option line of a help text: "--name ARG" (left), then `help` wrapped to the text width, all indented by
+ * `indent` more columns than the options list. */
+void cli_print_option(FILE *out, int indent, const char *left, const char *help);
 
 /* The whole command line: dispatch, parse, setup, run; returns the exit status. */
 int cli_main(int argc, char **argv);

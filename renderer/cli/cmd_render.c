@@ -104,18 +104,25 @@ static int render_validate(void *opts, cli_ctx *ctx)
 	return rc;
 }
 
+/* The methods and each one's own options, from the registry's tables (DESIGN section 4): an option several methods
+ * share (--threshold, --period, ...) is listed under each with that method's help, default and range. */
 static void methods_help(FILE *out)
 {
 	size_t n;
 	const method_info *const *m = method_list(&n);
-	fprintf(out, "\nmethods (options in brackets; a variant token sets them too: tfr@8, rrc/4, tarc-oracle@8):\n");
+	fprintf(out, "\nmethods and their options (--NAME VALUE after --method; a variant token sets the ones marked\n"
+		     "'as': tfr@8, rrc/4, tarc-oracle@8):\n");
 	for (size_t i = 0; i < n; i++) {
-		char opts[256] = "";
-		for (size_t k = 0, len = 0; k < m[i]->option_count && len < sizeof opts; k++)
-			len += (size_t)snprintf(opts + len, sizeof opts - len, " [--%s%s%s]", m[i]->options[k].name,
-						m[i]->options[k].arg && m[i]->options[k].type != METHOD_OPT_BOOL ? " " : "",
-						m[i]->options[k].type != METHOD_OPT_BOOL && m[i]->options[k].arg ? m[i]->options[k].arg : "");
-		fprintf(out, "  %-6s %s%s%s\n", m[i]->name, m[i]->summary, m[i]->available ? "" : " [planned]", opts);
+		fprintf(out, "  %-6s %s%s\n", m[i]->name, m[i]->summary, m[i]->available ? "" : " [planned]");
+		for (size_t k = 0; k < m[i]->option_count; k++) {
+			const method_option *o = &m[i]->options[k];
+			char left[64], desc[160], help[640];
+			snprintf(left, sizeof left, "--%s%s%s", o->name, o->type != METHOD_OPT_BOOL && o->arg ? " " : "",
+				 o->type != METHOD_OPT_BOOL && o->arg ? o->arg : "");
+			method_option_describe(o, desc, sizeof desc);
+			snprintf(help, sizeof help, "%s%s%s%s", o->help, *desc ? " [" : "", desc, *desc ? "]" : "");
+			cli_print_option(out, 5, left, help);
+		}
 	}
 }
 

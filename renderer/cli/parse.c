@@ -463,6 +463,27 @@ static void default_text(const cli_opt *t, const void *defaults, char *out, size
 	}
 }
 
+void cli_print_option(FILE *out, int indent, const char *left, const char *help)
+{
+	/* wrap the help text at ~100 columns, continuation lines indented */
+	const int width = 76 - indent;
+	const char *h = help;
+	int first = 1;
+	while (*h || first) {
+		size_t n = strlen(h);
+		if (n > (size_t)width) {
+			n = (size_t)width;
+			while (n > 20 && h[n] != ' ')
+				n--;
+		}
+		fprintf(out, "  %*s%-20s %.*s\n", indent, "", first ? left : "", (int)n, h);
+		h += n;
+		while (*h == ' ')
+			h++;
+		first = 0;
+	}
+}
+
 static void print_opts(FILE *out, const cli_opt *t, const void *defaults)
 {
 	for (; t && t->type != CLI_OPT_END; t++) {
@@ -474,22 +495,7 @@ static void print_opts(FILE *out, const cli_opt *t, const void *defaults)
 		snprintf(left, sizeof left, "--%s%s%s", t->name, t->arg ? " " : "", t->arg ? t->arg : "");
 		default_text(t, defaults, def, sizeof def);
 		snprintf(help, sizeof help, "%s%s", t->help ? t->help : "", def);
-		/* wrap the help text at ~100 columns, continuation lines indented */
-		const char *h = help;
-		int first = 1;
-		while (*h || first) {
-			size_t n = strlen(h);
-			if (n > 76) {
-				n = 76;
-				while (n > 20 && h[n] != ' ')
-					n--;
-			}
-			fprintf(out, "  %-20s %.*s\n", first ? left : "", (int)n, h);
-			h += n;
-			while (*h == ' ')
-				h++;
-			first = 0;
-		}
+		cli_print_option(out, 0, left, help);
 	}
 }
 
@@ -512,8 +518,7 @@ void cli_print_help(FILE *out, const cli_command *c)
 			c->defaults(defaults, &setup);
 		fprintf(out, "\noptions:\n");
 		print_opts(out, c->options, defaults);
-		if (c->dynamic_options)
-			print_opts(out, c->dynamic_options(), NULL);
+		/* (the dynamic options, i.e. the methods' own, are listed per method by help_extra) */
 		if (c->needs & CLI_NEED_SCENE)
 			print_opts(out, c->needs & CLI_NEED_FRAME_LIST ? setup_scene_list_opts : setup_scene_opts, &setup);
 		if (c->needs & CLI_NEED_COLOUR)

@@ -100,6 +100,11 @@ uint32_t method_config_period(const method_config *c);
 double method_config_number(const method_config *c, const char *option);
 bool method_config_flag(const method_config *c, const char *option);
 
+/* What `render --help` says of an option beyond its help text, from its table line: how a variant sets it, its
+ * default (or that the variant must carry it) and the values it takes, e.g. "as @T; default 8; 0..255",
+ * "as /N; required; one of 1, 2, 4, 8", "default bilinear; bilinear or nearest". Empty for a plain flag. */
+void method_option_describe(const method_option *o, char *out, size_t out_size);
+
 /* The option values as manifest entries (all options, defaults included); returns the count (<= max).
  * String values point into the method's tables. */
 size_t method_config_run_options(const method_config *c, run_option *out, size_t max);

@@ -19,7 +19,7 @@ static const char *const resample_names[] = {"bilinear", "nearest", NULL};
 static const uint32_t periods[] = {1, 2, 4, 8, 0};
 
 static const method_option rrc_option_table[] = {
-	{.name = "period", .arg = "N", .help = "refresh every 16x16 tile every N frames (1, 2, 4, 8; 1 equals ref)",
+	{.name = "period", .arg = "N", .help = "refresh every 16x16 tile every N frames (1 equals ref)",
 	 .type = METHOD_OPT_UINT, .offset = offsetof(rrc_options, period), .def = 4, .min = 1, .max = 8, .allowed = periods,
 	 .variant = '/', .variant_required = true},
 	{.name = "resample", .arg = "MODE", .help = "cache lookup: bilinear (per-tap validity) or nearest",
@@ -27,7 +27,7 @@ static const method_option rrc_option_table[] = {
 	{.name = "truth", .help = "also shade the reused samples and count those more than T from the truth "
 				  "(late_samples; T = --truth-threshold)",
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(rrc_options, truth)},
-	{.name = "truth-threshold", .arg = "T", .help = "rrc --truth: T for late_samples (code values, default 8)",
+	{.name = "truth-threshold", .arg = "T", .help = "with --truth: the T of late_samples, in code values",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(rrc_options, truth_threshold), .def = 8, .min = 0, .max = 255},
 };
 

@@ -18,14 +18,14 @@ typedef struct sau_options {
 static const uint32_t periods[] = {1, 2, 4, 8, 0};
 
 static const method_option sau_option_table[] = {
-	{.name = "period", .arg = "N", .help = "shade every block every N frames from its allocation (1, 2, 4, 8; 1 is sa)",
+	{.name = "period", .arg = "N", .help = "shade every block every N frames from its allocation (1 is sa)",
 	 .type = METHOD_OPT_UINT, .offset = offsetof(sau_options, period), .def = 4, .min = 1, .max = 8, .allowed = periods,
 	 .variant = '/', .variant_required = true},
 	ATLAS_OPTIONS(sau_options),
 	{.name = "truth", .help = "also shade the reused blocks and count texels more than T from the truth "
 				  "(late_samples; T = --truth-threshold)",
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(sau_options, truth)},
-	{.name = "truth-threshold", .arg = "T", .help = "sau --truth: T for late_samples (code values, default 8)",
+	{.name = "truth-threshold", .arg = "T", .help = "with --truth: the T of late_samples, in code values",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(sau_options, truth_threshold), .def = 8, .min = 0, .max = 255},
 };
 

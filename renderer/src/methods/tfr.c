@@ -27,10 +27,10 @@ typedef struct tfr_options {
 } tfr_options;
 
 static const method_option tfr_option_table[] = {
-	{.name = "threshold", .arg = "T", .help = "reshade when the shading differs by more than T code values (> 0)",
+	{.name = "threshold", .arg = "T", .help = "reshade when the shading differs by more than T code values",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(tfr_options, threshold), .def = 8, .min = 1e-6, .max = 255,
 	 .variant = '@', .variant_required = true},
-	{.name = "max-age", .arg = "K", .help = "reshade at the latest at age K frames (1..119)", .type = METHOD_OPT_UINT,
+	{.name = "max-age", .arg = "K", .help = "reshade at the latest at age K frames", .type = METHOD_OPT_UINT,
 	 .offset = offsetof(tfr_options, max_age), .def = TFR_MAX_AGE, .min = 1, .max = TFR_MAX_AGE},
 	{.name = "truth", .help = "write late_samples: reused samples more than T from the truth (0 for tfr by construction; "
 				  "counted, not assumed)",
