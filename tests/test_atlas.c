@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <jansson.h>
 
 #include "test_vk.h"
 
@@ -443,6 +444,22 @@ static void test_cli_pair_and_runs(void **state)
 	assert_non_null(strstr(p, "\"variant\": \"sau/4\""));
 	assert_non_null(strstr(p, "\"period\": 4"));
 	assert_non_null(strstr(p, "\"method\": \"tasa-oracle\""));
+	free(p);
+	/* TAS-METHODS section 4: the manifest records the atlas the options became at this size and the density used
+	 * (--atlas-density 0 = sqrt(S / 8)): 48 x 32 x 4 = 6144 texels -> 2^13 = 128 x 64; rho = sqrt(1/2); the level
+	 * hysteresis (atlas_alloc.h). */
+	snprintf(path, sizeof path, "%s/set/runs/sau-N4/manifest.json", dir);
+	p = tu_read_file(path, NULL);
+	assert_non_null(p);
+	json_error_t jerr;
+	json_t *man = json_loads(p, 0, &jerr), *der = json_object_get(json_object_get(man, "inputs"), "method_derived");
+	assert_non_null(der);
+	assert_true(json_number_value(json_object_get(der, "atlas_width")) == 128);
+	assert_true(json_number_value(json_object_get(der, "atlas_height")) == 64);
+	assert_true(fabs(json_number_value(json_object_get(der, "atlas_density")) - sqrt(0.5)) < 1e-6);
+	assert_true(json_number_value(json_object_get(der, "hysteresis_below")) == 1.25);
+	assert_true(json_number_value(json_object_get(der, "hysteresis_above")) == 0.25);
+	json_decref(man);
 	free(p);
 	snprintf(cmd, sizeof cmd, "%s metrics runs --out %s/table %s/set/runs/sa %s/set/runs/sau-N4 %s/set/runs/tasa-T8", TASLAB_BINARY,
 		 dir, dir, dir, dir);

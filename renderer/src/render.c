@@ -119,6 +119,11 @@ fail:
 	return rc;
 }
 
+size_t render_derived(const render *r, run_option *out, size_t max)
+{
+	return r->method->derived ? r->method->derived(r, out, max) : 0;
+}
+
 void render_destroy(render **pr)
 {
 	if (!pr || !*pr)

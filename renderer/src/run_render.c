@@ -37,8 +37,12 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 	char name[64], variant[96];
 	method_config_name(mc, name, sizeof name);
 	method_config_variant(mc, variant, sizeof variant);
-	run_option opts[RUN_MAX_OPTIONS];
+	run_option opts[RUN_MAX_OPTIONS], derived[RUN_MAX_OPTIONS];
 	size_t nopt = method_config_run_options(mc, opts, RUN_MAX_OPTIONS);
+	size_t nderived = render_derived(r, derived, RUN_MAX_OPTIONS);
+	char api[32];
+	snprintf(api, sizeof api, "%u.%u.%u", VK_API_VERSION_MAJOR(d->dev->props.apiVersion),
+		 VK_API_VERSION_MINOR(d->dev->props.apiVersion), VK_API_VERSION_PATCH(d->dev->props.apiVersion));
 	run_info info = {
 		.scene_name = scn->name,
 		.scene_path = d->scene_path,
@@ -50,6 +54,10 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.period = method_config_period(mc),
 		.options = opts,
 		.option_count = nopt,
+		.derived = derived,
+		.derived_count = nderived,
+		.ocio_version = colour_library_version(),
+		.vulkan_api = api,
 		.device = d->dev->props.deviceName,
 		.driver = d->dev->driver_info,
 		.first_frame = d->first,

@@ -50,6 +50,9 @@ void render_destroy(render **r);
 /* Renders frame `frame` (time = frame / fps) and reads it back; img's pixels stay valid until the next
  * render_frame. */
 int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *stats, char *err, size_t err_size);
+/* What the method derived from its options at creation (atlas size, density used, ...: manifest
+ * inputs.method_derived); returns the count (<= max), 0 for methods that derive nothing. */
+size_t render_derived(const render *r, run_option *out, size_t max);
 
 /* ---- one run: render frames into a run folder (run.h) ---- */
 

@@ -110,15 +110,17 @@ static json_t *option_json(const run_option *o)
 
 static json_t *inputs_json(const run_info *in)
 {
-	json_t *opts = json_object();
+	json_t *opts = json_object(), *derived = json_object();
 	for (size_t i = 0; i < in->option_count; i++)
 		json_object_set_new(opts, in->options[i].key, option_json(&in->options[i]));
+	for (size_t i = 0; i < in->derived_count; i++)
+		json_object_set_new(derived, in->derived[i].key, option_json(&in->derived[i]));
 	/* Frames as 64-bit JSON integers: a frame number is a uint32_t (an int turned frames >= 2^31 negative). */
-	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
+	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
 			 in->scene_name, "scene_path", in->scene_path, "camera", in->camera, "camera_motion",
 			 in->camera_motion, "method", in->method, "variant", in->variant, "threshold",
 			 isfinite(in->threshold) ? json_real(in->threshold) : json_null(), "period",
-			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "frames",
+			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "method_derived", derived, "frames",
 			 (json_int_t)in->first_frame, (json_int_t)in->last_frame, "size", (int)in->width, (int)in->height, "fps",
 			 (double)in->fps);
 }
@@ -144,6 +146,8 @@ int run_writer_create(const char *dir, const run_info *info, run_writer **out, c
 	w->info = *info;
 	w->info.options = NULL; /* borrowed only during create: kept as JSON */
 	w->info.option_count = 0;
+	w->info.derived = NULL;
+	w->info.derived_count = 0;
 	w->inputs = inputs_json(info);
 	if (!w->inputs) {
 		run_writer_destroy(&w);
@@ -289,8 +293,11 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 	char created[32];
 	tl_clock_utc(created, sizeof created);
 	const run_info *in = &w->info;
-	json_t *m = json_pack("{s:s, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
-			      "taslab_version", TASLAB_VERSION_STRING, "created_utc", created, "inputs", w->inputs,
+	json_t *m = json_pack("{s:s, s:{s:s, s:s?, s:s?, s:s?}, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, "
+			      "s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
+			      "taslab_version", TASLAB_VERSION_STRING, "versions", "taslab", TASLAB_VERSION_STRING,
+			      "opencolorio", in->ocio_version, "vulkan_api", in->vulkan_api, "vulkan_driver", in->driver,
+			      "created_utc", created, "inputs", w->inputs,
 			      "device", "name", in->device, "driver", in->driver, "validation", in->validation, "outputs",
 			      "exr", in->write_exr, "png", in->write_png, "decisions", in->write_decisions, "display_transform",
 			      in->display_transform ? in->display_transform : "", "totals", "frames", (json_int_t)w->frames,

@@ -44,6 +44,9 @@ typedef struct render_method {
 	/* With render_desc.decisions (method_info.decisions): one frame_decision per pixel of the last frame. */
 	const uint8_t *(*decisions)(render *r);
 	void (*finish)(render *r);
+	/* Values the method derived from its options and the frame size at init (the atlas size, the density used when
+	 * the option says "default"), for the manifest's inputs.method_derived; returns the count (<= max). NULL: none. */
+	size_t (*derived)(const render *r, run_option *out, size_t max);
 } render_method;
 
 /* The registry (methods/registry.c): the implementation of an available method, else NULL. */

@@ -301,6 +301,23 @@ static bool has_subgroup_reduction(VkPhysicalDevice pd)
 	return (sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sp.supportedOperations & need) == need;
 }
 
+/* TAS-METHODS section 4: "record s, rho, lmax, hysteresis in the manifest" — s and lmax are options; these are what
+ * they became at this frame size. */
+size_t atlas_derived(const render *r, run_option *out, size_t max)
+{
+	const atlas_state *s = r->method_state;
+	const run_option v[] = {
+		{.key = "atlas_width", .type = RUN_VALUE_NUMBER, .number = s->atlas_w},
+		{.key = "atlas_height", .type = RUN_VALUE_NUMBER, .number = s->atlas_h},
+		{.key = "atlas_density", .type = RUN_VALUE_NUMBER, .number = s->rho},
+		{.key = "hysteresis_below", .type = RUN_VALUE_NUMBER, .number = ATLAS_HYSTERESIS_BELOW},
+		{.key = "hysteresis_above", .type = RUN_VALUE_NUMBER, .number = ATLAS_HYSTERESIS_ABOVE},
+	};
+	size_t n = sizeof v / sizeof v[0] < max ? sizeof v / sizeof v[0] : max;
+	memcpy(out, v, n * sizeof *out);
+	return n;
+}
+
 int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 {
 	atlas_state *s = calloc(1, sizeof *s);

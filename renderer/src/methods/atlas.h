@@ -29,6 +29,7 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size);
 void atlas_record(render *r, VkCommandBuffer cmd, uint32_t frame);
 void atlas_collect(render *r, frame_stats *st);
 void atlas_finish(render *r);
+size_t atlas_derived(const render *r, run_option *out, size_t max);
 
 #define ATLAS_PASS_COUNT 10
 extern const char *const atlas_pass_names[ATLAS_PASS_COUNT];
@@ -37,7 +38,7 @@ extern const char *const atlas_pass_names[ATLAS_PASS_COUNT];
 #define ATLAS_FRAME_OPS                                                                                            \
 	.pass_names = atlas_pass_names, .pass_count = ATLAS_PASS_COUNT, .state_ring = 1, .prepare = atlas_prepare,      \
 	.record_pre = atlas_record_pre, .cpu_step = atlas_cpu_step, .record = atlas_record, .collect = atlas_collect,   \
-	.finish = atlas_finish
+	.finish = atlas_finish, .derived = atlas_derived
 
 /* The options every atlas method has (method_option entries for an options struct T with fields scale, density,
  * lmax, lod0; DESIGN section 4 --atlas-scale). */

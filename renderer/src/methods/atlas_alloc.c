@@ -241,7 +241,7 @@ uint32_t atlas_level(float length, float rho, uint32_t lmax, uint32_t cur, bool 
 {
 	float x = log2f(rho * length + 1.0f);
 	*clamped = false;
-	if (cur && x > (float)cur - 1.25f && x <= (float)cur + 0.25f)
+	if (cur && x > (float)cur - ATLAS_HYSTERESIS_BELOW && x <= (float)cur + ATLAS_HYSTERESIS_ABOVE)
 		return cur;
 	float c = ceilf(x);
 	if (c > (float)lmax) {

@@ -41,6 +41,9 @@ void atlas_edge_lengths(const float *clip, bool single, uint32_t width, uint32_t
  * with hysteresis around the current level `cur` (0: none): kept while log2(rho L + 1) lies in
  * (cur - 1.25, cur + 0.25]. *clamped is set when the unclamped level exceeds lmax. */
 uint32_t atlas_level(float length, float rho, uint32_t lmax, uint32_t cur, bool *clamped);
+/* The hysteresis band of atlas_level, in levels below and above the current one (recorded in the manifest). */
+#define ATLAS_HYSTERESIS_BELOW 1.25f
+#define ATLAS_HYSTERESIS_ABOVE 0.25f
 
 /* ---- the allocator: shelves of one power-of-two height handed out by a buddy over the atlas rows, blocks
  * inside a shelf by a buddy over the atlas width; lowest address first; empty shelves go back. ---- */

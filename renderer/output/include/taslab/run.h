@@ -49,6 +49,11 @@ typedef struct run_info {
 	uint32_t period;     /* N of rrc/sau, 0 when the method has none */
 	const run_option *options; /* the method's options, all of them (defaults included) */
 	size_t option_count;
+	const run_option *derived; /* what the method derived from them (render_derived): inputs.method_derived */
+	size_t derived_count;
+	/* Library versions for the manifest's "versions" (NULL: not recorded): OpenColorIO, and the Vulkan API version
+	 * of the device ("1.3.230"); the driver is `driver`. */
+	const char *ocio_version, *vulkan_api;
 	uint32_t first_frame, last_frame; /* inclusive */
 	uint32_t width, height;
 	float fps;
