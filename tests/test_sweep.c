@@ -50,7 +50,7 @@ static void test_request_file(void **state)
 				   " \"variants\": [\"ref\", \"tfr@8\"], \"methods\": [\"tarc\"], \"thresholds\": [4, 16.5],\n"
 				   " \"periods\": [2, 8], \"frames\": \"0:30\", \"size\": [48, 32], \"fps\": 30, \"out\": \"sw\",\n"
 				   " \"baseline\": \"ref\", \"metrics\": \"maxrgb,flip\", \"ppd\": 40, \"device\": \"lavapipe\",\n"
-				   " \"validation\": true, \"jobs\": 3}");
+				   " \"validation\": true, \"truth\": true, \"jobs\": 3}");
 	assert_int_equal(sweep_request_read(p, r, err, sizeof err), 0);
 	assert_int_equal(r->scene_count, 2);
 	assert_string_equal(r->scenes[0], "calm");
@@ -64,6 +64,7 @@ static void test_request_file(void **state)
 	assert_true(r->threshold_count == 2 && r->thresholds[1] == 16.5);
 	assert_true(r->period_count == 2 && r->periods[1] == 8);
 	assert_true(r->width == 48 && r->height == 32 && r->fps == 30 && r->ppd == 40 && r->validation && r->jobs == 3);
+	assert_true(r->truth && (r->set & SWEEP_SET_TRUTH));
 	snprintf(want, sizeof want, "%s/sw", dir);
 	assert_string_equal(r->out, want);
 	assert_true(r->set & SWEEP_SET_FRAMES);
@@ -236,6 +237,10 @@ static void test_spec_file_and_plan(void **state)
 	*t = *s;
 	t->width = 96;
 	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);
+	*t = *s;
+	t->truth = !s->truth; /* --truth changes what the runs count */
+	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);
+	assert_non_null(strstr(what, "truth"));
 	*t = *s;
 	t->scenes[0].end = 4;
 	assert_int_equal(sweep_spec_compare(s, t, what, sizeof what), 1);

@@ -154,6 +154,47 @@ static void test_sweep_resume(void **state)
 	assert_non_null(strstr(out, "resolved sweep"));
 }
 
+/* --truth: the variants whose method can count late samples are rendered with --truth (their manifests say so) and
+ * summary.csv carries late_samples and late_percent for them; ref has neither. */
+static void test_truth(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_truth");
+	char args[8192], sw[4096], p[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(args, sizeof args, COMMON " --variants ref,tarc@8 --frames 0:4 --truth --no-report --out %s", sw);
+	int st = sweep(args);
+	if (st)
+		fail_msg("sweep failed (%d):\n%s", st, out);
+	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tarc-T8/manifest.json", sw);
+	char *man = tu_read_file(p, NULL);
+	assert_non_null(man);
+	assert_non_null(strstr(man, "\"truth\": true"));
+	free(man);
+	snprintf(p, sizeof p, "%s/summary.csv", sw);
+	char *csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	const char *row = strstr(csv, "\nturntable,orbit,moving,tarc,tarc@8,");
+	assert_non_null(row);
+	/* the last three cells: late_samples (a count), late_percent (of the reused samples), run */
+	const char *end = strstr(row, ",runs/turntable/orbit/tarc-T8\n");
+	assert_non_null(end);
+	const char *c = end - 1;
+	while (c > row && *c != ',')
+		c--;
+	const char *c2 = c - 1;
+	while (c2 > row && *c2 != ',')
+		c2--;
+	char *stop;
+	double late = strtod(c2 + 1, &stop), pct = strtod(c + 1, NULL);
+	assert_true(stop == c && late >= 0 && pct >= 0 && pct <= 100);
+	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/ref\n")); /* ref counts nothing */
+	free(csv);
+	/* the setting is part of the sweep: resuming without it is refused */
+	snprintf(args, sizeof args, "%s/sweep.json --truth", sw);
+	assert_int_not_equal(sweep(args), 0);
+}
+
 /* Starts `taslab sweep ARGS` in the background; returns its pid. */
 static pid_t start(const char *args, const char *log)
 {
@@ -243,6 +284,9 @@ static void test_failure_and_study(void **state)
 	snprintf(p, sizeof p, "%s/summary.csv", sw);
 	char *csv = tu_read_file(p, NULL);
 	assert_non_null(strstr(csv, "rrc/2,,2,2,48,32,missing"));
+	/* without --truth no late counts: the row ends in two empty cells before the run path */
+	assert_non_null(strstr(csv, ",late_samples,late_percent,run\n"));
+	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/tfr-T8\n"));
 	free(csv);
 
 	/* a study of tfr@8 on this scene and path: report --study joins it per condition */
@@ -300,6 +344,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_bad_input),
 		cmocka_unit_test(test_sweep_resume),
+		cmocka_unit_test(test_truth),
 		cmocka_unit_test(test_sigkill_resume),
 		cmocka_unit_test(test_failure_and_study),
 	};

@@ -84,10 +84,6 @@ static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t 
 	s->fs_invocations = column_sum(&st, "fs_invocations");
 	s->reused_samples = column_sum(&st, "reused_samples");
 	s->late_samples = column_sum(&st, "late_samples");
-	s->late = column_sum(&st, "late");
-	s->early = column_sum(&st, "early");
-	s->on_time = column_sum(&st, "on_time");
-	s->unchanged = column_sum(&st, "unchanged");
 	run_stats_free(&st);
 	if (ng) {
 		qsort(gpu_ms, ng, sizeof *gpu_ms, cmpd);
@@ -149,8 +145,7 @@ static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null();
 static const char *const csv_columns[] = {
 	"run", "scene", "camera", "camera_motion", "method", "variant", "T", "period", "frames", "width", "height",
 	"visible_samples", "shaded_samples", "allocated_samples", "reuse_percent", "reduction_percent", "baseline",
-	"fs_invocations", "gpu_ms_median", "speedup_vs_ref", "reused_samples", "late_samples", "late_percent", "late",
-	"early", "on_time", "unchanged", NULL};
+	"fs_invocations", "gpu_ms_median", "speedup_vs_ref", "reused_samples", "late_samples", "late_percent", NULL};
 
 static int csv_column(const char *name)
 {
@@ -227,9 +222,6 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 		num(f, r->reused_samples, "%.0f"), fputc(',', f);
 		num(f, r->late_samples, "%.0f"), fputc(',', f);
 		num(f, late_pct, "%.4f");
-		double t[4] = {r->late, r->early, r->on_time, r->unchanged};
-		for (int k = 0; k < 4; k++)
-			fputc(',', f), num(f, t[k], "%.0f");
 		fputc('\n', f);
 		json_t *o = json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:o, s:o, s:I, s:[i,i]}", "run", r->path, "scene", r->scene,
 				      "camera", r->camera, "camera_motion", r->camera_motion, "method", r->method, "variant",
@@ -243,8 +235,7 @@ int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *er
 			    {"allocated_samples", r->allocated_samples}, {"reuse", r->reuse_mean},
 			    {"reduction", r->reduction}, {"fs_invocations", r->fs_invocations},
 			    {"gpu_ms_median", r->gpu_ms_median}, {"speedup_vs_ref", r->speedup_vs_ref},
-			    {"reused_samples", r->reused_samples}, {"late_samples", r->late_samples},
-			    {"late", r->late}, {"early", r->early}, {"on_time", r->on_time}, {"unchanged", r->unchanged}};
+			    {"reused_samples", r->reused_samples}, {"late_samples", r->late_samples}};
 		for (size_t k = 0; o && k < sizeof nums / sizeof nums[0]; k++)
 			json_object_set_new(o, nums[k].k, jnum(nums[k].v));
 		if (o)

@@ -195,14 +195,6 @@ double mtr_sweep_value(const mtr_sweep_row *row, const char *column)
 		return m->late_samples;
 	if (!strcmp(column, "late_percent"))
 		return m->reused_samples > 0 ? 100 * m->late_samples / m->reused_samples : NAN;
-	if (!strcmp(column, "late"))
-		return m->late;
-	if (!strcmp(column, "early"))
-		return m->early;
-	if (!strcmp(column, "on_time"))
-		return m->on_time;
-	if (!strcmp(column, "unchanged"))
-		return m->unchanged;
 	return NAN;
 }
 
@@ -224,7 +216,7 @@ int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *r
 		return rc;
 	FILE *f = a.f;
 	static const char *const before[] = {"reuse_percent", "shaded_samples", "shaded_per_frame", "reduction_percent"};
-	static const char *const after[] = {"late_samples", "late_percent", "late", "early", "on_time", "unchanged"};
+	static const char *const after[] = {"late_samples", "late_percent"};
 	fprintf(f, "scene,camera,camera_motion,method,variant,T,period,frames,width,height,status");
 	for (size_t k = 0; k < 4; k++)
 		fprintf(f, ",%s", before[k]);
@@ -233,7 +225,7 @@ int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *r
 	for (; ncol < MTR_SWEEP_MAX_COLUMNS && mtr_column_name(ncol); ncol++)
 		if (mtr_column_where(ncol) & 2u)
 			fprintf(f, ",%s", mtr_column_name(ncol));
-	for (size_t k = 0; k < 6; k++)
+	for (size_t k = 0; k < sizeof after / sizeof after[0]; k++)
 		fprintf(f, ",%s", after[k]);
 	fprintf(f, ",run\n");
 	for (size_t i = 0; i < n; i++) {
@@ -256,7 +248,7 @@ int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *r
 		for (int c = 0; c < ncol; c++)
 			if (mtr_column_where(c) & 2u)
 				cell(f, r->metric[c], "%.9g");
-		for (size_t k = 0; k < 6; k++)
+		for (size_t k = 0; k < sizeof after / sizeof after[0]; k++)
 			cell(f, mtr_sweep_value(r, after[k]), k == 1 ? "%.4f" : "%.0f");
 		char run[TL_PATH_MAX];
 		sweep_run_path(s, ".", &r->run, SWEEP_PATH_RUN, run, sizeof run);

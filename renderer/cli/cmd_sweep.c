@@ -136,6 +136,10 @@ static const cli_opt sweep_options[] = {
 	{.name = "validation", .arg = NULL,
 	 .help = "every run with the Khronos validation layer; any message fails the run",
 	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, validation)},
+	{.name = "truth", .arg = NULL,
+	 .help = "render every variant whose method has --truth with it: late_samples and late_percent in summary.csv "
+		 "(reused samples more than T from their true shading; costs shading them too)",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, truth)},
 	{.name = "ocio-config", .arg = "F",
 	 .help = "OpenColorIO config for the display transform (default: $OCIO, else the built-in ACES 1.0 SDR-video)",
 	 .type = CLI_STRING, .offset = offsetof(sweep_opts, ocio_config)},
@@ -152,7 +156,7 @@ static const cli_opt sweep_options[] = {
 static bool changes_spec(const sweep_opts *o)
 {
 	return o->scenes || o->cameras || o->variants || o->methods || o->thresholds || o->periods || o->frames ||
-	       o->size[0] || o->fps > 0 || o->baseline || o->metrics || o->ppd > 0 || o->device || o->validation ||
+	       o->size[0] || o->fps > 0 || o->baseline || o->metrics || o->ppd > 0 || o->device || o->validation || o->truth ||
 	       o->ocio_config || o->display || o->view;
 }
 
@@ -297,7 +301,7 @@ static void sweep_help(FILE *out)
 		     "   \"methods\": [\"tarc\"], \"thresholds\": [4, 16], \"periods\": [4], \"frames\": \"0:300\",\n"
 		     "   \"size\": \"960x540\", \"out\": \"sweeps/s1\", \"jobs\": 2}\n"
 		     "  keys: scenes cameras variants methods thresholds periods frames size fps out baseline metrics ppd\n"
-		     "        device ocio_config display view validation jobs (paths relative to the file's folder)\n"
+		     "        device ocio_config display view validation truth jobs (paths relative to the file's folder)\n"
 		     "\nresume: run the same command again, or 'taslab sweep SWEEP/sweep.json': complete runs (manifest.json)\n"
 		     "are kept, the rest is redone. Exit status 0 when every run completed, 1 when some failed.\n");
 }

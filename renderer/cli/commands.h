@@ -77,7 +77,7 @@ typedef struct sweep_opts {
 	uint32_t size[2];
 	double fps, ppd;
 	const char *device, *ocio_config, *display, *view;
-	bool validation;
+	bool validation, truth;
 	uint32_t jobs;
 	bool slurm, slurm_dry_run, no_report, quiet;
 	const char *slurm_opts, *task;

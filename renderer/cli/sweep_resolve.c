@@ -102,6 +102,8 @@ int cli_sweep_request_from_opts(const sweep_opts *o, sweep_request *r, char *err
 		r->ppd = o->ppd, r->set |= SWEEP_SET_PPD;
 	if (o->validation)
 		r->validation = true, r->set |= SWEEP_SET_VALIDATION;
+	if (o->truth)
+		r->truth = true, r->set |= SWEEP_SET_TRUTH;
 	if (o->jobs)
 		r->jobs = o->jobs, r->set |= SWEEP_SET_JOBS;
 	return rc;
@@ -329,6 +331,7 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	s->ppd = r->ppd > 0 ? r->ppd : MTR_FLIP_PPD_DEFAULT;
 	snprintf(s->device, sizeof s->device, "%s", r->device);
 	s->validation = r->validation;
+	s->truth = r->truth;
 	snprintf(s->ocio_config, sizeof s->ocio_config, "%s", r->ocio_config);
 	snprintf(s->display, sizeof s->display, "%s", r->display);
 	snprintf(s->view, sizeof s->view, "%s", r->view);

@@ -1,7 +1,7 @@
 /* metrics_runs.h — shading statistics of runs from their stats.csv and manifest.json (DESIGN sections 5, 6):
  * reuse, reduction of shaded samples against a baseline variant (paper Table 1), speedup against `ref`
- * (paper Fig. 12), and late / early / on-time / unchanged tallies when a run's stats.csv has those columns
- * (paper Figs. 7, 9). */
+ * (paper Fig. 12), and the late samples a run counted with --truth. (The predictors' late / early / on-time /
+ * unchanged tallies of Figs. 7 and 9 are per scene, path and T, not per run: `taslab analyze predictors`.) */
 #ifndef TASLAB_METRICS_RUNS_H
 #define TASLAB_METRICS_RUNS_H
 
@@ -29,7 +29,6 @@ typedef struct mtr_run_summary {
 	double speedup_vs_ref;      /* ref median / this median; NAN without a matching ref run */
 	double reused_samples;      /* sum; NAN when absent */
 	double late_samples;        /* --truth: sum; NAN when absent */
-	double late, early, on_time, unchanged; /* analysis tallies: column sums, NAN when absent */
 } mtr_run_summary;
 
 /* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: "sa" for the atlas methods sa,

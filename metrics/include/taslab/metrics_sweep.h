@@ -6,7 +6,7 @@
  *   scene,camera,camera_motion,method,variant,T,period,frames,width,height,status,
  *   reuse_percent,shaded_samples,shaded_per_frame,reduction_percent,baseline,gpu_ms_median,speedup_vs_ref,
  *   <every column of the `metrics diff` summary.json: maxrgb_mean,...,exceed_2..exceed_64,psnr,ssim,flicker_mean,
- *   flip_mean,...>,late_samples,late_percent,late,early,on_time,unchanged,run
+ *   flip_mean,...>,late_samples,late_percent,run
  * status: complete (run, clip and metrics), partial (the run is complete but its clip or metrics are missing),
  * missing (the run is not complete). The ref rows carry no difference metrics (a run compared with itself).
  *

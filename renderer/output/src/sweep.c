@@ -248,6 +248,11 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 				rc = bad(&c, key, "must be true or false");
 			r->validation = json_is_true(v);
 			r->set |= SWEEP_SET_VALIDATION;
+		} else if (!strcmp(key, "truth")) {
+			if (!json_is_boolean(v))
+				rc = bad(&c, key, "must be true or false");
+			r->truth = json_is_true(v);
+			r->set |= SWEEP_SET_TRUTH;
 		} else if (!strcmp(key, "jobs")) {
 			rc = get_uint(&c, key, v, 1, 256, &r->jobs);
 			r->set |= SWEEP_SET_JOBS;
@@ -260,7 +265,7 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 			rc = tl_error(err, err_size, TL_ERR_INPUT,
 				      "%s: unknown key \"%s\" (known: scenes, cameras, variants, methods, thresholds, periods, "
 				      "frames, size, fps, out, baseline, metrics, ppd, device, ocio_config, display, view, "
-				      "validation, jobs)",
+				      "validation, truth, jobs)",
 				      path, printable(key, pk, sizeof pk));
 		}
 		if (rc)
@@ -293,10 +298,10 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 							  "method", v->method, "T", jnum(v->T), "period",
 							  v->period ? json_integer(v->period) : json_null()));
 	}
-	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
+	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:b, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
 			      "scenes", scenes, "variants", variants, "size", (int)s->width, (int)s->height, "baseline",
 			      s->baseline, "metrics", s->metrics, "ppd", s->ppd, "device", s->device, "validation",
-			      (int)s->validation, "ocio_config", s->ocio_config, "display", s->display, "view", s->view,
+			      (int)s->validation, "truth", (int)s->truth, "ocio_config", s->ocio_config, "display", s->display, "view", s->view,
 			      "display_transform", s->display_transform);
 	int rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
@@ -401,8 +406,8 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 		return rc;
 	ctx c = {path, err, err_size};
 	static const char *const keys[] = {"taslab_sweep", "scenes", "variants", "size", "baseline", "metrics", "ppd",
-					   "device", "validation", "ocio_config", "display", "view", "display_transform",
-					   NULL};
+					   "device", "validation", "truth", "ocio_config", "display", "view",
+					   "display_transform", NULL};
 	json_t *scenes = json_object_get(j, "scenes"), *variants = json_object_get(j, "variants");
 	if (!json_is_object(j) || json_integer_value(json_object_get(j, "taslab_sweep")) != 1)
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab sweep.json (no \"taslab_sweep\": 1)", path);
@@ -446,6 +451,11 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	if (!rc && !json_is_boolean(json_object_get(j, "validation")))
 		rc = bad(&c, "validation", "must be true or false");
 	s->validation = json_is_true(json_object_get(j, "validation"));
+	/* "truth" came later: a sweep.json without it was made without --truth */
+	json_t *truth = json_object_get(j, "truth");
+	if (!rc && truth && !json_is_boolean(truth))
+		rc = bad(&c, "truth", "must be true or false");
+	s->truth = json_is_true(truth);
 	if (!rc)
 		rc = get_string_or_empty(&c, "device", json_object_get(j, "device"), s->device, sizeof s->device);
 	if (!rc)
@@ -510,6 +520,8 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 		return differ(what, n, "device '%s' vs '%s'", a->device, b->device);
 	if (a->validation != b->validation)
 		return differ(what, n, "validation %s vs %s", a->validation ? "on" : "off", b->validation ? "on" : "off");
+	if (a->truth != b->truth)
+		return differ(what, n, "truth %s vs %s", a->truth ? "on" : "off", b->truth ? "on" : "off");
 	if (strcmp(a->display_transform, b->display_transform) || strcmp(a->ocio_config, b->ocio_config) ||
 	    strcmp(a->display, b->display) || strcmp(a->view, b->view))
 		return differ(what, n, "display transform %s vs %s", a->display_transform, b->display_transform);

@@ -24,6 +24,7 @@
  *              else ref)
  *   metrics    "all" or "maxrgb,psnr,..."           ppd  FLIP pixels per degree
  *   device, ocio_config, display, view, validation (bool), jobs (whole number)
+ *   truth      bool: render the variants whose method has a `truth` option with it (late_samples)
  * Relative scene paths are relative to the sweep file's folder too.
  *
  * Folder layout (index i of the plan: all `ref` runs first, scene-major, then every other run scene-major,
@@ -68,7 +69,7 @@ enum {
 	SWEEP_SET_FRAMES = 1u << 6, SWEEP_SET_SIZE = 1u << 7, SWEEP_SET_FPS = 1u << 8, SWEEP_SET_OUT = 1u << 9,
 	SWEEP_SET_BASELINE = 1u << 10, SWEEP_SET_METRICS = 1u << 11, SWEEP_SET_PPD = 1u << 12,
 	SWEEP_SET_DEVICE = 1u << 13, SWEEP_SET_OCIO = 1u << 14, SWEEP_SET_DISPLAY = 1u << 15, SWEEP_SET_VIEW = 1u << 16,
-	SWEEP_SET_VALIDATION = 1u << 17, SWEEP_SET_JOBS = 1u << 18,
+	SWEEP_SET_VALIDATION = 1u << 17, SWEEP_SET_JOBS = 1u << 18, SWEEP_SET_TRUTH = 1u << 19,
 };
 
 typedef struct sweep_request {
@@ -92,7 +93,7 @@ typedef struct sweep_request {
 	double fps, ppd;
 	char out[SWEEP_PATH_MAX], baseline[SWEEP_NAME_MAX], metrics[128];
 	char device[256], ocio_config[SWEEP_PATH_MAX], display[128], view[128];
-	bool validation;
+	bool validation, truth;
 	uint32_t jobs;
 } sweep_request;
 
@@ -135,6 +136,7 @@ typedef struct sweep_spec {
 	double ppd;                     /* FLIP pixels per degree */
 	char device[256];               /* --device as given ("" = the default choice) */
 	bool validation;
+	bool truth;                     /* variants whose method has --truth are rendered with it */
 	char ocio_config[SWEEP_PATH_MAX], display[128], view[128]; /* as given ("" = default) */
 	char display_transform[256];    /* the resolved transform's name (colour_name) */
 } sweep_spec;
