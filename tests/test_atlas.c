@@ -11,8 +11,10 @@
  *  S6  static scene: no (re)allocation after frame 0;
  *  S7  explicit texture gradients beat mip 0 against ref on a textured scene;
  *  U1  sau/1 equals sa; U2 static scene: sau/N shades every block at t mod N = 0 and none otherwise, frames equal sa;
+ *  U3  moving scene: sau/4's clip reduction against sa lies in [1 - 1/N - new fraction, 1 - 1/N] (Table 1: 74.55 %);
  *  A1  static scene: tasa shades every block in frames 0 and 1, none after, frames equal sa bit for bit;
- *  A2  the 2x2 image-space max filter (sec. 6.2 step 2): a constant quad (atlas_filter*.json: no light reaches it)
+ *  A2  T = 255 (no predicted change can exceed it): tasa shades only new blocks and those in their second frame;
+ *  A4  the 2x2 image-space max filter (sec. 6.2 step 2): a constant quad (atlas_filter*.json: no light reaches it)
  *      beside a quad lit by a ramping lamp reshades only when the two touch on screen — a background gap between
  *      them, or no constant quad at all, gives the same shading counts after frame 1;
  *  A3  oracle: no late texel (--truth), frames within T + 2 of sa; T = 0 equals sa;
@@ -218,6 +220,19 @@ static void test_moving(void **state)
 		assert_int_equal(tasa.st[f].shaded_samples, tasa2.st[f].shaded_samples);
 	}
 	assert_true(reused > 0 && shaded > 0);
+	/* U3: every block is shaded at its allocation and then every 4th frame, so sau/4 shades at most what sa shades less
+	 * 3/4 of what is not new. In samples against sa; the new fraction in blocks (frame 0: all of them). */
+	double sa_shaded = 0, sau_shaded = 0, new_units = 0, visible_units = 0;
+	for (uint32_t f = 0; f < F; f++) {
+		sa_shaded += (double)sa.st[f].shaded_samples;
+		sau_shaded += (double)sau.st[f].shaded_samples;
+		new_units += (double)sa.st[f].new_units;
+		visible_units += (double)sa.st[f].visible_units;
+	}
+	double reduction = 1 - sau_shaded / sa_shaded, new_fraction = new_units / visible_units;
+	print_message("U3: sau/4 reduction against sa %.2f %% (new fraction %.2f %%; paper Table 1: 74.55 %%)\n",
+		      100 * reduction, 100 * new_fraction);
+	assert_true(reduction <= 0.75 + 1e-12 && reduction >= 0.75 - new_fraction);
 	tu_assert_same_frames(&sa, &oracle0, false);
 	tu_clip *all[] = {&sa, &sau, &tasa, &tasa2, &oracle, &oracle0};
 	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
@@ -226,7 +241,33 @@ static void test_moving(void **state)
 	scene_destroy(&s);
 }
 
-/* A2: blocks shaded in frames 2.. (after every block's first two shadings) of tasa@4 on a variant of atlas_filter. */
+/* A2: with T = 255 no predicted change can exceed T (d is at most 255 code values), so tasa shades only what it must:
+ * new blocks (first allocation or a new level) and blocks in their second frame (the first gradient, phase 1). The box
+ * of reuse_slide slides over a static floor, so blocks keep being allocated as it moves. */
+static void test_forced_only(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("reuse_slide");
+	vkdev *dev = tu_lavapipe();
+	enum { F = 12, W = 96, H = 64 };
+	tu_clip c = tu_render_clip(dev, s, 0, "tasa@255", NULL, NULL, W, H, F, false);
+	int64_t later = 0, visible = 0;
+	assert_int_equal(c.st[0].shaded_units, c.st[0].visible_units);
+	for (uint32_t f = 1; f < F; f++) {
+		const frame_stats *st = &c.st[f];
+		if (st->shaded_units < st->new_units || st->shaded_units > st->new_units + c.st[f - 1].new_units)
+			fail_msg("tasa@255 frame %u: %lld blocks shaded, %lld new, %lld new a frame before", f,
+				 (long long)st->shaded_units, (long long)st->new_units, (long long)c.st[f - 1].new_units);
+		if (f >= 2)
+			later += st->shaded_units, visible += st->visible_units;
+	}
+	assert_true(visible > 0 && later < visible); /* and it does reuse */
+	tu_clip_free(&c);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* A4: blocks shaded in frames 2.. (after every block's first two shadings) of tasa@4 on a variant of atlas_filter. */
 static int64_t shaded_after_start(vkdev *dev, const char *name, uint32_t n)
 {
 	scene *s = tu_load_scene(name);
@@ -246,7 +287,7 @@ static void test_filter(void **state)
 	enum { F = 24 };
 	int64_t touch = shaded_after_start(dev, "atlas_filter", F), gap = shaded_after_start(dev, "atlas_filter_gap", F);
 	int64_t alone = shaded_after_start(dev, "atlas_filter_alone", F);
-	print_message("A2: blocks reshaded in frames 2..%d: lit quad alone %lld, constant quad beside it with a gap %lld, "
+	print_message("A4: blocks reshaded in frames 2..%d: lit quad alone %lld, constant quad beside it with a gap %lld, "
 		      "touching %lld\n", F - 1, (long long)alone, (long long)gap, (long long)touch);
 	assert_true(alone > 0);         /* the ramp reshades the lit quad */
 	assert_int_equal(gap, alone);   /* the constant quad, apart on screen, never reshades */
@@ -479,7 +520,8 @@ int main(void)
 		cmocka_unit_test(test_allocator),	  cmocka_unit_test(test_patches_and_levels),
 		cmocka_unit_test(test_bad_input),	  cmocka_unit_test(test_static_scene),
 		cmocka_unit_test(test_no_bleeding),	  cmocka_unit_test(test_convergence_and_gradients),
-		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_filter),
+		cmocka_unit_test(test_moving),		  cmocka_unit_test(test_forced_only),
+		cmocka_unit_test(test_filter),
 		cmocka_unit_test(test_builtin_scenes),
 		cmocka_unit_test(test_cli_pair_and_runs),
 	};
