@@ -296,7 +296,7 @@ done:
 
 static void sweep_help(FILE *out)
 {
-	fprintf(out, "\nsweep file (JSON; options given on the command line override it):\n"
+	fprintf(out, "\nsweep file (JSON, or TOML when the name ends in .toml; options given on the command line override it):\n"
 		     "  {\"scenes\": [\"calm\", \"moderate\"], \"cameras\": \"all\", \"variants\": [\"ref\", \"tfr@8\", \"rrc/4\"],\n"
 		     "   \"methods\": [\"tarc\"], \"thresholds\": [4, 16], \"periods\": [4], \"frames\": \"0:300\",\n"
 		     "   \"size\": \"960x540\", \"out\": \"sweeps/s1\", \"jobs\": 2}\n"

@@ -1,5 +1,6 @@
 /* fuzz_sweep.c — libFuzzer harness for sweep files (untrusted input: a sweep file someone wrote, or a SWEEP/sweep.json
- * edited by hand; DESIGN section 9, output/sweep.h). Each input is read both as a request and as a resolved spec.
+ * edited by hand; DESIGN section 9, output/sweep.h). Each input is read as a request twice, as JSON and as TOML (the
+ * reader picks the format by the file's extension), and as a resolved spec.
  * Properties checked beyond "no crash, leak or hang" (ASan + UBSan via scripts/fuzz sweep):
  *   - every refusal is one non-empty line naming the file;
  *   - an accepted spec round-trips: write -> read gives the same sweep (sweep_spec_compare) and the same bytes when
@@ -78,8 +79,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	if (!dir[0])
 		setup();
-	char in[300], out[300], out2[300], err[1024] = "", what[512];
+	char in[300], in_toml[300], out[300], out2[300], err[1024] = "", what[512];
 	snprintf(in, sizeof in, "%s/in.json", dir);
+	snprintf(in_toml, sizeof in_toml, "%s/in.toml", dir);
 	snprintf(out, sizeof out, "%s/sweep.json", dir);
 	snprintf(out2, sizeof out2, "%s/again.json", dir);
 	FILE *f = fopen(in, "wb");
@@ -87,6 +89,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		abort();
 	if (sweep_request_read(in, req, err, sizeof err))
 		refused(err, in);
+	err[0] = 0;
+	f = fopen(in_toml, "wb");
+	if (!f || fwrite(data, 1, size, f) != size || fclose(f))
+		abort();
+	if (sweep_request_read(in_toml, req, err, sizeof err))
+		refused(err, in_toml);
 	err[0] = 0;
 	if (sweep_spec_read(in, spec, err, sizeof err)) {
 		refused(err, in);

@@ -10,6 +10,7 @@
 
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
+#include "toml_json.h"
 
 /* ------------------------------------------------------------------ helpers */
 
@@ -144,13 +145,15 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 {
 	memset(r, 0, sizeof *r);
 	json_t *j = NULL;
-	int rc = tl_json_read(path, &j, err, err_size);
+	size_t plen = strlen(path);
+	const bool toml = plen > 5 && !strcmp(path + plen - 5, ".toml");
+	int rc = toml ? tl_toml_read(path, &j, err, err_size) : tl_json_read(path, &j, err, err_size);
 	if (rc)
 		return rc;
 	ctx c = {path, err, err_size};
 	if (!json_is_object(j)) {
 		json_decref(j);
-		return tl_error(err, err_size, TL_ERR_INPUT, "%s: a sweep file is a JSON object (see 'taslab sweep --help')", path);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: a sweep file is a JSON object or a TOML document (see 'taslab sweep --help')", path);
 	}
 	const char *key;
 	json_t *v;
