@@ -220,8 +220,10 @@ static void test_moving(void **state)
 		assert_int_equal(tasa.st[f].shaded_samples, tasa2.st[f].shaded_samples);
 	}
 	assert_true(reused > 0 && shaded > 0);
-	/* U3: every block is shaded at its allocation and then every 4th frame, so sau/4 shades at most what sa shades less
-	 * 3/4 of what is not new. In samples against sa; the new fraction in blocks (frame 0: all of them). */
+	/* U3 as TAS-METHODS states it: every block is shaded at its allocation and then every 4th frame, so sau/4 saves at
+	 * most 3/4 of sa's shading and loses at most what is new. The reduction is in samples against sa, the new fraction
+	 * in blocks (frame 0: all of them), as the spec's bound has it; it is exact only for blocks of equal size, so the
+	 * lower bound is the spec's, not a derivation (deterministic frames: no flakiness either way). */
 	double sa_shaded = 0, sau_shaded = 0, new_units = 0, visible_units = 0;
 	for (uint32_t f = 0; f < F; f++) {
 		sa_shaded += (double)sa.st[f].shaded_samples;

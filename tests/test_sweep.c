@@ -75,6 +75,11 @@ static void test_request_toml(void **state)
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\njobs = 0\n", "\"jobs\"");
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\nperiods = [1.5]\n", "\"periods\"");
 	request_fails_as(dir, "bad.toml", "scenes = \"\\u0001\"\n[a\x01]\n", "bad.toml:");
+	/* a NUL in a key would silently stand for another key; JSON refuses it too */
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\n\"jobs\\u0000x\" = 2\n", "bad.toml:2:1: a key contains a NUL");
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\\u0000\"]\n", "bad.toml:1:11: a string contains a NUL");
+	/* the extension is matched without case */
+	request_fails_as(dir, "bad.TOML", "scenes = [\"calm\"]\nframes = 1979-05-27\n", "bad.TOML:2:10: dates");
 }
 
 static void test_request_file(void **state)

@@ -154,19 +154,23 @@ static void test_sweep_resume(void **state)
 	assert_non_null(strstr(out, "resolved sweep"));
 }
 
-/* --truth: the variants whose method can count late samples are rendered with --truth (their manifests say so) and
- * summary.csv carries late_samples and late_percent for them; ref has neither. */
+/* --truth: the variants whose method can count late samples are rendered with --truth (their manifests say so),
+ * summary.csv carries late_samples and late_percent for them (ref has neither), and the report plots the late share
+ * against T and lists it per run. */
 static void test_truth(void **state)
 {
 	(void)state;
 	const char *dir = tu_tmpdir("sweep_truth");
 	char args[8192], sw[4096], p[4096];
 	snprintf(sw, sizeof sw, "%s/sw", dir);
-	snprintf(args, sizeof args, COMMON " --variants ref,tarc@8 --frames 0:4 --truth --no-report --out %s", sw);
+	/* tfr reuses most samples from frame 1 on (tarc at 48x32 reshades everything: its 72x72-pixel filter footprint
+	 * covers the frame) */
+#define TRUTH_SWEEP COMMON " --variants ref,tfr@8 --frames 0:6 --out %s"
+	snprintf(args, sizeof args, TRUTH_SWEEP " --truth", sw);
 	int st = sweep(args);
 	if (st)
 		fail_msg("sweep failed (%d):\n%s", st, out);
-	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tarc-T8/manifest.json", sw);
+	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tfr-T8/manifest.json", sw);
 	char *man = tu_read_file(p, NULL);
 	assert_non_null(man);
 	assert_non_null(strstr(man, "\"truth\": true"));
@@ -174,10 +178,10 @@ static void test_truth(void **state)
 	snprintf(p, sizeof p, "%s/summary.csv", sw);
 	char *csv = tu_read_file(p, NULL);
 	assert_non_null(csv);
-	const char *row = strstr(csv, "\nturntable,orbit,moving,tarc,tarc@8,");
+	const char *row = strstr(csv, "\nturntable,orbit,moving,tfr,tfr@8,");
 	assert_non_null(row);
 	/* the last three cells: late_samples (a count), late_percent (of the reused samples), run */
-	const char *end = strstr(row, ",runs/turntable/orbit/tarc-T8\n");
+	const char *end = strstr(row, ",runs/turntable/orbit/tfr-T8\n");
 	assert_non_null(end);
 	const char *c = end - 1;
 	while (c > row && *c != ',')
@@ -185,14 +189,23 @@ static void test_truth(void **state)
 	const char *c2 = c - 1;
 	while (c2 > row && *c2 != ',')
 		c2--;
-	char *stop;
-	double late = strtod(c2 + 1, &stop), pct = strtod(c + 1, NULL);
-	assert_true(stop == c && late >= 0 && pct >= 0 && pct <= 100);
+	char *stop, *stop2;
+	double late = strtod(c2 + 1, &stop), pct = strtod(c + 1, &stop2);
+	assert_true(stop == c && stop2 == end && stop2 > c + 1); /* both cells filled */
+	assert_true(late >= 0 && pct >= 0 && pct <= 100);
 	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/ref\n")); /* ref counts nothing */
 	free(csv);
-	/* the setting is part of the sweep: resuming without it is refused */
-	snprintf(args, sizeof args, "%s/sweep.json --truth", sw);
-	assert_int_not_equal(sweep(args), 0);
+	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--late.svg", sw);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	char *html = tu_read_file(p, NULL);
+	assert_non_null(strstr(html, "late samples: reused more than T from their true shading"));
+	free(html);
+	/* the setting is part of the sweep: the same sweep without it into the same folder is refused */
+	snprintf(args, sizeof args, TRUTH_SWEEP, sw);
+	assert_int_equal(sweep(args), 2);
+	assert_non_null(strstr(out, "truth on vs off"));
+#undef TRUTH_SWEEP
 }
 
 /* Starts `taslab sweep ARGS` in the background; returns its pid. */

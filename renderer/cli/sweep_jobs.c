@@ -63,11 +63,10 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	vkdev *dev = NULL;
 	method_config mc;
 	int rc = method_config_parse_variant(&mc, v->variant, err, err_size);
-	/* --truth: every variant whose method can count late samples does (tfr counts 0 by construction; an oracle
-	 * shades everything and has no truth option to set) */
-	for (size_t k = 0; !rc && s->truth && k < mc.method->option_count; k++)
-		if (!strcmp(mc.method->options[k].name, "truth"))
-			rc = method_config_set(&mc, "truth", NULL, err, err_size);
+	/* --truth: every variant whose method can count late samples does (the oracles too: their count is 0 by
+	 * construction, and so is tfr's) */
+	if (!rc && s->truth && method_has_option(mc.method, "truth"))
+		rc = method_config_set(&mc, "truth", NULL, err, err_size);
 	if (!rc)
 		rc = scene_load(sc->path, &scn, err, err_size);
 	int cam = scn ? scene_find_camera(scn, sc->cameras[r->camera].name) : -1;

@@ -55,7 +55,8 @@ static const cell_def RUN_CELLS[] = {{"reuse_percent", "%.1f %%"}, {"reduction_p
 				      {"speedup_vs_ref", "%.2f×"},  {"exceed_T", "%.5f"},
 				      {"exceed_8", "%.5f"},         {"maxrgb_p99", "%.2f"},
 				      {"flicker_mean", "%.3f"},     {"flip_mean", "%.4f"},
-				      {"psnr", "%.1f dB"},          {NULL, NULL}};
+				      {"psnr", "%.1f dB"},          {"late_percent", "%.3f %%"},
+				      {NULL, NULL}};
 
 static void cells(FILE *f, const mtr_sweep_row *r, const cell_def *c)
 {
@@ -306,6 +307,9 @@ static const plot_def PLOTS[] = {
 	{"maxrgb_p99", "p99", "max-RGB difference, 99th percentile", "code values", false},
 	{"flicker_mean", "flicker", "flicker: difference of frame-to-frame changes", "code values (mean)", false},
 	{"flip_mean", "flip", "LDR-FLIP error (mean)", "FLIP", false},
+	/* only with `sweep --truth` (drawn when some run has the value) */
+	{"late_percent", "late", "late samples: reused more than T from their true shading (--truth)",
+	 "% of reused samples", false},
 };
 #define PLOT_COUNT (sizeof PLOTS / sizeof PLOTS[0])
 
@@ -824,7 +828,7 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 		/* the runs */
 		fprintf(f, "<h3>Runs</h3><div class=\"scroll\"><table><tr><th class=\"l\">variant</th><th>reuse</th>"
 			   "<th>reduction</th><th>speedup</th><th>exceed_T</th><th>exceed_8</th><th>p99</th><th>flicker</th>"
-			   "<th>FLIP</th><th>PSNR</th>");
+			   "<th>FLIP</th><th>PSNR</th><th>late</th>");
 		if (d->study)
 			fprintf(f, "<th>Q [95%%]</th><th>p_ref [95%%]</th><th>JND [95%%]</th>");
 		fprintf(f, "<th>frame</th><th>ref</th><th>variant</th><th>difference</th></tr>\n");

@@ -102,8 +102,11 @@ bool method_config_flag(const method_config *c, const char *option);
 
 /* What `render --help` says of an option beyond its help text, from its table line: how a variant sets it, its
  * default (or that the variant must carry it) and the values it takes, e.g. "as @T; default 8; 0..255",
- * "as /N; required; one of 1, 2, 4, 8", "default bilinear; bilinear or nearest". Empty for a plain flag. */
+ * "as /N; default 4; one of 1, 2, 4, 8", "default bilinear; bilinear or nearest" ("required" instead of a default
+ * when the variant must carry the value). Empty for a plain flag. */
 void method_option_describe(const method_option *o, char *out, size_t out_size);
+/* Whether method `m` has an option called `name` (e.g. "truth"). */
+bool method_has_option(const method_info *m, const char *name);
 
 /* The option values as manifest entries (all options, defaults included); returns the count (<= max).
  * String values point into the method's tables. */

@@ -240,12 +240,8 @@ extern "C" void colour_destroy(colour **c)
 	*c = nullptr;
 }
 
-extern "C" const char *colour_library_version(void)
-{
-	return OCIO::GetVersion();
-}
-
-const char *colour_name(const colour *c) { return c->name.c_str(); }
+extern "C" const char *colour_name(const colour *c) { return c->name.c_str(); }
+extern "C" const char *colour_library_version(void) { return OCIO::GetVersion(); }
 extern "C" const char *colour_glsl(const colour *c) { return c->glsl.c_str(); }
 extern "C" int colour_glsl_rewritten(const colour *c) { return c->rewritten; }
 

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
@@ -121,6 +122,14 @@ static int get_uint(const ctx *c, const char *key, json_t *v, json_int_t lo, jso
 	return TL_OK;
 }
 
+static int get_bool(const ctx *c, const char *key, json_t *v, bool *out)
+{
+	if (!json_is_boolean(v))
+		return bad(c, key, "must be true or false");
+	*out = json_is_true(v);
+	return TL_OK;
+}
+
 static int get_size(const ctx *c, const char *key, json_t *v, uint32_t *w, uint32_t *h)
 {
 	if (json_is_string(v)) {
@@ -146,7 +155,7 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 	memset(r, 0, sizeof *r);
 	json_t *j = NULL;
 	size_t plen = strlen(path);
-	const bool toml = plen > 5 && !strcmp(path + plen - 5, ".toml");
+	const bool toml = plen > 5 && !strcasecmp(path + plen - 5, ".toml");
 	int rc = toml ? tl_toml_read(path, &j, err, err_size) : tl_json_read(path, &j, err, err_size);
 	if (rc)
 		return rc;
@@ -247,14 +256,10 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 			rc = get_string(&c, key, v, r->view, sizeof r->view);
 			r->set |= SWEEP_SET_VIEW;
 		} else if (!strcmp(key, "validation")) {
-			if (!json_is_boolean(v))
-				rc = bad(&c, key, "must be true or false");
-			r->validation = json_is_true(v);
+			rc = get_bool(&c, key, v, &r->validation);
 			r->set |= SWEEP_SET_VALIDATION;
 		} else if (!strcmp(key, "truth")) {
-			if (!json_is_boolean(v))
-				rc = bad(&c, key, "must be true or false");
-			r->truth = json_is_true(v);
+			rc = get_bool(&c, key, v, &r->truth);
 			r->set |= SWEEP_SET_TRUTH;
 		} else if (!strcmp(key, "jobs")) {
 			rc = get_uint(&c, key, v, 1, 256, &r->jobs);
@@ -451,14 +456,13 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 		rc = get_string(&c, "metrics", json_object_get(j, "metrics"), s->metrics, sizeof s->metrics);
 	if (!rc)
 		rc = get_number(&c, "ppd", json_object_get(j, "ppd"), 1e-3, 1000, &s->ppd);
-	if (!rc && !json_is_boolean(json_object_get(j, "validation")))
-		rc = bad(&c, "validation", "must be true or false");
-	s->validation = json_is_true(json_object_get(j, "validation"));
+	if (!rc)
+		rc = get_bool(&c, "validation", json_object_get(j, "validation"), &s->validation);
 	/* "truth" came later: a sweep.json without it was made without --truth */
 	json_t *truth = json_object_get(j, "truth");
-	if (!rc && truth && !json_is_boolean(truth))
-		rc = bad(&c, "truth", "must be true or false");
-	s->truth = json_is_true(truth);
+	s->truth = false;
+	if (!rc && truth)
+		rc = get_bool(&c, "truth", truth, &s->truth);
 	if (!rc)
 		rc = get_string_or_empty(&c, "device", json_object_get(j, "device"), s->device, sizeof s->device);
 	if (!rc)

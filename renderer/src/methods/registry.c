@@ -317,9 +317,16 @@ bool method_config_flag(const method_config *c, const char *option)
 	return o && o->type == METHOD_OPT_BOOL && get_number(c, o) != 0.0;
 }
 
+bool method_has_option(const method_info *m, const char *name)
+{
+	return find_option(m, name, NULL) != NULL;
+}
+
 void method_option_describe(const method_option *o, char *out, size_t out_size)
 {
 	size_t len = 0;
+	if (!out_size)
+		return;
 	out[0] = 0;
 #define PUT(...)                                                                                                       \
 	do {                                                                                                           \
