@@ -1,13 +1,16 @@
 /* test_colour.c — the OpenColorIO view transform: GPU (OCIO-generated GLSL, run on lavapipe) and CPU
  * (OCIO processor) agree within 0.5 code value on the 0-255 scale over a dense set of linear inputs
- * (HDR values and saturated colours); reference points of the default ACES transform; bad configs. */
+ * (HDR values and saturated colours), for the default ACES transform, a user config and a config of LUT files;
+ * reference points of the default ACES transform; bad configs. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "taslab/colour_gpu.h"
+#include "taslab/imageio.h"
 #include "taslab/vkdev.h"
+#include "test_util.h"
 #include "test_vk.h"
 
 /* 28 levels per channel: 0, then 1e-4 .. 64 log-spaced (HDR up to 6 stops over 1.0). */
@@ -187,12 +190,72 @@ static void test_user_config(void **state)
 	assert_non_null(strstr(err, "--ocio-config"));
 }
 
+/* A view built from LUT files (tests/data/ocio_lut: a 1D shaper, a 17^3 grade): its LUTs are read from a device buffer
+ * instead of samplers (colour_gpu.c), with the filtering the samplers would have; GPU and CPU agree as for analytic
+ * views, with linear, tetrahedral (OCIO's shader math on nearest lookups) and nearest interpolation, inputs beyond the
+ * shaper's range and 0 included; no validation message. */
+static void test_lut_config(void **state)
+{
+	(void)state;
+	char path[4096], err[1024];
+	snprintf(path, sizeof path, "%s/tests/data/ocio_lut/config.ocio", TASLAB_SOURCE_DIR);
+	colour *c = NULL;
+	colour_desc cd = {.config_path = path, .display = "sRGB", .view = "Graded", .ignore_env = 1};
+	if (colour_create(&cd, &c, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(colour_lut_count(c), 2);
+	const colour_lut *a = colour_lut_get(c, 0), *b = colour_lut_get(c, 1);
+	assert_true(a->dims <= 2 && a->channels == 1 && a->linear && a->width * a->height >= 4096);
+	assert_true(b->dims == 3 && b->channels == 3 && b->linear && b->width == 17 && b->depth == 17);
+	assert_non_null(strstr(colour_glsl(c), b->sampler));
+	assert_null(colour_lut_get(c, 2));
+	colour_destroy(&c);
+	check_gpu_cpu(path, "sRGB", "Graded");
+	check_gpu_cpu(path, "sRGB", "Tetrahedral");
+	check_gpu_cpu(path, "sRGB", "Nearest");
+	/* The frame pipeline with that view, validation on: every shader that includes the transform (display, the
+	 * reprojection passes of tarc, the atlas shading of tasa) compiles and runs; ref's PNGs equal the CPU transform
+	 * of its EXRs (taslab tonemap) to the code value. */
+	const char *dir = tu_tmpdir("colour_lut_render");
+	const char *methods[] = {"ref", "tarc@8", "tasa@8"};
+	char cmd[8192], out[16384];
+	for (size_t i = 0; i < 3; i++) {
+		snprintf(cmd, sizeof cmd,
+			 "%s render --scene calm --camera walk --size 96x54 --frames 0:3 --method %s --ocio-config %s "
+			 "--view Graded --validation --quiet --out %s/r%zu",
+			 TASLAB_BINARY, methods[i], path, dir, i);
+		if (tu_run(cmd, out, sizeof out))
+			fail_msg("%s\n%s", cmd, out);
+	}
+	snprintf(cmd, sizeof cmd, "%s tonemap %s/r0 --ocio-config %s --view Graded --out %s/cpu", TASLAB_BINARY, dir, path, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s\n%s", cmd, out);
+	for (int f = 0; f < 3; f++) {
+		char pa[4096], pb[4096];
+		snprintf(pa, sizeof pa, "%s/r0/frames/%06d.png", dir, f);
+		snprintf(pb, sizeof pb, "%s/cpu/%06d.png", dir, f);
+		uint32_t wa, ha, wb, hb;
+		uint8_t *ia = NULL, *ib = NULL;
+		if (imageio_read_rgb8(pa, &wa, &ha, &ia, err, sizeof err) ||
+		    imageio_read_rgb8(pb, &wb, &hb, &ib, err, sizeof err))
+			fail_msg("%s", err);
+		assert_true(wa == wb && ha == hb);
+		int worst = 0;
+		for (size_t k = 0; k < (size_t)wa * ha * 3; k++)
+			worst = abs(ia[k] - ib[k]) > worst ? abs(ia[k] - ib[k]) : worst;
+		free(ia);
+		free(ib);
+		if (worst > 1)
+			fail_msg("frame %d: GPU and CPU transforms %d code values apart", f, worst);
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_default_gpu_matches_cpu), cmocka_unit_test(test_glsl_rewrite_bit_identical),
 		cmocka_unit_test(test_default_reference_points),
-		cmocka_unit_test(test_user_config),
+		cmocka_unit_test(test_user_config),       cmocka_unit_test(test_lut_config),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -104,6 +104,8 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 			goto fail;
 		r->colour = r->own_colour;
 	}
+	if ((rc = colour_device_create(r->dev, r->colour, &r->colour_dev, err, err_size)))
+		goto fail;
 	if ((rc = render_upload_scene(r, err, err_size)) || (rc = render_targets_create(r, err, err_size)) ||
 	    (rc = render_descriptors_create(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)))
 		goto fail;
@@ -153,6 +155,7 @@ void render_destroy(render **pr)
 		render_shadow_destroy(r);
 	render_targets_destroy(r);
 	render_upload_destroy(r);
+	colour_device_destroy(r->dev, &r->colour_dev);
 	colour_destroy(&r->own_colour);
 	free(r->blend_order);
 	free(r->world);

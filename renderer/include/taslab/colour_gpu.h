@@ -13,6 +13,16 @@
 extern "C" {
 #endif
 
+/* The transform's GLSL for one device: ocio_display() with the view's LUTs (colour_lut) read from a buffer on the
+ * device through buffer references instead of samplers, so that a shader includes it without binding anything
+ * (colour_gpu.c says how); for an analytic view, colour_glsl() as it is. Shaders put colour_device_extensions()
+ * right after their #version line ("" without LUTs). Lives as long as the shaders compiled with it are used. */
+typedef struct colour_device colour_device;
+int colour_device_create(vkdev *dev, const colour *c, colour_device **out, char *err, size_t err_size);
+void colour_device_destroy(vkdev *dev, colour_device **cd);
+const char *colour_device_glsl(const colour_device *cd);
+const char *colour_device_extensions(const colour_device *cd);
+
 /* Applies the GPU version of the transform to `n` RGBA float pixels in place, on `dev`. */
 int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *err, size_t err_size);
 

@@ -42,6 +42,7 @@ typedef struct vkdev {
 	char driver_info[256];
 	bool has_pipeline_stats;
 	bool has_timestamps;
+	bool has_buffer_device_address; /* bufferDeviceAddress enabled (LUTs of a view transform) */
 	bool validation;
 	bool has_debug_utils;
 	uint32_t validation_messages; /* counted by the debug messenger */

@@ -10,12 +10,63 @@
 
 namespace OCIO = OCIO_NAMESPACE;
 
+/* A LUT of the view (colour_lut), owning its name and values. */
+struct lut_store {
+	std::string sampler;
+	std::vector<float> values;
+	colour_lut info;
+};
+
 struct colour {
 	OCIO::ConstCPUProcessorRcPtr cpu;
 	std::string glsl;
 	std::string name;
 	int rewritten; /* B-spline curve functions restructured (restructure_glsl) */
+	std::vector<lut_store> luts;
 };
+
+/* The LUT textures OCIO's GLSL samples (1D LUTs as 1D or 2D textures of one or three channels, 3D LUTs as RGB 3D
+ * textures), with the filtering OCIO's own OpenGL helper gives them: nearest for INTERP_NEAREST (and, for 3D, for
+ * INTERP_TETRAHEDRAL, which OCIO's shader computes itself from nearest lookups), else linear. The sampler's
+ * type is read from its declaration in the GLSL (a one-row 1D LUT may be a sampler1D). */
+static void collect_luts(const OCIO::GpuShaderDescRcPtr &sd, const std::string &glsl, std::vector<lut_store> &out)
+{
+	out.clear();
+	for (unsigned i = 0; i < sd->getNumTextures(); i++) {
+		const char *tex = nullptr, *sampler = nullptr;
+		unsigned w = 0, h = 0;
+		OCIO::GpuShaderDesc::TextureType channel;
+		OCIO::Interpolation interp;
+		sd->getTexture(i, tex, sampler, w, h, channel, interp);
+		const float *v = nullptr;
+		sd->getTextureValues(i, v);
+		lut_store l;
+		l.sampler = sampler;
+		const int channels = channel == OCIO::GpuShaderDesc::TEXTURE_RED_CHANNEL ? 1 : 3;
+		l.values.assign(v, v + (size_t)w * h * channels);
+		const bool one_d = glsl.find("sampler1D " + l.sampler + ";") != std::string::npos;
+		l.info = colour_lut{nullptr, one_d ? 1 : 2, w, h, 1, channels, interp != OCIO::INTERP_NEAREST, nullptr};
+		out.push_back(std::move(l));
+	}
+	for (unsigned i = 0; i < sd->getNum3DTextures(); i++) {
+		const char *tex = nullptr, *sampler = nullptr;
+		unsigned e = 0;
+		OCIO::Interpolation interp;
+		sd->get3DTexture(i, tex, sampler, e, interp);
+		const float *v = nullptr;
+		sd->get3DTextureValues(i, v);
+		lut_store l;
+		l.sampler = sampler;
+		l.values.assign(v, v + (size_t)e * e * e * 3);
+		l.info = colour_lut{nullptr, 3, e, e, e, 3, interp != OCIO::INTERP_NEAREST && interp != OCIO::INTERP_TETRAHEDRAL,
+				    nullptr};
+		out.push_back(std::move(l));
+	}
+	for (lut_store &l : out) { /* pointers last: the vector no longer moves */
+		l.info.sampler = l.sampler.c_str();
+		l.info.values = l.values.data();
+	}
+}
 
 /* ---- restructuring the GLSL OpenColorIO emits (issue "frame cost") ----
  * OCIO 2.1 evaluates GradingRGBCurve B-splines (the ACES RRT and ODT tone scales) in GLSL with a loop that
@@ -210,14 +261,15 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 		sd->setFunctionName("ocio_display");
 		sd->setResourcePrefix("ocio_");
 		gpu->extractGpuShaderInfo(sd);
-		if (sd->getNumTextures() || sd->getNum3DTextures() || sd->getNumUniforms()) {
-			std::snprintf(err, err_size, "%s: this view transform needs LUT textures or dynamic uniforms on the GPU, "
-						 "which taslab does not support yet; choose a view built from analytic transforms",
+		if (sd->getNumUniforms()) {
+			std::snprintf(err, err_size, "%s: this view transform has dynamic properties (GPU uniforms), which "
+						 "taslab does not support; make them static in the config",
 				      path ? path : "default");
 			delete c;
 			return -1;
 		}
 		c->glsl = sd->getShaderText();
+		collect_luts(sd, c->glsl, c->luts);
 		c->rewritten = desc->keep_ocio_glsl ? 0 : restructure_glsl(c->glsl);
 	} catch (OCIO::Exception &e) {
 		std::string msg = e.what();
@@ -242,6 +294,11 @@ extern "C" void colour_destroy(colour **c)
 
 extern "C" const char *colour_name(const colour *c) { return c->name.c_str(); }
 extern "C" const char *colour_library_version(void) { return OCIO::GetVersion(); }
+extern "C" size_t colour_lut_count(const colour *c) { return c->luts.size(); }
+extern "C" const colour_lut *colour_lut_get(const colour *c, size_t i)
+{
+	return i < c->luts.size() ? &c->luts[i].info : nullptr;
+}
 extern "C" const char *colour_glsl(const colour *c) { return c->glsl.c_str(); }
 extern "C" int colour_glsl_rewritten(const colour *c) { return c->rewritten; }
 

@@ -1,4 +1,16 @@
-/* colour_gpu.c — evaluates the OpenColorIO GLSL of a view transform on the Vulkan device (colour.h). */
+/* colour_gpu.c — the OpenColorIO view transform on the Vulkan device (colour_gpu.h): its GLSL as the frame's shaders
+ * include it, with the view's LUTs in a buffer read through buffer references, and a probe that applies it to pixels.
+ *
+ * LUTs without descriptors: OCIO's GLSL samples each LUT with texture() on a sampler it declares. Binding those
+ * samplers would add a descriptor to every pipeline that shades (display, tfr, the reprojection passes, the atlas
+ * shading, the analyses). Instead all LUT values go into one device buffer whose device address is compiled into the
+ * GLSL as a constant (the shaders are compiled at run time anyway), the sampler declarations are removed, and each
+ * texture(NAME, p) becomes NAME_sample(p): a function that reads the texels with the filtering the sampler would
+ * have — clamp to edge, texel centres at (i + 0.5) / n, linear (bi-/trilinear in float, like OCIO's CPU path) or
+ * nearest — and returns what texture() returns for the format ((v, 0, 0, 1) for one channel, (r, g, b, 1) for three).
+ * Indices are clamped after the float-to-int conversion, so no input (NaN included) reads outside the buffer. */
+#include <inttypes.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -6,6 +18,232 @@
 #include "shader_compile.h"
 #include "taslab/colour_gpu.h"
 #include "taslab/vkdev.h"
+
+#define LUT_EXTENSIONS                                                                                                 \
+	"#extension GL_EXT_buffer_reference : require\n#extension GL_EXT_buffer_reference_uvec2 : require\n"
+
+struct colour_device {
+	vkdev_buffer luts; /* every LUT's values, one after the other (floats) */
+	char *glsl;
+	const char *extensions;
+};
+
+/* A growing string; `failed` once an allocation failed (later appends do nothing). */
+typedef struct strbuf {
+	char *s;
+	size_t len, cap;
+	int failed;
+} strbuf;
+
+static void put(strbuf *b, const char *fmt, ...)
+{
+	if (b->failed)
+		return;
+	va_list ap;
+	va_start(ap, fmt);
+	int n = vsnprintf(NULL, 0, fmt, ap);
+	va_end(ap);
+	if (n < 0) {
+		b->failed = 1;
+		return;
+	}
+	if (b->len + (size_t)n + 1 > b->cap) {
+		size_t cap = b->cap ? b->cap : 4096;
+		while (cap < b->len + (size_t)n + 1)
+			cap *= 2;
+		char *t = realloc(b->s, cap);
+		if (!t) {
+			b->failed = 1;
+			return;
+		}
+		b->s = t;
+		b->cap = cap;
+	}
+	va_start(ap, fmt);
+	vsnprintf(b->s + b->len, b->cap - b->len, fmt, ap);
+	va_end(ap);
+	b->len += (size_t)n;
+}
+
+/* NAME_texel(p): the texel at integer position p (in range) as a vec3; NAME_sample(c): texture(NAME, c). */
+static void lut_functions(strbuf *b, const colour_lut *l, uint64_t offset)
+{
+	static const char *const ivec[4] = {"", "int", "ivec2", "ivec3"}, *const vec[4] = {"", "float", "vec2", "vec3"};
+	static const char *const comp[3] = {".x", ".y", ".z"};
+	const char *iv = ivec[l->dims], *fv = vec[l->dims], *name = l->sampler;
+	/* linear index of texel p */
+	put(b, "vec3 %s_texel(%s p)\n{\n\tuint i = %" PRIu64 "u + %du * uint(", name, iv, offset, l->channels);
+	if (l->dims == 1)
+		put(b, "p");
+	else if (l->dims == 2)
+		put(b, "p.x + %u * p.y", l->width);
+	else
+		put(b, "p.x + %u * (p.y + %u * p.z)", l->width, l->height);
+	put(b, ");\n");
+	if (l->channels == 1)
+		put(b, "\treturn vec3(taslab_lut_value(i), 0.0, 0.0);\n}\n");
+	else
+		put(b, "\treturn vec3(taslab_lut_value(i), taslab_lut_value(i + 1u), taslab_lut_value(i + 2u));\n}\n");
+	const unsigned n[3] = {l->width, l->height, l->depth};
+	put(b, "vec4 %s_sample(%s c)\n{\n\tconst %s n = %s(", name, fv, iv, iv);
+	for (int k = 0; k < l->dims; k++)
+		put(b, "%s%u", k ? ", " : "", n[k]);
+	put(b, ");\n");
+	if (!l->linear) {
+		put(b, "\t%s a = clamp(%s(floor(c * %s(n))), %s(0), n - 1);\n\treturn vec4(%s_texel(a), 1.0);\n}\n", iv, iv, fv, iv,
+		    name);
+		return;
+	}
+	put(b, "\t%s p = clamp(c * %s(n) - 0.5, %s(0.0), %s(n - 1));\n", fv, fv, fv, fv);
+	put(b, "\t%s a = clamp(%s(p), %s(0), n - 1), e = min(a + 1, n - 1);\n", iv, iv, iv);
+	put(b, "\t%s f = clamp(p - %s(a), 0.0, 1.0);\n", fv, fv);
+	if (l->dims == 1) {
+		put(b, "\treturn vec4(mix(%s_texel(a), %s_texel(e), f), 1.0);\n}\n", name, name);
+		return;
+	}
+	/* corners: bit k of j set = take e in component k */
+	for (int j = 0; j < (1 << l->dims); j++) {
+		put(b, "\tvec3 t%d = %s_texel(%s(", j, name, iv);
+		for (int k = 0; k < l->dims; k++)
+			put(b, "%s%s%s", k ? ", " : "", (j >> k) & 1 ? "e" : "a", comp[k]);
+		put(b, "));\n");
+	}
+	if (l->dims == 2)
+		put(b, "\treturn vec4(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), 1.0);\n}\n");
+	else
+		put(b, "\treturn vec4(mix(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), mix(mix(t4, t5, f.x), mix(t6, t7, f.x), "
+		       "f.y), f.z), 1.0);\n}\n");
+}
+
+/* OCIO's GLSL with the sampler declarations removed and texture(NAME, ...) turned into NAME_sample(...). */
+static int rewrite_lookups(const char *src, const colour *c, strbuf *b, char *err, size_t err_size)
+{
+	for (const char *p = src; *p;) {
+		size_t n = strcspn(p, "\n");
+		int skip = 0;
+		for (size_t i = 0; i < colour_lut_count(c) && !skip; i++) {
+			char decl[256];
+			const colour_lut *l = colour_lut_get(c, i);
+			snprintf(decl, sizeof decl, "uniform sampler%dD %s;", l->dims, l->sampler);
+			skip = strstr(p, decl) && (size_t)(strstr(p, decl) - p) < n;
+		}
+		for (const char *q = p; !skip && q < p + n;) {
+			size_t i = 0, m = 0;
+			for (; i < colour_lut_count(c); i++) {
+				char call[256];
+				m = (size_t)snprintf(call, sizeof call, "texture(%s,", colour_lut_get(c, i)->sampler);
+				if (!strncmp(q, call, m))
+					break;
+			}
+			if (i < colour_lut_count(c)) {
+				put(b, "%s_sample(", colour_lut_get(c, i)->sampler);
+				q += m;
+			} else {
+				put(b, "%c", *q);
+				q++;
+			}
+		}
+		if (!skip)
+			put(b, "\n");
+		p += n;
+		if (*p == '\n')
+			p++;
+	}
+	if (!b->failed && strstr(b->s ? b->s : "", "Sampler"))
+		for (size_t i = 0; i < colour_lut_count(c); i++) {
+			char call[256];
+			snprintf(call, sizeof call, "texture(%s", colour_lut_get(c, i)->sampler);
+			if (strstr(b->s, call))
+				return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
+						"the view's GLSL samples %s in a form taslab does not rewrite", colour_lut_get(c, i)->sampler);
+		}
+	return b->failed ? tl_error(err, err_size, TL_ERR_NOMEM, "out of memory") : TL_OK;
+}
+
+int colour_device_create(vkdev *dev, const colour *c, colour_device **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	colour_device *cd = calloc(1, sizeof *cd);
+	if (!cd)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	cd->extensions = "";
+	const size_t nl = colour_lut_count(c);
+	if (!nl) {
+		cd->glsl = strdup(colour_glsl(c));
+		if (!cd->glsl) {
+			free(cd);
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		}
+		*out = cd;
+		return TL_OK;
+	}
+	if (!dev->has_buffer_device_address) {
+		free(cd);
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
+				"device '%s' has no bufferDeviceAddress, which a view transform with LUTs needs; choose an "
+				"analytic view (the built-in ACES one is)", dev->props.deviceName);
+	}
+	/* one buffer for all LUTs */
+	uint64_t total = 0;
+	for (size_t i = 0; i < nl; i++) {
+		const colour_lut *l = colour_lut_get(c, i);
+		total += (uint64_t)l->width * l->height * l->depth * (uint64_t)l->channels;
+	}
+	float *values = malloc(total * sizeof *values);
+	int rc = TL_OK;
+	VkResult vr = VK_SUCCESS;
+	if (!values)
+		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	uint64_t off = 0;
+	strbuf b = {0};
+	put(&b, "// taslab: the view's LUTs, read from one buffer (renderer/src/device/colour_gpu.c)\n"
+		"layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TaslabLut { float v[]; };\n");
+	if (!rc && !(vr = vkdev_buffer_create(dev, total * sizeof(float),
+					      VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+						      VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+					      false, "view transform LUTs", &cd->luts))) {
+		VkBufferDeviceAddressInfo ai = {.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO, .buffer = cd->luts.buffer};
+		const uint64_t addr = vkGetBufferDeviceAddress(dev->device, &ai);
+		/* (the reference in a variable: glslang 11 crashes or refuses on indexing the constructor's result) */
+		put(&b, "float taslab_lut_value(uint i)\n{\n\tTaslabLut lut = TaslabLut(uvec2(%uu, %uu));\n\treturn lut.v[i];\n}\n",
+		    (unsigned)(addr & 0xffffffffu), (unsigned)(addr >> 32));
+		for (size_t i = 0; i < nl; i++) {
+			const colour_lut *l = colour_lut_get(c, i);
+			const uint64_t n = (uint64_t)l->width * l->height * l->depth * (uint64_t)l->channels;
+			memcpy(values + off, l->values, n * sizeof(float));
+			lut_functions(&b, l, off);
+			off += n;
+		}
+		vr = vkdev_upload_buffer(dev, &cd->luts, values, total * sizeof(float));
+	}
+	if (!rc && vr)
+		rc = tl_error(err, err_size, TL_ERR_VULKAN, "view transform LUTs: Vulkan error %s", vkdev_result_string(vr));
+	free(values);
+	if (!rc)
+		rc = rewrite_lookups(colour_glsl(c), c, &b, err, err_size);
+	if (rc) {
+		free(b.s);
+		colour_device_destroy(dev, &cd);
+		return rc;
+	}
+	cd->glsl = b.s;
+	cd->extensions = LUT_EXTENSIONS;
+	*out = cd;
+	return TL_OK;
+}
+
+void colour_device_destroy(vkdev *dev, colour_device **pcd)
+{
+	if (!pcd || !*pcd)
+		return;
+	vkdev_buffer_destroy(dev, &(*pcd)->luts);
+	free((*pcd)->glsl);
+	free(*pcd);
+	*pcd = NULL;
+}
+
+const char *colour_device_glsl(const colour_device *cd) { return cd->glsl; }
+const char *colour_device_extensions(const colour_device *cd) { return cd->extensions; }
 
 static const char *const SRC_HEAD = "#version 460\n";
 static const char *const SRC_MAIN =
@@ -21,8 +259,11 @@ int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *e
 {
 	int rc = -1;
 	VkResult vr;
-	const char *fn = colour_glsl(c);
-	size_t len = strlen(SRC_HEAD) + strlen(fn) + strlen(SRC_MAIN) + 1;
+	colour_device *cd = NULL;
+	if (colour_device_create(dev, c, &cd, err, err_size))
+		return -1;
+	const char *fn = colour_device_glsl(cd), *ext = colour_device_extensions(cd);
+	size_t len = strlen(SRC_HEAD) + strlen(ext) + strlen(fn) + strlen(SRC_MAIN) + 1;
 	char *src = malloc(len);
 	uint32_t *spv = NULL;
 	size_t spv_size = 0;
@@ -36,7 +277,7 @@ int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *e
 		snprintf(err, err_size, n ? "out of memory" : "no pixels");
 		goto done;
 	}
-	snprintf(src, len, "%s%s%s", SRC_HEAD, fn, SRC_MAIN);
+	snprintf(src, len, "%s%s%s%s", SRC_HEAD, ext, fn, SRC_MAIN);
 	if (shc_compile(src, SHC_STAGE_COMPUTE, &spv, &spv_size, err, err_size))
 		goto done;
 	VkDevice d = dev->device;
@@ -107,6 +348,7 @@ done:
 	if (mod)
 		vkDestroyShaderModule(dev->device, mod, NULL);
 	vkdev_buffer_destroy(dev, &buf);
+	colour_device_destroy(dev, &cd);
 	free(spv);
 	free(src);
 	return rc;

@@ -253,7 +253,9 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 	vkGetPhysicalDeviceFeatures(d->physical, &have);
 	d->has_pipeline_stats = have.pipelineStatisticsQuery;
 	VkPhysicalDeviceVulkan13Features have13 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-	VkPhysicalDeviceFeatures2 have2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &have13};
+	VkPhysicalDeviceVulkan12Features have12 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES,
+						   .pNext = &have13};
+	VkPhysicalDeviceFeatures2 have2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &have12};
 	vkGetPhysicalDeviceFeatures2(d->physical, &have2);
 	if (!have13.dynamicRendering || !have13.synchronization2 || !have13.maintenance4) {
 		snprintf(err, err_size, "device '%s' lacks dynamicRendering/synchronization2/maintenance4", d->props.deviceName);
@@ -271,7 +273,10 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 		.pNext = &f13,
 		.hostQueryReset = VK_TRUE,
 		.scalarBlockLayout = VK_TRUE,
+		/* the LUTs of a view transform are read through buffer references (colour_gpu.c) */
+		.bufferDeviceAddress = have12.bufferDeviceAddress,
 	};
+	d->has_buffer_device_address = have12.bufferDeviceAddress;
 	VkPhysicalDeviceFeatures2 f2 = {
 		.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
 		.pNext = &f12,
@@ -367,13 +372,17 @@ static int find_memory(const vkdev *dev, uint32_t bits, VkMemoryPropertyFlags wa
 	return -1;
 }
 
-static VkResult allocate(vkdev *dev, VkMemoryRequirements req, VkMemoryPropertyFlags want, VkDeviceMemory *mem)
+static VkResult allocate(vkdev *dev, VkMemoryRequirements req, VkMemoryPropertyFlags want, bool addressable,
+			 VkDeviceMemory *mem)
 {
 	int type = find_memory(dev, req.memoryTypeBits, want);
 	if (type < 0)
 		return VK_ERROR_OUT_OF_DEVICE_MEMORY;
+	VkMemoryAllocateFlagsInfo fi = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO,
+					.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT};
 	VkMemoryAllocateInfo ai = {
 		.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+		.pNext = addressable ? &fi : NULL,
 		.allocationSize = req.size,
 		.memoryTypeIndex = (uint32_t)type,
 	};
@@ -397,7 +406,9 @@ VkResult vkdev_buffer_create(vkdev *dev, VkDeviceSize size, VkBufferUsageFlags u
 	vkGetBufferMemoryRequirements(dev->device, out->buffer, &req);
 	VkMemoryPropertyFlags want = host_visible ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
 						  : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
-	if ((r = allocate(dev, req, want, &out->memory)) || (r = vkBindBufferMemory(dev->device, out->buffer, out->memory, 0)))
+	const bool addressable = (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) != 0;
+	if ((r = allocate(dev, req, want, addressable, &out->memory)) ||
+	    (r = vkBindBufferMemory(dev->device, out->buffer, out->memory, 0)))
 		goto fail;
 	if (host_visible && (r = vkMapMemory(dev->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)))
 		goto fail;
@@ -440,7 +451,7 @@ VkResult vkdev_image_create(vkdev *dev, uint32_t w, uint32_t h, uint32_t layers,
 		return r;
 	VkMemoryRequirements req;
 	vkGetImageMemoryRequirements(dev->device, out->image, &req);
-	if ((r = allocate(dev, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, &out->memory)) ||
+	if ((r = allocate(dev, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, false, &out->memory)) ||
 	    (r = vkBindImageMemory(dev->device, out->image, out->memory, 0)))
 		goto fail;
 	VkImageViewCreateInfo vi = {

@@ -188,8 +188,18 @@ int render_compile(const render *r, const char *template_path, shc_stage stage, 
 int render_compile_defs(const render *r, const char *template_path, const char *defines, shc_stage stage,
 			uint32_t **spv, size_t *spv_size, char *err, size_t err_size)
 {
-	char *src = NULL;
-	int rc = shader_assemble_defs(template_path, colour_glsl(r->colour), defines, &src, err, err_size);
+	char *src = NULL, *defs = NULL;
+	/* the view's extensions (buffer references for its LUTs) go right after #version with the defines */
+	const char *ext = colour_device_extensions(r->colour_dev);
+	if (*ext) {
+		size_t n = strlen(ext) + (defines ? strlen(defines) : 0) + 1;
+		if (!(defs = malloc(n)))
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		snprintf(defs, n, "%s%s", ext, defines ? defines : "");
+		defines = defs;
+	}
+	int rc = shader_assemble_defs(template_path, colour_device_glsl(r->colour_dev), defines, &src, err, err_size);
+	free(defs);
 	if (rc)
 		return rc;
 	if (shc_compile(src, stage, spv, spv_size, err, err_size))

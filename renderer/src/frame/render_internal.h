@@ -17,6 +17,7 @@
 #include "../device/shader_compile.h"
 #include "../device/shader_library.h"
 #include "gpu_types.h"
+#include "taslab/colour_gpu.h"
 #include "taslab/method.h"
 #include "taslab/render.h"
 
@@ -138,6 +139,7 @@ struct render {
 
 	colour *own_colour;       /* created when desc.colour is NULL */
 	const colour *colour;
+	colour_device *colour_dev; /* its GLSL for this device (the LUTs of a view in a device buffer) */
 
 	/* scratch */
 	tlm_mat4 *world;

@@ -38,11 +38,24 @@ void colour_destroy(colour **c);
 const char *colour_name(const colour *c);
 /* The version of the OpenColorIO library taslab runs with ("2.1.2"), for manifests. */
 const char *colour_library_version(void);
-/* GLSL (Vulkan GLSL 4.60 compatible) defining `vec4 ocio_display(vec4 linear_rgba)`; no uniforms or
- * textures (creation fails with a clear message for a config that would need them). The text is OCIO's,
+/* GLSL (Vulkan GLSL 4.60 compatible) defining `vec4 ocio_display(vec4 linear_rgba)`. No uniforms (creation fails
+ * with a clear message for a view with dynamic properties); a view built from LUT files declares one sampler per
+ * LUT (colour_lut_get), which the renderer turns into buffer reads (renderer/src/device/colour_gpu.c). The text is OCIO's,
  * with its B-spline curve functions restructured into straight-line code that computes bit-identical values
  * (colour.cpp explains why: a 20x faster display transform on a SIMD CPU driver). */
 const char *colour_glsl(const colour *c);
+/* A lookup table sampled by colour_glsl(): `uniform samplerND <sampler>;` there, read with texture(). */
+typedef struct colour_lut {
+	const char *sampler;           /* its GLSL name, e.g. "ocio_lut3d_1Sampler" */
+	int dims;                      /* 1, 2 or 3: sampler1D, sampler2D, sampler3D */
+	unsigned width, height, depth; /* texels (height and depth 1 where unused) */
+	int channels;                  /* 1 (red only: texture() gives (v, 0, 0, 1)) or 3 (RGB) */
+	int linear;                    /* linear filtering, else nearest; clamp to edge in both */
+	const float *values;           /* width*height*depth*channels floats, x fastest, channels interleaved */
+} colour_lut;
+/* The view's LUTs (0 for an analytic view such as the built-in ACES one); valid while the colour lives. */
+size_t colour_lut_count(const colour *c);
+const colour_lut *colour_lut_get(const colour *c, size_t i);
 /* How many curve functions were restructured (0: OCIO's text as emitted). */
 int colour_glsl_rewritten(const colour *c);
 /* Applies the transform in place to `n` RGB(A) float pixels (channels 3 or 4, alpha untouched). */
