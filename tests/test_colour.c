@@ -36,7 +36,8 @@ static size_t make_inputs(float **out)
 	return n;
 }
 
-static void check_gpu_cpu(const char *config, const char *display, const char *view)
+/* GPU and CPU within `tol` code values over the input grid, no validation message. */
+static void check_gpu_cpu_within(const char *config, const char *display, const char *view, double tol)
 {
 	char err[1024];
 	colour *c = NULL;
@@ -69,12 +70,17 @@ static void check_gpu_cpu(const char *config, const char *display, const char *v
 	fprintf(stderr, "%s: max |GPU - CPU| = %.4f code values over %zu inputs (worst at linear %g %g %g)\n",
 		colour_name(c), worst, n, (double)in[at * 4], (double)in[at * 4 + 1], (double)in[at * 4 + 2]);
 	free(in);
-	assert_true(worst <= 0.5);
+	assert_true(worst <= tol);
 	assert_int_equal(vkdev_validation_messages(dev), 0);
 	free(cpu);
 	free(gpu);
 	vkdev_destroy(&dev);
 	colour_destroy(&c);
+}
+
+static void check_gpu_cpu(const char *config, const char *display, const char *view)
+{
+	check_gpu_cpu_within(config, display, view, 0.5);
 }
 
 static void test_default_gpu_matches_cpu(void **state)
@@ -205,17 +211,27 @@ static void test_lut_config(void **state)
 		fail_msg("%s", err);
 	assert_int_equal(colour_lut_count(c), 2);
 	const colour_lut *a = colour_lut_get(c, 0), *b = colour_lut_get(c, 1);
-	assert_true(a->dims <= 2 && a->channels == 1 && a->linear && a->width * a->height >= 4096);
+	assert_true(a->dims == 2 && a->channels == 1 && a->linear && a->width * a->height >= 4096); /* OCIO: 4096 x 2 */
 	assert_true(b->dims == 3 && b->channels == 3 && b->linear && b->width == 17 && b->depth == 17);
 	assert_non_null(strstr(colour_glsl(c), b->sampler));
 	assert_null(colour_lut_get(c, 2));
 	colour_destroy(&c);
-	check_gpu_cpu(path, "sRGB", "Graded");
-	check_gpu_cpu(path, "sRGB", "Tetrahedral");
-	check_gpu_cpu(path, "sRGB", "Nearest");
+	/* (a filtering mistake in the 1D shaper costs ~0.35 code values: far tighter than the 0.5 of analytic views) */
+	check_gpu_cpu_within(path, "sRGB", "Graded", 0.01);
+	check_gpu_cpu_within(path, "sRGB", "Tetrahedral", 0.01);
+	check_gpu_cpu_within(path, "sRGB", "Nearest", 0.01);
+	/* a 1024-entry RGB shaper: a sampler1D of three channels */
+	cd.view = "ShaperRGB";
+	if (colour_create(&cd, &c, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(colour_lut_count(c), 1);
+	a = colour_lut_get(c, 0);
+	assert_true(a->dims == 1 && a->channels == 3 && a->width == 1024 && a->height == 1);
+	colour_destroy(&c);
+	check_gpu_cpu_within(path, "sRGB", "ShaperRGB", 0.01);
 	/* The frame pipeline with that view, validation on: every shader that includes the transform (display, the
-	 * reprojection passes of tarc, the atlas shading of tasa) compiles and runs; ref's PNGs equal the CPU transform
-	 * of its EXRs (taslab tonemap) to the code value. */
+	 * reprojection passes of tarc, the atlas shading of tasa) compiles and runs; ref's PNGs are within 1 code value
+	 * of the CPU transform of its EXRs (taslab tonemap; measured: equal). */
 	const char *dir = tu_tmpdir("colour_lut_render");
 	const char *methods[] = {"ref", "tarc@8", "tasa@8"};
 	char cmd[8192], out[16384];

@@ -26,8 +26,9 @@ struct colour {
 };
 
 /* The LUT textures OCIO's GLSL samples (1D LUTs as 1D or 2D textures of one or three channels, 3D LUTs as RGB 3D
- * textures), with the filtering OCIO's own OpenGL helper gives them: nearest for INTERP_NEAREST (and, for 3D, for
- * INTERP_TETRAHEDRAL, which OCIO's shader computes itself from nearest lookups), else linear. The sampler's
+ * textures) and their filtering: nearest for INTERP_NEAREST, and for a 3D LUT's INTERP_TETRAHEDRAL (OCIO's shader
+ * does the tetrahedral maths itself from reads at texel centres, where nearest and linear filtering agree), else
+ * linear. The sampler's
  * type is read from its declaration in the GLSL (a one-row 1D LUT may be a sampler1D). */
 static void collect_luts(const OCIO::GpuShaderDescRcPtr &sd, const std::string &glsl, std::vector<lut_store> &out)
 {
@@ -277,6 +278,10 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 			if (ch == '\n')
 				ch = ' ';
 		std::snprintf(err, err_size, "OpenColorIO: %s", msg.c_str());
+		delete c;
+		return -1;
+	} catch (...) { /* std::bad_alloc (a large LUT copied): nothing may leave an extern "C" function */
+		std::snprintf(err, err_size, "%s: out of memory creating the view transform", path ? path : "default");
 		delete c;
 		return -1;
 	}

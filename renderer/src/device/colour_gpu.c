@@ -121,11 +121,12 @@ static int rewrite_lookups(const char *src, const colour *c, strbuf *b, char *er
 	for (const char *p = src; *p;) {
 		size_t n = strcspn(p, "\n");
 		int skip = 0;
+		const char *text = p + strspn(p, " \t"); /* OCIO declares one sampler per line */
 		for (size_t i = 0; i < colour_lut_count(c) && !skip; i++) {
 			char decl[256];
 			const colour_lut *l = colour_lut_get(c, i);
-			snprintf(decl, sizeof decl, "uniform sampler%dD %s;", l->dims, l->sampler);
-			skip = strstr(p, decl) && (size_t)(strstr(p, decl) - p) < n;
+			int m = snprintf(decl, sizeof decl, "uniform sampler%dD %s;", l->dims, l->sampler);
+			skip = m > 0 && text < p + n && !strncmp(text, decl, (size_t)m);
 		}
 		for (const char *q = p; !skip && q < p + n;) {
 			size_t i = 0, m = 0;
@@ -138,9 +139,12 @@ static int rewrite_lookups(const char *src, const colour *c, strbuf *b, char *er
 			if (i < colour_lut_count(c)) {
 				put(b, "%s_sample(", colour_lut_get(c, i)->sampler);
 				q += m;
-			} else {
-				put(b, "%c", *q);
-				q++;
+			} else { /* up to the next possible call */
+				const char *t = q + 1;
+				while (t < p + n && *t != 't')
+					t++;
+				put(b, "%.*s", (int)(t - q), q);
+				q = t;
 			}
 		}
 		if (!skip)
@@ -199,8 +203,7 @@ int colour_device_create(vkdev *dev, const colour *c, colour_device **out, char 
 	put(&b, "// taslab: the view's LUTs, read from one buffer (renderer/src/device/colour_gpu.c)\n"
 		"layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TaslabLut { float v[]; };\n");
 	if (!rc && !(vr = vkdev_buffer_create(dev, total * sizeof(float),
-					      VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-						      VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+					      VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
 					      false, "view transform LUTs", &cd->luts))) {
 		VkBufferDeviceAddressInfo ai = {.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO, .buffer = cd->luts.buffer};
 		const uint64_t addr = vkGetBufferDeviceAddress(dev->device, &ai);
