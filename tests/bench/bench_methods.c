@@ -4,7 +4,9 @@
  * consecutive frames (its cache stays valid). Writes one CSV row per variant and frame:
  *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,allocated,q_mean=M,q_p99=P,<pass>=MS...
  * q_mean / q_p99: mean and 99th percentile of the max-RGB difference of the display frame against the first
- * variant's (the reference) in the same frame.
+ * variant's (the reference) in the same frame. When a variant is labelled "sa", every row also has sa_e4, sa_e8,
+ * sa_e16, sa_e32, sa_e64: the fraction of pixels whose max-RGB difference to sa's frame exceeds T (TAS-METHODS A5:
+ * at matched budgets tasa should exceed less often than sau against sa).
  *
  *   bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
  * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
@@ -112,7 +114,20 @@ int main(int argc, char **argv)
 	}
 	int rc = 0;
 	size_t px = (size_t)w * h;
-	uint8_t *first_disp = malloc(px * 4);
+	uint8_t *first_disp = malloc(px * 4), *sa_disp = NULL;
+	int sa_index = -1;
+	for (int i = 0; i < nv; i++)
+		if (!strcmp(v[i].label, "sa"))
+			sa_index = i;
+	/* sa's frame is compared with every variant, those before it too: render it first within each frame */
+	if (sa_index > 0) {
+		bench_variant t = v[sa_index];
+		memmove(&v[2], &v[1], (size_t)(sa_index - 1) * sizeof v[0]);
+		v[1] = t;
+		sa_index = 1;
+	}
+	if (sa_index >= 0)
+		sa_disp = malloc(px * 4);
 	for (unsigned f = first; f < end && !rc && first_disp; f++) {
 		for (int i = 0; i < nv; i++) {
 			frame_image img;
@@ -126,6 +141,8 @@ int main(int argc, char **argv)
 			double sum = 0;
 			if (i == 0)
 				memcpy(first_disp, img.display_rgba, px * 4);
+			if (i == sa_index && sa_disp)
+				memcpy(sa_disp, img.display_rgba, px * 4);
 			for (size_t k = 0; k < px; k++) {
 				int m = 0;
 				for (int c = 0; c < 3; c++) {
@@ -141,6 +158,21 @@ int main(int argc, char **argv)
 				(long long)st.visible_samples, (long long)st.shaded_samples, (long long)st.reused_samples,
 				(long long)st.new_units, (long long)st.late_samples, st.gpu_ms_total,
 				(long long)st.allocated_samples, sum / (double)px, p99);
+			if (sa_disp) {
+				static const int T[5] = {4, 8, 16, 32, 64};
+				size_t over[5] = {0};
+				for (size_t k = 0; k < px; k++) {
+					int m = 0;
+					for (int c = 0; c < 3; c++) {
+						int d = abs((int)img.display_rgba[k * 4 + c] - (int)sa_disp[k * 4 + c]);
+						m = d > m ? d : m;
+					}
+					for (int t = 0; t < 5; t++)
+						over[t] += m > T[t];
+				}
+				for (int t = 0; t < 5; t++)
+					fprintf(out, ",sa_e%d=%.6f", T[t], (double)over[t] / (double)px);
+			}
 			for (uint32_t e = 0; e < st.extra_count; e++)
 				if (!strcmp(st.extra_names[e], "cpu_ms_alloc"))
 					fprintf(out, ",cpu_ms_alloc=%.4f", st.extra[e]);
@@ -154,6 +186,7 @@ int main(int argc, char **argv)
 	}
 	fclose(out);
 	free(first_disp);
+	free(sa_disp);
 	for (int i = 0; i < nv; i++)
 		render_destroy(&v[i].r);
 	vkdev_destroy(&dev);
