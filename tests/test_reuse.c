@@ -55,10 +55,13 @@ static void assert_invariants(const tu_clip *c, const char *what)
 		if (c->dec[f]) {
 			/* the decision map agrees with the counters */
 			int64_t shaded = 0;
-			for (int d = FRAME_DECISION_NEW; d < FRAME_DECISION_COUNT; d++)
+			for (int d = FRAME_DECISION_NEW; d <= FRAME_DECISION_SCHEDULED; d++)
 				shaded += count_dec(c, f, (frame_decision)d);
 			assert_int_equal(shaded, s->shaded_samples);
-			assert_int_equal(count_dec(c, f, FRAME_DECISION_REUSED), s->reused_samples);
+			/* reused: shown from the cache, late (--truth) or not */
+			int64_t late = count_dec(c, f, FRAME_DECISION_LATE);
+			assert_int_equal(count_dec(c, f, FRAME_DECISION_REUSED) + late, s->reused_samples);
+			assert_int_equal(late, s->late_samples > 0 ? s->late_samples : 0);
 			assert_int_equal(count_dec(c, f, FRAME_DECISION_NEW), s->new_units);
 		}
 	}
@@ -404,7 +407,7 @@ static void test_tarc_footprint_and_oracle(void **state)
 	assert_invariants(&c, "tarc@8");
 	/* tiles whose true shading changed between two consecutive frames up to t */
 	bool *changed = calloc((size_t)tw * th, 1);
-	int64_t predicted = 0, far_reused = 0;
+	int64_t predicted = 0, far_reused = 0, late = 0;
 	for (uint32_t f = 1; f < F; f++) {
 		for (size_t i = 0; i < px; i++)
 			if (memcmp(ref.hdr[f] + i * 4, ref.hdr[f - 1] + i * 4, 8))
@@ -427,9 +430,10 @@ static void test_tarc_footprint_and_oracle(void **state)
 			}
 		}
 		assert_true(c.st[f].late_samples >= 0);
+		late += c.st[f].late_samples; /* each is a magenta pixel of the map (assert_invariants) */
 	}
-	print_message("tarc@8 on a moving shadow: %lld predicted reshades, %lld reused samples far from any change\n",
-		      (long long)predicted, (long long)far_reused);
+	print_message("tarc@8 on a moving shadow: %lld predicted reshades, %lld reused samples far from any change, "
+		      "%lld late\n", (long long)predicted, (long long)far_reused, (long long)late);
 	assert_true(predicted > 0);
 	assert_true(far_reused > 0);
 	free(changed);
@@ -466,7 +470,8 @@ static void test_truth(void **state)
 	enum { F = 8, W = 64, H = 48 };
 	const char *truth[] = {"truth", NULL};
 	tu_clip t = tu_render_clip(dev, s, 0, "tfr@8", truth, NULL, W, H, F, false);
-	tu_clip r = tu_render_clip(dev, s, 0, "rrc/4", truth, NULL, W, H, F, false);
+	tu_clip r = tu_render_clip(dev, s, 0, "rrc/4", truth, NULL, W, H, F, true);
+	assert_invariants(&r, "rrc/4 --truth"); /* incl. magenta (late) map pixels = late_samples, frame by frame */
 	tu_clip plain = tu_render_clip(dev, s, 0, "rrc/4", NULL, NULL, W, H, F, false);
 	int64_t r_late = 0, r_reused = 0;
 	for (uint32_t f = 0; f < F; f++) {
@@ -489,6 +494,7 @@ static void test_truth(void **state)
 	}
 	print_message("rrc/4 on a moving shadow: %lld of %lld reused samples late (T = 8)\n", (long long)r_late,
 		      (long long)r_reused);
+	assert_true(r_late > 0); /* so the map check above compared something */
 	tu_clip_free(&t);
 	tu_clip_free(&r);
 	tu_clip_free(&plain);

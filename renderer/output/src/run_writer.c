@@ -73,7 +73,7 @@ static int clear_run(const char *dir, char *err, size_t err_size)
 /* Decision map colours (run.h): black background, grey reused, cyan new, blue second frame, red predicted,
  * yellow scheduled. */
 static const uint8_t decision_rgb[FRAME_DECISION_COUNT][3] = {
-	{0, 0, 0}, {96, 96, 96}, {0, 220, 255}, {40, 90, 255}, {255, 48, 0}, {255, 210, 0},
+	{0, 0, 0}, {96, 96, 96}, {0, 220, 255}, {40, 90, 255}, {255, 48, 0}, {255, 210, 0}, {255, 0, 255},
 };
 
 int run_decision_code(const uint8_t rgb[3])

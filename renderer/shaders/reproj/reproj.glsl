@@ -32,7 +32,8 @@ const uint SHADE_BIT = 1u << 31; // rrc: shade this frame (miss, first frame, or
 // bits 24..26: this frame's decision for `render --decisions` (frame_decision in taslab/frame.h)
 const uint DEC_SHIFT = 24u;
 const uint DEC_REUSED = 1u << DEC_SHIFT, DEC_NEW = 2u << DEC_SHIFT, DEC_SECOND = 3u << DEC_SHIFT;
-const uint DEC_PREDICTED = 4u << DEC_SHIFT, DEC_SCHEDULED = 5u << DEC_SHIFT;
+const uint DEC_PREDICTED = 4u << DEC_SHIFT, DEC_SCHEDULED = 5u << DEC_SHIFT, DEC_LATE = 6u << DEC_SHIFT;
+const uint DEC_MASK = 7u << DEC_SHIFT;
 
 // Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number; aux[3] T (float bits).
 const uint FLAG_HAVE_PREV = 1u;   // the previous frame was rendered: the cache is valid

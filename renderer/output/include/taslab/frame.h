@@ -41,6 +41,7 @@ typedef enum frame_decision {
 	FRAME_DECISION_SECOND = 3,    /* shaded: second frame after becoming visible (paper sec. 6 step 1) */
 	FRAME_DECISION_PREDICTED = 4, /* shaded: predicted change beyond T (oracle: true change beyond T) */
 	FRAME_DECISION_SCHEDULED = 5, /* shaded on a schedule: rrc tile refresh, --max-age, --force-reshade */
+	FRAME_DECISION_LATE = 6,      /* reused, and more than T from its true shading (--truth): late_samples */
 	FRAME_DECISION_COUNT
 } frame_decision;
 

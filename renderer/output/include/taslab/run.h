@@ -4,7 +4,8 @@
  *   RUN/frames/NNNNNN.png   display-referred 8-bit RGB
  *   RUN/decisions/NNNNNN.png  `render --decisions`: the reuse decision per pixel (frame_decision, frame.h) as
  *                           colours: none black, reused (96,96,96), new (0,220,255), second frame
- *                           (40,90,255), predicted (255,48,0), scheduled (255,210,0)
+ *                           (40,90,255), predicted (255,48,0), scheduled (255,210,0), late (255,0,255:
+ *                           reused but more than T from the truth; with --truth)
  *   RUN/stats.csv           one row per frame (frame.h)
  *   RUN/manifest.json       written last and atomically: inputs, method options, device, totals
  *
