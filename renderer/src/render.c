@@ -220,8 +220,8 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 		st->gpu_ms[p] = have_ts ? (double)(ts[p + 1] - ts[p]) * period_ms : -1.0;
 	}
 	/* The frame's time is the method's work: a pass named "truth" (the --truth diagnostic, which shades the reused
-	 * samples to count the late ones; an empty interval without --truth) is left out, so speedups do not change
-	 * with --truth. Its own time stays in gpu_ms_truth. */
+	 * samples to count the late ones; rrc/tarc copy their --decisions maps in the same interval; empty without
+	 * either) is left out, so speedups do not change with these diagnostics. Its own time stays in gpu_ms_truth. */
 	st->gpu_ms_total = have_ts ? (double)(ts[st->pass_count] - ts[0]) * period_ms : -1.0;
 	for (uint32_t p = 0; have_ts && p < st->pass_count; p++)
 		if (!strcmp(st->pass_names[p], "truth"))
