@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "taslab/tl_buf.h"
 #include "taslab/tl_clock.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
@@ -308,12 +309,30 @@ static void test_json(void **state)
 	assert_true(tl_clock_s() > 0);
 }
 
+/* tl_buf: appends and formatted appends grow the text past the first allocation, byte for byte. */
+static void test_buf(void **state)
+{
+	(void)state;
+	tl_buf b = {0};
+	assert_int_equal(tl_buf_append(&b, "ab", 1), 0);
+	for (int i = 0; i < 3000; i++)
+		assert_int_equal(tl_buf_printf(&b, "%03d,", i % 1000), 0);
+	assert_false(b.failed);
+	assert_int_equal(b.len, 1 + 3000 * 4);
+	assert_int_equal(strlen(b.s), b.len);
+	assert_memory_equal(b.s, "a000,001,", 9);
+	assert_string_equal(b.s + b.len - 4, "999,");
+	assert_int_equal(tl_buf_append(&b, "xyz", 2), 0);
+	assert_string_equal(b.s + b.len - 6, "999,xy");
+	free(b.s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_errors),	   cmocka_unit_test(test_mkdirs), cmocka_unit_test(test_atomic_write),
 		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths),
-		cmocka_unit_test(test_json), cmocka_unit_test(test_atomic_set), cmocka_unit_test(test_check_out_dir),
+		cmocka_unit_test(test_json), cmocka_unit_test(test_atomic_set), cmocka_unit_test(test_check_out_dir), cmocka_unit_test(test_buf),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

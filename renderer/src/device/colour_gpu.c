@@ -10,13 +10,13 @@
  * nearest — and returns what texture() returns for the format ((v, 0, 0, 1) for one channel, (r, g, b, 1) for three).
  * Indices are clamped after the float-to-int conversion, so no input (NaN included) reads outside the buffer. */
 #include <inttypes.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "shader_compile.h"
 #include "taslab/colour_gpu.h"
+#include "taslab/tl_buf.h"
 #include "taslab/vkdev.h"
 
 #define LUT_EXTENSIONS                                                                                                 \
@@ -28,95 +28,58 @@ struct colour_device {
 	const char *extensions;
 };
 
-/* A growing string; `failed` once an allocation failed (later appends do nothing). */
-typedef struct strbuf {
-	char *s;
-	size_t len, cap;
-	int failed;
-} strbuf;
-
-static void put(strbuf *b, const char *fmt, ...)
-{
-	if (b->failed)
-		return;
-	va_list ap;
-	va_start(ap, fmt);
-	int n = vsnprintf(NULL, 0, fmt, ap);
-	va_end(ap);
-	if (n < 0) {
-		b->failed = 1;
-		return;
-	}
-	if (b->len + (size_t)n + 1 > b->cap) {
-		size_t cap = b->cap ? b->cap : 4096;
-		while (cap < b->len + (size_t)n + 1)
-			cap *= 2;
-		char *t = realloc(b->s, cap);
-		if (!t) {
-			b->failed = 1;
-			return;
-		}
-		b->s = t;
-		b->cap = cap;
-	}
-	va_start(ap, fmt);
-	vsnprintf(b->s + b->len, b->cap - b->len, fmt, ap);
-	va_end(ap);
-	b->len += (size_t)n;
-}
-
 /* NAME_texel(p): the texel at integer position p (in range) as a vec3; NAME_sample(c): texture(NAME, c). */
-static void lut_functions(strbuf *b, const colour_lut *l, uint64_t offset)
+static void lut_functions(tl_buf *b, const colour_lut *l, uint64_t offset)
 {
 	static const char *const ivec[4] = {"", "int", "ivec2", "ivec3"}, *const vec[4] = {"", "float", "vec2", "vec3"};
 	static const char *const comp[3] = {".x", ".y", ".z"};
 	const char *iv = ivec[l->dims], *fv = vec[l->dims], *name = l->sampler;
 	/* linear index of texel p */
-	put(b, "vec3 %s_texel(%s p)\n{\n\tuint i = %" PRIu64 "u + %du * uint(", name, iv, offset, l->channels);
+	tl_buf_printf(b, "vec3 %s_texel(%s p)\n{\n\tuint i = %" PRIu64 "u + %du * uint(", name, iv, offset, l->channels);
 	if (l->dims == 1)
-		put(b, "p");
+		tl_buf_printf(b, "p");
 	else if (l->dims == 2)
-		put(b, "p.x + %u * p.y", l->width);
+		tl_buf_printf(b, "p.x + %u * p.y", l->width);
 	else
-		put(b, "p.x + %u * (p.y + %u * p.z)", l->width, l->height);
-	put(b, ");\n");
+		tl_buf_printf(b, "p.x + %u * (p.y + %u * p.z)", l->width, l->height);
+	tl_buf_printf(b, ");\n");
 	if (l->channels == 1)
-		put(b, "\treturn vec3(taslab_lut_value(i), 0.0, 0.0);\n}\n");
+		tl_buf_printf(b, "\treturn vec3(taslab_lut_value(i), 0.0, 0.0);\n}\n");
 	else
-		put(b, "\treturn vec3(taslab_lut_value(i), taslab_lut_value(i + 1u), taslab_lut_value(i + 2u));\n}\n");
+		tl_buf_printf(b, "\treturn vec3(taslab_lut_value(i), taslab_lut_value(i + 1u), taslab_lut_value(i + 2u));\n}\n");
 	const unsigned n[3] = {l->width, l->height, l->depth};
-	put(b, "vec4 %s_sample(%s c)\n{\n\tconst %s n = %s(", name, fv, iv, iv);
+	tl_buf_printf(b, "vec4 %s_sample(%s c)\n{\n\tconst %s n = %s(", name, fv, iv, iv);
 	for (int k = 0; k < l->dims; k++)
-		put(b, "%s%u", k ? ", " : "", n[k]);
-	put(b, ");\n");
+		tl_buf_printf(b, "%s%u", k ? ", " : "", n[k]);
+	tl_buf_printf(b, ");\n");
 	if (!l->linear) {
-		put(b, "\t%s a = clamp(%s(floor(c * %s(n))), %s(0), n - 1);\n\treturn vec4(%s_texel(a), 1.0);\n}\n", iv, iv, fv, iv,
+		tl_buf_printf(b, "\t%s a = clamp(%s(floor(c * %s(n))), %s(0), n - 1);\n\treturn vec4(%s_texel(a), 1.0);\n}\n", iv, iv, fv, iv,
 		    name);
 		return;
 	}
-	put(b, "\t%s p = clamp(c * %s(n) - 0.5, %s(0.0), %s(n - 1));\n", fv, fv, fv, fv);
-	put(b, "\t%s a = clamp(%s(p), %s(0), n - 1), e = min(a + 1, n - 1);\n", iv, iv, iv);
-	put(b, "\t%s f = clamp(p - %s(a), 0.0, 1.0);\n", fv, fv);
+	tl_buf_printf(b, "\t%s p = clamp(c * %s(n) - 0.5, %s(0.0), %s(n - 1));\n", fv, fv, fv, fv);
+	tl_buf_printf(b, "\t%s a = clamp(%s(p), %s(0), n - 1), e = min(a + 1, n - 1);\n", iv, iv, iv);
+	tl_buf_printf(b, "\t%s f = clamp(p - %s(a), 0.0, 1.0);\n", fv, fv);
 	if (l->dims == 1) {
-		put(b, "\treturn vec4(mix(%s_texel(a), %s_texel(e), f), 1.0);\n}\n", name, name);
+		tl_buf_printf(b, "\treturn vec4(mix(%s_texel(a), %s_texel(e), f), 1.0);\n}\n", name, name);
 		return;
 	}
 	/* corners: bit k of j set = take e in component k */
 	for (int j = 0; j < (1 << l->dims); j++) {
-		put(b, "\tvec3 t%d = %s_texel(%s(", j, name, iv);
+		tl_buf_printf(b, "\tvec3 t%d = %s_texel(%s(", j, name, iv);
 		for (int k = 0; k < l->dims; k++)
-			put(b, "%s%s%s", k ? ", " : "", (j >> k) & 1 ? "e" : "a", comp[k]);
-		put(b, "));\n");
+			tl_buf_printf(b, "%s%s%s", k ? ", " : "", (j >> k) & 1 ? "e" : "a", comp[k]);
+		tl_buf_printf(b, "));\n");
 	}
 	if (l->dims == 2)
-		put(b, "\treturn vec4(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), 1.0);\n}\n");
+		tl_buf_printf(b, "\treturn vec4(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), 1.0);\n}\n");
 	else
-		put(b, "\treturn vec4(mix(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), mix(mix(t4, t5, f.x), mix(t6, t7, f.x), "
+		tl_buf_printf(b, "\treturn vec4(mix(mix(mix(t0, t1, f.x), mix(t2, t3, f.x), f.y), mix(mix(t4, t5, f.x), mix(t6, t7, f.x), "
 		       "f.y), f.z), 1.0);\n}\n");
 }
 
 /* OCIO's GLSL with the sampler declarations removed and texture(NAME, ...) turned into NAME_sample(...). */
-static int rewrite_lookups(const char *src, const colour *c, strbuf *b, char *err, size_t err_size)
+static int rewrite_lookups(const char *src, const colour *c, tl_buf *b, char *err, size_t err_size)
 {
 	for (const char *p = src; *p;) {
 		size_t n = strcspn(p, "\n");
@@ -137,18 +100,18 @@ static int rewrite_lookups(const char *src, const colour *c, strbuf *b, char *er
 					break;
 			}
 			if (i < colour_lut_count(c)) {
-				put(b, "%s_sample(", colour_lut_get(c, i)->sampler);
+				tl_buf_printf(b, "%s_sample(", colour_lut_get(c, i)->sampler);
 				q += m;
 			} else { /* up to the next possible call */
 				const char *t = q + 1;
 				while (t < p + n && *t != 't')
 					t++;
-				put(b, "%.*s", (int)(t - q), q);
+				tl_buf_printf(b, "%.*s", (int)(t - q), q);
 				q = t;
 			}
 		}
 		if (!skip)
-			put(b, "\n");
+			tl_buf_printf(b, "\n");
 		p += n;
 		if (*p == '\n')
 			p++;
@@ -199,8 +162,8 @@ int colour_device_create(vkdev *dev, const colour *c, colour_device **out, char 
 	if (!values)
 		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	uint64_t off = 0;
-	strbuf b = {0};
-	put(&b, "// taslab: the view's LUTs, read from one buffer (renderer/src/device/colour_gpu.c)\n"
+	tl_buf b = {0};
+	tl_buf_printf(&b, "// taslab: the view's LUTs, read from one buffer (renderer/src/device/colour_gpu.c)\n"
 		"layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer TaslabLut { float v[]; };\n");
 	if (!rc && !(vr = vkdev_buffer_create(dev, total * sizeof(float),
 					      VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
@@ -208,7 +171,7 @@ int colour_device_create(vkdev *dev, const colour *c, colour_device **out, char 
 		VkBufferDeviceAddressInfo ai = {.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO, .buffer = cd->luts.buffer};
 		const uint64_t addr = vkGetBufferDeviceAddress(dev->device, &ai);
 		/* (the reference in a variable: glslang 11 crashes or refuses on indexing the constructor's result) */
-		put(&b, "float taslab_lut_value(uint i)\n{\n\tTaslabLut lut = TaslabLut(uvec2(%uu, %uu));\n\treturn lut.v[i];\n}\n",
+		tl_buf_printf(&b, "float taslab_lut_value(uint i)\n{\n\tTaslabLut lut = TaslabLut(uvec2(%uu, %uu));\n\treturn lut.v[i];\n}\n",
 		    (unsigned)(addr & 0xffffffffu), (unsigned)(addr >> 32));
 		for (size_t i = 0; i < nl; i++) {
 			const colour_lut *l = colour_lut_get(c, i);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "taslab/tl_buf.h"
 #include "taslab/tl_error.h"
 
 typedef struct shader_file {
@@ -24,35 +25,14 @@ const char *shader_source(const char *path)
 	return NULL;
 }
 
-typedef struct buffer {
-	char *data;
-	size_t len, cap;
-} buffer;
-
-static int append(buffer *b, const char *s, size_t n)
-{
-	if (b->len + n + 1 > b->cap) {
-		size_t c = (b->cap ? b->cap * 2 : 65536) + n;
-		char *d = realloc(b->data, c);
-		if (!d)
-			return -1;
-		b->data = d;
-		b->cap = c;
-	}
-	memcpy(b->data + b->len, s, n);
-	b->len += n;
-	b->data[b->len] = 0;
-	return 0;
-}
-
-static int expand(const char *src, const char *ocio, const char *defines, buffer *b, int depth, char *err,
+static int expand(const char *src, const char *ocio, const char *defines, tl_buf *b, int depth, char *err,
 		  size_t err_size)
 {
 	for (const char *p = src; *p;) {
 		size_t n = strcspn(p, "\n");
 		int rc = 0;
 		if (!strncmp(p, "#version", 8) && depth == 0 && defines) {
-			rc = append(b, p, n) || append(b, "\n", 1) || append(b, defines, strlen(defines));
+			rc = tl_buf_append(b, p, n) || tl_buf_append(b, "\n", 1) || tl_buf_append(b, defines, strlen(defines));
 			if (rc)
 				return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory assembling a shader");
 			p += n;
@@ -74,11 +54,11 @@ static int expand(const char *src, const char *ocio, const char *defines, buffer
 		} else if (!strncmp(p, "#extension GL_GOOGLE_include_directive", 38)) {
 			/* resolved here */
 		} else if (!strncmp(p, "// @OCIO_DISPLAY@", 17)) {
-			rc = append(b, ocio, strlen(ocio));
+			rc = tl_buf_append(b, ocio, strlen(ocio));
 		} else {
-			rc = append(b, p, n);
+			rc = tl_buf_append(b, p, n);
 		}
-		if (rc || append(b, "\n", 1))
+		if (rc || tl_buf_append(b, "\n", 1))
 			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory assembling a shader");
 		p += n;
 		if (*p == '\n')
@@ -99,12 +79,12 @@ int shader_assemble_defs(const char *path, const char *ocio_glsl, const char *de
 	const char *text = shader_source(path);
 	if (!text)
 		return tl_error(err, err_size, TL_ERR_INTERNAL, "shader: no template '%s' in the shader library", path);
-	buffer b = {0};
+	tl_buf b = {0};
 	int rc = expand(text, ocio_glsl ? ocio_glsl : "", defines, &b, 0, err, err_size);
 	if (rc) {
-		free(b.data);
+		free(b.s);
 		return rc;
 	}
-	*out = b.data;
+	*out = b.s;
 	return TL_OK;
 }
