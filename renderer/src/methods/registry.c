@@ -337,28 +337,27 @@ void method_option_describe(const method_option *o, char *out, size_t out_size)
 		PUT("as %c%s", o->variant, o->arg ? o->arg : "");
 	else if (o->variant == '-')
 		PUT("as -%s", o->name);
-	const char *sep = len ? "; " : "";
-	if (o->type == METHOD_OPT_BOOL)
-		; /* a flag: nothing more to say */
-	else if (isnan(o->def))
-		PUT("%srequired", sep);
-	else if (o->type == METHOD_OPT_CHOICE)
-		PUT("%sdefault %s", sep, o->choices[(size_t)o->def]);
-	else
-		PUT("%sdefault %g", sep, o->def);
-	if (o->type == METHOD_OPT_BOOL) {
-	} else if (o->type == METHOD_OPT_CHOICE) {
-		PUT("; ");
-		for (size_t k = 0; o->choices[k]; k++)
-			PUT("%s%s", k == 0 ? "" : o->choices[k + 1] ? ", " : " or ", o->choices[k]);
-	} else if (o->allowed) {
-		PUT("; one of ");
-		for (size_t k = 0; o->allowed[k]; k++)
-			PUT("%s%u", k ? ", " : "", o->allowed[k]);
-	} else if (o->min > 0.0 && o->min < 1e-3) { /* a positive lower bound that only excludes 0 */
-		PUT("; above 0, at most %g", o->max);
-	} else {
-		PUT("; %g..%g", o->min, o->max);
+	if (o->type != METHOD_OPT_BOOL) { /* a flag has no default or range to tell */
+		const char *sep = len ? "; " : "";
+		if (isnan(o->def))
+			PUT("%srequired", sep);
+		else if (o->type == METHOD_OPT_CHOICE)
+			PUT("%sdefault %s", sep, o->choices[(size_t)o->def]);
+		else
+			PUT("%sdefault %g", sep, o->def);
+		if (o->type == METHOD_OPT_CHOICE) {
+			PUT("; ");
+			for (size_t k = 0; o->choices[k]; k++)
+				PUT("%s%s", k == 0 ? "" : o->choices[k + 1] ? ", " : " or ", o->choices[k]);
+		} else if (o->allowed) {
+			PUT("; one of ");
+			for (size_t k = 0; o->allowed[k]; k++)
+				PUT("%s%u", k ? ", " : "", o->allowed[k]);
+		} else if (o->min > 0.0 && o->min < 1e-3) { /* a positive lower bound that only excludes 0 */
+			PUT("; above 0, at most %g", o->max);
+		} else {
+			PUT("; %g..%g", o->min, o->max);
+		}
 	}
 #undef PUT
 }
