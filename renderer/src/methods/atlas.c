@@ -35,6 +35,7 @@ enum {
 typedef struct patch_state {
 	uint32_t x, y;
 	uint8_t lw, lh;      /* allocated block (log2 sides) */
+	uint8_t req_lw, req_lh;   /* the levels asked for when it was allocated (lw, lh are smaller after an overflow) */
 	uint8_t want_lw, want_lh;
 	uint8_t allocated, facing, want_facing, phase; /* phase 0 new, 1 shaded once, 2 steady */
 	uint8_t clamped, shade;
@@ -402,13 +403,13 @@ static void plan_levels(render *r, atlas_state *s)
 		float lu, lv;
 		atlas_edge_lengths(clip, single, r->desc.width, r->desc.height, &lu, &lv);
 		bool cu, cv;
-		q->want_lw = (uint8_t)atlas_level(lu, s->rho, s->v.lmax, q->allocated ? q->lw : 0, &cu);
-		q->want_lh = (uint8_t)atlas_level(lv, s->rho, s->v.lmax, q->allocated ? q->lh : 0, &cv);
+		q->want_lw = (uint8_t)atlas_level(lu, s->rho, s->v.lmax, q->allocated ? q->req_lw : 0, &cu);
+		q->want_lh = (uint8_t)atlas_level(lv, s->rho, s->v.lmax, q->allocated ? q->req_lh : 0, &cv);
 		q->clamped = cu || cv;
 		/* facing of triangle A as seen from the eye (a double-sided patch turning around is new) */
 		tlm_vec3 n = tlm_v3_cross(tlm_v3_sub(w[1], w[0]), tlm_v3_sub(w[2], w[0]));
 		q->want_facing = tlm_v3_dot(n, tlm_v3_sub(r->eye, w[0])) > 0.0f;
-		bool keeps = q->allocated && q->want_lw == q->lw && q->want_lh == q->lh && q->want_facing == q->facing;
+		bool keeps = q->allocated && q->want_lw == q->req_lw && q->want_lh == q->req_lh && q->want_facing == q->facing;
 		G[p] = keeps && q->phase == 2 ? q->G : 0.0f;
 	}
 }
@@ -538,10 +539,12 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 	const float *F = s->buf[B_F].mapped;
 	s->allocated_blocks = s->allocated_texels = s->new_blocks = s->shaded_blocks = s->shaded_texels = 0;
 	s->overflow = s->clamped = 0;
-	/* 1-2: free the blocks of patches no longer visible, resized or turned around */
+	/* 1-2: free the blocks of patches no longer visible, resized or turned around. "Resized" compares with the size
+	 * the patch asked for: a block made smaller by an overflow (step 3) stays while that request stays the same —
+	 * comparing with the block's own size would free and re-allocate it, new, in every frame. */
 	for (uint32_t p = 0; p < s->patch_count; p++) {
 		patch_state *q = &s->ps[p];
-		if (q->allocated && (!vis[p] || q->want_lw != q->lw || q->want_lh != q->lh || q->want_facing != q->facing))
+		if (q->allocated && (!vis[p] || q->want_lw != q->req_lw || q->want_lh != q->req_lh || q->want_facing != q->facing))
 			release(s, q);
 	}
 	/* 3: allocate the new ones in ascending patch id; on overflow one level smaller (the longer side halved) */
@@ -550,7 +553,6 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 		if (!vis[p] || q->allocated)
 			continue;
 		uint32_t lw = q->want_lw, lh = q->want_lh;
-		bool shrunk = false;
 		while (!atlas_alloc_block(s->alloc, lw, lh, &q->x, &q->y)) {
 			if (lw <= 1 && lh <= 1 && getenv("TASLAB_DEBUG_ATLAS")) {
 				uint64_t hist[16] = {0}, nvis = 0;
@@ -572,10 +574,9 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 				lw--;
 			else
 				lh--;
-			shrunk = true;
 		}
-		s->overflow += shrunk;
 		q->lw = (uint8_t)lw, q->lh = (uint8_t)lh;
+		q->req_lw = q->want_lw, q->req_lh = q->want_lh;
 		q->allocated = 1;
 		q->facing = q->want_facing;
 		q->t_alloc = frame;
@@ -615,6 +616,7 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 				s->allocated_blocks++;
 				s->allocated_texels += texels;
 				s->clamped += q->clamped;
+				s->overflow += q->lw != q->req_lw || q->lh != q->req_lh;
 			}
 			if (pass == 0 ? !q->shade : (q->shade || !s->v.truth || s->v.oracle))
 				continue;
