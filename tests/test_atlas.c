@@ -19,7 +19,8 @@
  *      them, or no constant quad at all, gives the same shading counts after frame 1;
  *  A3  oracle: no late texel (--truth), frames within T + 2 of sa; T = 0 equals sa;
  *  (d) allocated samples, visible and new units identical across sa, sau, tasa and the oracle on a moving scene;
- *  determinism; every built-in scene renders with each method; bad input. */
+ *  determinism; every built-in scene renders with each method; bad input.
+ * A4 as a unit test on a synthetic id/G image, S4, the facing calibration and A5: test_atlas_checks.c. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -18,7 +18,8 @@
  *  T5  filter footprint: every predicted reshade lies within 4 tiles (the 9x9 kernel) of a tile whose true
  *      shading changed at some earlier frame; far from any change nothing is reshaded;
  *  stats invariants (shaded + reused = visible, 0 <= new <= shaded <= visible, forced <= shaded), identical
- *  visible_samples across ref/tfr/rrc/tarc on a moving camera, determinism, --truth, bad input. */
+ *  visible_samples across ref/tfr/rrc/tarc on a moving camera, determinism, --truth, bad input.
+ * R3, T4's stored gradient and T6: test_reuse_checks.c. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

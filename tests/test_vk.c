@@ -73,9 +73,8 @@ int tu_camera_index(const scene *s, const char *name)
 	return -1;
 }
 
-/* Renders frames [0, n) of `variant` with extra options ("name=value", NULL-terminated). */
-tu_clip tu_render_clip(vkdev *dev, const scene *s, int camera, const char *variant, const char *const *opts,
-			const colour *col, uint32_t w, uint32_t h, uint32_t n, bool decisions)
+render *tu_render_open(vkdev *dev, const scene *s, int camera, const char *variant, const char *const *opts,
+		       const colour *col, uint32_t w, uint32_t h, bool decisions)
 {
 	char err[1024];
 	method_config mc;
@@ -95,6 +94,15 @@ tu_clip tu_render_clip(vkdev *dev, const scene *s, int camera, const char *varia
 			 .decisions = decisions};
 	if (render_create(dev, &d, &r, err, sizeof err))
 		fail_msg("%s: %s", variant, err);
+	return r;
+}
+
+/* Renders frames [0, n) of `variant` with extra options ("name=value", NULL-terminated). */
+tu_clip tu_render_clip(vkdev *dev, const scene *s, int camera, const char *variant, const char *const *opts,
+			const colour *col, uint32_t w, uint32_t h, uint32_t n, bool decisions)
+{
+	char err[1024];
+	render *r = tu_render_open(dev, s, camera, variant, opts, col, w, h, decisions);
 	tu_clip c = {.n = n, .w = w, .h = h};
 	c.disp = calloc(n, sizeof *c.disp);
 	c.hdr = calloc(n, sizeof *c.hdr);

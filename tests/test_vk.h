@@ -36,6 +36,9 @@ int tu_camera_index(const struct scene *s, const char *name);
 tu_clip tu_render_clip(struct vkdev *dev, const struct scene *s, int camera, const char *variant,
 		       const char *const *opts, const struct colour *col, uint32_t w, uint32_t h, uint32_t n, bool decisions);
 void tu_clip_free(tu_clip *c);
+/* The renderer tu_render_clip uses, for tests that look at a method's state between frames (method_debug.h). */
+struct render *tu_render_open(struct vkdev *dev, const struct scene *s, int camera, const char *variant,
+			      const char *const *opts, const struct colour *col, uint32_t w, uint32_t h, bool decisions);
 /* Largest difference over R, G, B of two RGBA8 images. */
 int tu_max_diff(const uint8_t *a, const uint8_t *b, size_t pixels);
 /* Fails unless the PNG (and, with `hdr`, the half-float) frames of two clips are identical. */

@@ -61,6 +61,9 @@ vec3 atlas_shade_texel(uint slot, uint pid, uint texel, out ivec2 tc, out bool i
 	vec3 wa = (o.world * vec4(A.p, 1.0)).xyz, wb = (o.world * vec4(B.p, 1.0)).xyz, wc = (o.world * vec4(C.p, 1.0)).xyz;
 	vec3 wp = (o.world * vec4(v.p, 1.0)).xyz;
 	bool front = dot(cross(wb - wa, wc - wa), states[slot].camera_time.xyz - wp) > 0.0;
+#ifdef ATLAS_DEBUG_POSITIONS
+	return v.p; // diagnostic (TASLAB_ATLAS_DEBUG=positions): the texel's object-space position (test S4)
+#endif
 	return shade_point(slot, object, v.p, v.n, v.t, v.uv, front);
 }
 

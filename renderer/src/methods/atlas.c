@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "atlas_alloc.h"
+#include "method_debug.h"
 #include "taslab/tl_clock.h"
 
 const char *const atlas_pass_names[ATLAS_PASS_COUNT] = {"shadow", "ids",     "visible", "alloc", "shade", "truth",
@@ -169,8 +170,9 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 	VkResult res;
 	uint32_t w = r->desc.width, h = r->desc.height;
 	if ((res = vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R32G32B32A32_UINT,
-				      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
-				      false, "atlas ids", &s->ids)) ||
+				      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+					      VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas ids", &s->ids)) ||
 	    (res = vkdev_image_create(r->dev, s->atlas_w, s->atlas_h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 				      VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
 				      false, "atlas", &s->atlas)) ||
@@ -271,10 +273,13 @@ static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)
 	free(fs);
 	if (rc)
 		return rc;
-	char defs[200];
-	snprintf(defs, sizeof defs, "%s%s%s%s%s", tasa_gradients(s) ? "#define TASA 1\n" : "",
+	char defs[256];
+	/* TASLAB_ATLAS_DEBUG=positions (diagnostic, README "Shading atlas"): texels hold their object-space position */
+	const char *dbg = getenv("TASLAB_ATLAS_DEBUG");
+	snprintf(defs, sizeof defs, "%s%s%s%s%s%s", tasa_gradients(s) ? "#define TASA 1\n" : "",
 		 s->v.oracle ? "#define ORACLE 1\n" : "", s->v.truth ? "#define TRUTH 1\n" : "",
-		 s->v.lod0 ? "#define TL_TEXTURE_LOD0 1\n" : "", s->subgroup ? "#define TL_SUBGROUP 1\n" : "");
+		 s->v.lod0 ? "#define TL_TEXTURE_LOD0 1\n" : "", s->subgroup ? "#define TL_SUBGROUP 1\n" : "",
+		 dbg && !strcmp(dbg, "positions") ? "#define ATLAS_DEBUG_POSITIONS 1\n" : "");
 	if ((rc = make_compute(r, s, "atlas/visible.comp.in", defs, &s->visible_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/shade.comp.in", defs, &s->shade_pipe, err, err_size)) ||
 	    (rc = make_compute(r, s, "atlas/resolve.comp.in", defs, &s->resolve_pipe, err, err_size)))
@@ -759,4 +764,77 @@ void atlas_finish(render *r)
 	free(s->ps);
 	free(s);
 	r->method_state = NULL;
+}
+
+/* ---- diagnostics for the tests (atlas.h) ---- */
+
+int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err_size)
+{
+	atlas_state *s = state_of(r);
+	VkDeviceSize size = (VkDeviceSize)r->desc.width * r->desc.height * 16;
+	vkdev_buffer b = {0};
+	VkCommandBuffer cmd;
+	VkResult res = vkdev_buffer_create(r->dev, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+					   true, "atlas ids copy", &b);
+	if (!res && upload)
+		memcpy(b.mapped, ids, size);
+	if (!res)
+		res = vkdev_cmd_begin(r->dev, &cmd);
+	if (res) {
+		vkdev_buffer_destroy(r->dev, &b);
+		return render_vk_error(err, err_size, "atlas ids copy", res);
+	}
+	VkImageLayout tl = upload ? VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+	VkAccessFlags2 ta = upload ? VK_ACCESS_2_TRANSFER_WRITE_BIT : VK_ACCESS_2_TRANSFER_READ_BIT;
+	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, upload ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL,
+			    tl, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, ta);
+	VkBufferImageCopy c = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+			       .imageExtent = {r->desc.width, r->desc.height, 1}};
+	if (upload)
+		vkCmdCopyBufferToImage(cmd, b.buffer, s->ids.image, tl, 1, &c);
+	else
+		vkCmdCopyImageToBuffer(cmd, s->ids.image, tl, b.buffer, 1, &c);
+	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, tl, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+			    ta, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	render_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+		       VK_ACCESS_2_HOST_READ_BIT);
+	res = vkdev_cmd_submit_wait(r->dev, cmd);
+	if (!res && !upload)
+		memcpy(ids, b.mapped, size);
+	vkdev_buffer_destroy(r->dev, &b);
+	return res ? render_vk_error(err, err_size, "atlas ids copy", res) : TL_OK;
+}
+
+int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size)
+{
+	atlas_state *s = state_of(r);
+	memcpy(s->buf[B_G].mapped, G, (size_t)s->patch_count * sizeof *G);
+	VkCommandBuffer cmd;
+	VkResult res = vkdev_cmd_begin(r->dev, &cmd);
+	if (res)
+		return render_vk_error(err, err_size, "atlas visible pass", res);
+	vkCmdFillBuffer(cmd, s->buf[B_VISIBLE].buffer, 0, VK_WHOLE_SIZE, 0);
+	vkCmdFillBuffer(cmd, s->buf[B_F].buffer, 0, VK_WHOLE_SIZE, 0);
+	barrier_compute(cmd);
+	bind_compute(r, s, cmd, s->visible_pipe, 0, 0, 0, 0);
+	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	barrier_compute(cmd);
+	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
+		return render_vk_error(err, err_size, "atlas visible pass", res);
+	memcpy(visible, s->buf[B_VISIBLE].mapped, (size_t)s->patch_count * sizeof *visible);
+	memcpy(F, s->buf[B_F].mapped, (size_t)s->patch_count * sizeof *F);
+	return TL_OK;
+}
+
+const uint32_t *atlas_debug_blocks(render *r, uint32_t *patch_count)
+{
+	atlas_state *s = state_of(r);
+	*patch_count = s->patch_count;
+	return s->buf[B_BLOCKS].mapped;
+}
+
+int atlas_debug_facing(render *r, uint32_t pid)
+{
+	atlas_state *s = state_of(r);
+	return pid < s->patch_count && s->ps[pid].allocated ? s->ps[pid].facing : -1;
 }

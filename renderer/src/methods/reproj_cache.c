@@ -19,6 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "method_debug.h"
+
 enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_COUNT };
 
 typedef struct reproj_state {
@@ -276,6 +278,11 @@ const uint8_t *reproj_decisions(render *r)
 	for (size_t i = 0, n = (size_t)r->desc.width * r->desc.height; i < n; i++)
 		s->decision_codes[i] = (uint8_t)((st[i * 4 + 2] >> 24) & 7u);
 	return s->decision_codes;
+}
+
+const uint32_t *reproj_debug_state(render *r)
+{
+	return state_of(r)->decision_buf.mapped;
 }
 
 void reproj_finish(render *r)

@@ -1,0 +1,30 @@
+/* method_debug.h (private) — diagnostics of the methods for the acceptance tests (tests/test_atlas_checks.c,
+ * tests/test_reuse_checks.c): read back, or for a unit test replace, a method's internal state between frames.
+ * Not part of the command line; call them on a render of the right method after render_frame. */
+#ifndef TASLAB_METHOD_DEBUG_H
+#define TASLAB_METHOD_DEBUG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "taslab/render.h"
+
+/* Atlas methods (atlas.c). atlas_debug_ids copies the visibility pass's image (width x height x (object + 1,
+ * mesh triangle, barycentrics 1 and 2 as float bits)) out, or in with `upload`. atlas_debug_visible runs the visible
+ * pass (tasa: with the 2x2 image-space max filter) on the ids image with gradients G (one per global patch) and
+ * returns visible[] and F[] (per global patch). atlas_debug_blocks: the last frame's block table, 4 words per global
+ * patch (x | y << 16, lw | lh << 8 | age << 16, mesh patch, object). */
+int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err_size);
+int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size);
+const uint32_t *atlas_debug_blocks(render *r, uint32_t *patch_count);
+/* The facing the CPU decided for a global patch this frame (triangle A's winding seen from the eye, the rule that
+ * replaces gl_FrontFacing; 1 front, 0 back), -1 when the patch has no block. */
+int atlas_debug_facing(render *r, uint32_t pid);
+
+/* rrc / tarc (reproj_cache.c): the cache state the last frame wrote, width x height x 4 words (object + 1, view
+ * distance bits, age | flags | decision << 24, tarc: the stored gradient g as float bits); read back only with
+ * render_desc.decisions, else NULL. */
+const uint32_t *reproj_debug_state(render *r);
+
+#endif
