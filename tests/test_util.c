@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <math.h>
 #include <stdio.h>
 
 #include <stdlib.h>
@@ -123,4 +124,72 @@ void tu_expect_cli_error(const char *args, const char *needle)
 	int st = tu_run(cmd, out, sizeof out);
 	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
 		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
+}
+
+int tu_ci(void)
+{
+	const char *ci = getenv("CI");
+	return ci && ci[0];
+}
+
+static char tu_skipped[4096];
+
+int tu_require(int ok, const char *fmt, ...)
+{
+	if (ok)
+		return 1;
+	char what[1024];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(what, sizeof what, fmt, ap);
+	va_end(ap);
+	if (tu_ci())
+		fail_msg("missing prerequisite (CI is set, so this fails instead of skipping): %s", what);
+	fprintf(stderr, "SKIPPED: %s\n", what);
+	size_t used = strlen(tu_skipped);
+	snprintf(tu_skipped + used, sizeof tu_skipped - used, "SKIPPED: %s\n", what);
+	return 0;
+}
+
+int tu_finish(int failures)
+{
+	if (failures || !tu_skipped[0])
+		return failures;
+	fprintf(stderr, "%s", tu_skipped);
+	return TU_SKIPPED;
+}
+
+/* Value of column `col` (0-based) in the CSV row whose first `nkey` columns equal key[]. */
+double tu_csv_lookup(const char *path, const char *const *key, int nkey, int col)
+{
+	FILE *f = fopen(path, "r");
+	char line[1024];
+	double v = NAN;
+	while (f && fgets(line, sizeof line, f)) {
+		char *fld[32];
+		int n = 0;
+		for (char *p = line, *c; n < 32; p = c + 1) {
+			fld[n++] = p;
+			if (!(c = strpbrk(p, ",\n")))
+				break;
+			int end = *c == '\n';
+			*c = 0;
+			if (end)
+				break;
+		}
+		int ok = n > col;
+		for (int k = 0; k < nkey && ok; k++) {
+			char *x = fld[k];
+			if (*x == '"')
+				x++, x[strlen(x) - 1] = 0;
+			ok = !strcmp(x, key[k]);
+		}
+		if (ok) {
+			v = fld[col][0] ? strtod(fld[col], NULL) : NAN;
+			break;
+		}
+	}
+	if (f)
+		fclose(f);
+	return v;
 }
