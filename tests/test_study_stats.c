@@ -21,8 +21,8 @@
 
 /* JOD bootstrap intervals: taslab (GSL's MT19937, seed 3) and R (set.seed(1)) each draw 20000 resamples of the
  * participants; their 2.5/97.5% percentiles differ by Monte Carlo error only. The JOD of a resample takes few values
- * (12 ratings per scene/path row, 72 pooled: p_ref on a grid of 1/24 or 1/144), so the two percentiles land on the same or a
- * neighbouring grid value, up to ~0.2 JOD apart where the steps are widest. Measured over the 28 rows x 2 ends: at
+ * (12 ratings per scene/path row, 72 pooled: p_ref on a grid of 1/24 or 1/144), so the two percentiles land on the
+ * same or a neighbouring grid value, up to ~0.2 JOD apart where the steps are widest. Measured over the 28 rows x 2 ends: at
  * most 0.166 (seed 3), 0.155 (seeds 1, 2), 0.166 (seed 7); tolerance 0.25. With 200 resamples instead, 5 of 6 seeds
  * exceed it (up to 0.34): the check tells a converged bootstrap from a short one. */
 #define JOD_BOOT_TOL 0.25
