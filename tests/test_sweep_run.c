@@ -393,8 +393,7 @@ static pid_t start(const char *args, const char *log)
 	pid_t pid = fork();
 	if (pid == 0) {
 		char cmd[8192];
-		snprintf(cmd, sizeof cmd, "exec %s sweep %s >%s 2>&1", TASLAB_BINARY, args, log);
-		setenv("ASAN_OPTIONS", "detect_leaks=0:quarantine_size_mb=8", 1);
+		snprintf(cmd, sizeof cmd, "%s exec %s sweep %s >%s 2>&1", tu_child_env(), TASLAB_BINARY, args, log);
 		execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
 		_exit(127);
 	}

@@ -16,7 +16,7 @@ for b in slurmctld slurmd munged sbatch squeue sinfo; do
 done
 rm -rf "$work" && mkdir -p "$work"/{state,spool,munge}
 chmod 700 "$work/munge"
-export ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=8
+source "$(dirname "$0")/lsan_env.sh"
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done

@@ -27,15 +27,19 @@ const char *tu_tmpdir(const char *name)
 	return path;
 }
 
+const char *tu_child_env(void)
+{
+	/* verify_asan_link_order=0: the preloaded pin library comes before the ASan runtime in the initial library list
+	 * (it only calls dlopen). A small quarantine (also set for in-process tests in tests/CMakeLists.txt) keeps
+	 * use-after-free checks for our allocations while lavapipe's large per-submission buffers bypass it: with the
+	 * default 256 MB each of them lands on fresh pages, which made the TFR analysis 7x slower. */
+	return "export LD_PRELOAD=" TASLAB_LSAN_PIN " ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0:quarantine_size_mb=8;";
+}
+
 int tu_run(const char *cmd, char *out, size_t out_size)
 {
-	char full[8192];
-	/* The taslab child process cannot pin the driver (see above), so LeakSanitizer is off for it;
-	 * the same code paths run in-process with leak checking in test_render and test_golden. A small
-	 * quarantine (also set for in-process tests in tests/CMakeLists.txt) keeps use-after-free checks for
-	 * our allocations while lavapipe's large per-submission buffers bypass it: with the default 256 MB
-	 * each of them lands on fresh pages, which made the TFR analysis 7x slower. */
-	snprintf(full, sizeof full, "ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=8 %s 2>&1", cmd);
+	char full[16384];
+	snprintf(full, sizeof full, "%s %s 2>&1", tu_child_env(), cmd);
 	FILE *p = popen(full, "r");
 	if (!p)
 		return -1;

@@ -4,7 +4,7 @@
 set -euo pipefail
 taslab="$1" work="$2"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-export ASAN_OPTIONS=detect_leaks=0 # the ASan build's driver leak (tests/lsan.supp) is not ours
+source "$here/../lsan_env.sh"
 source "$here/../require.sh"
 require "$(basename "$0"): chromium is not installed (run scripts/setup)" test -x "${CHROMIUM:-/usr/bin/chromium}"
 require "$(basename "$0"): playwright-core is not installed (run scripts/setup)" test -d "$here/node_modules/playwright-core"
