@@ -127,15 +127,11 @@ static void test_atomic_full_disk(void **state)
 	if (geteuid() == 0 && system(cmd)) { /* a mount left by an interrupted earlier run is gone now */
 	}
 	const char *d = tu_tmpdir("base_full");
-	if (geteuid() != 0) {
-		fprintf(stderr, "test_atomic_full_disk: skipped (needs root to mount a 64 KiB tmpfs)\n");
-		return;
-	}
+	if (!tu_require(geteuid() == 0, "test_atomic_full_disk: a write to a full disk (needs root to mount a 64 KiB tmpfs)"))
+		skip();
 	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=64k tmpfs %s 2>/dev/null", d);
-	if (system(cmd) != 0) {
-		fprintf(stderr, "test_atomic_full_disk: skipped (cannot mount a tmpfs here)\n");
-		return;
-	}
+	if (!tu_require(system(cmd) == 0, "test_atomic_full_disk: a write to a full disk (cannot mount a tmpfs on %s)", d))
+		skip();
 	snprintf(p, sizeof p, "%s/big.bin", d);
 	size_t n = 1 << 20;
 	char *data = calloc(1, n);
@@ -334,5 +330,5 @@ int main(void)
 		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths),
 		cmocka_unit_test(test_json), cmocka_unit_test(test_atomic_set), cmocka_unit_test(test_check_out_dir), cmocka_unit_test(test_buf),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -492,10 +492,9 @@ static void test_flip_reference(void **state)
 	(void)state;
 	flip_case cs[16];
 	size_t n = flip_cases(cs, 16);
-	if (!n) {
-		print_message("skipped: no FLIP reference values at %s/reference/flip\n", TASLAB_SHARED_DIR);
+	if (!tu_require(n > 0, "test_flip_reference: no FLIP reference values at %s/reference/flip (the shared folder "
+			       "beside the repository)", TASLAB_SHARED_DIR))
 		skip();
-	}
 	assert_true(n >= 5);
 	mtr_flip *f = NULL;
 	char err[256];
@@ -560,10 +559,9 @@ static void test_flip_diff(void **state)
 	size_t n = flip_cases(cs, 16), k = 0;
 	while (k < n && strcmp(cs[k].name, "noise_320x180"))
 		k++;
-	if (k == n) {
-		print_message("skipped: no FLIP reference case noise_320x180 at %s/reference/flip\n", TASLAB_SHARED_DIR);
+	if (!tu_require(k < n, "test_flip_diff: no FLIP reference case noise_320x180 at %s/reference/flip (the shared "
+			       "folder beside the repository)", TASLAB_SHARED_DIR))
 		skip();
-	}
 	const char *base = tu_tmpdir("metrics_flip_diff");
 	char cmd[8192], out[4096], err[1024], p[4096];
 	snprintf(cmd, sizeof cmd, "mkdir -p %s/a %s/b && cp %s/reference/flip/%s %s/a/000000.png && "
@@ -963,5 +961,5 @@ int main(void)
 		cmocka_unit_test(test_registry),         cmocka_unit_test(test_percentile_paths),
 		cmocka_unit_test(test_ssim_frame),       cmocka_unit_test(test_diff_runs_checked),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

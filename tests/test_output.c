@@ -333,10 +333,9 @@ static void test_png_io(void **state)
 	snprintf(p, sizeof p, "%s/full", d);
 	mkdir(p, 0755);
 	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=8k tmpfs %s 2>/dev/null", p);
-	if (geteuid() != 0 || system(cmd) != 0) {
-		fprintf(stderr, "test_png_io: full-disk write skipped (needs root to mount a tmpfs)\n");
+	if (!tu_require(geteuid() == 0 && system(cmd) == 0,
+			"test_png_io: the PNG writer on a full disk (needs root to mount an 8 KiB tmpfs on %s)", p))
 		return;
-	}
 	uint8_t *noise = malloc(256 * 256 * 3);
 	uint32_t x = 1;
 	for (size_t i = 0; i < 256 * 256 * 3; i++)
@@ -422,5 +421,5 @@ int main(void)
 		cmocka_unit_test(test_large_frame_numbers),
 		cmocka_unit_test(test_png_io),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

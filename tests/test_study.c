@@ -1,7 +1,5 @@
 /* test_study.c — the study module:
- *  - statistics against R (tests/reference/study_reference.csv from study_reference.R on study_ratings.csv):
- *    Q and its t.test CI, JND via qnorm, rm-ANOVA F/p from aov, Greenhouse-Geisser epsilon and p from
- *    anova.mlm(test = "Spherical"); tolerance 1e-6 (epsilon 1e-4: R prints it with 4 decimals);
+ *  - (the statistics against R and the observer screening are in test_study_stats.c);
  *  - import/export round trip and all-or-nothing validation with line numbers;
  *  - randomisation: reproducible from the seed, every pair in both orders (exactly half each for even N);
  *  - the server: answers stored exactly once, bad requests 4xx changing nothing, no path outside the
@@ -137,108 +135,6 @@ static long long db_count(const char *db, const char *sql)
 	}
 	sqlite3_close(h);
 	return v;
-}
-
-/* Value of column `col` (0-based) in the CSV row whose first `nkey` columns equal key[]. */
-static double csv_lookup(const char *path, const char *const *key, int nkey, int col)
-{
-	FILE *f = fopen(path, "r");
-	char line[1024];
-	double v = NAN;
-	while (f && fgets(line, sizeof line, f)) {
-		char *fld[32];
-		int n = 0;
-		for (char *p = line, *c; n < 32; p = c + 1) {
-			fld[n++] = p;
-			if (!(c = strpbrk(p, ",\n")))
-				break;
-			int end = *c == '\n';
-			*c = 0;
-			if (end)
-				break;
-		}
-		int ok = n > col;
-		for (int k = 0; k < nkey && ok; k++) {
-			char *x = fld[k];
-			if (*x == '"')
-				x++, x[strlen(x) - 1] = 0;
-			ok = !strcmp(x, key[k]);
-		}
-		if (ok) {
-			v = fld[col][0] ? strtod(fld[col], NULL) : NAN;
-			break;
-		}
-	}
-	if (f)
-		fclose(f);
-	return v;
-}
-
-static void test_tally_vs_r(void **state)
-{
-	(void)state;
-	const char *dir = tu_tmpdir("study_tally");
-	char db[4096], res[4096], err[1024], p[4096];
-	snprintf(db, sizeof db, "%s/s.db", dir);
-	snprintf(res, sizeof res, "%s/out", dir);
-	sty *s = created(db);
-	size_t rows;
-	if (sty_import_long(s, REF_DIR "/study_ratings.csv", &rows, err, sizeof err))
-		fail_msg("%s", err);
-	assert_int_equal(rows, 144);
-	commit(s);
-	sty_tally_desc td = {.out = res, .bootstrap = 200, .seed = 3};
-	if (sty_tally(s, &td, err, sizeof err))
-		fail_msg("%s", err);
-	sty_close(&s);
-	const char *ref = REF_DIR "/study_reference.csv";
-	snprintf(p, sizeof p, "%s/conditions.csv", res);
-	const char *Ts[2] = {"8", "16"}, *scenes[3] = {"calm", "dynamic", "moderate"}, *cams[2] = {"still", "walk"};
-	int checked = 0;
-	for (int t = 0; t < 2; t++)
-		for (int sc = 0; sc < 3; sc++)
-			for (int c = 0; c < 2; c++) {
-				char k[64];
-				snprintf(k, sizeof k, "%s/%s", scenes[sc], cams[c]);
-				const char *ours[5] = {"tfr", Ts[t], "", scenes[sc], cams[c]}; /* tfr has no period */
-				const char *kinds[4] = {"Q", "Q_lo", "Q_hi", "jnd"};
-				int cols[4] = {6, 7, 8, 12};
-				for (int q = 0; q < 4; q++) {
-					const char *rk[3] = {kinds[q], Ts[t], k};
-					double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 5, cols[q]);
-					if (!(fabs(want - got) <= 1e-6))
-						fail_msg("%s T=%s %s: ours %.9g, R %.9g", kinds[q], Ts[t], k, got, want);
-					checked++;
-				}
-			}
-	snprintf(p, sizeof p, "%s/anova.csv", res);
-	const char *effects[3] = {"camera", "scene", "camera:scene"};
-	for (int t = 0; t < 2; t++)
-		for (int e = 0; e < 3; e++) {
-			const char *ours[4] = {"tfr", Ts[t], "", effects[e]};
-			const char *kinds[6] = {"df1", "df2", "F", "p", "p_gg", "epsilon_gg"};
-			int cols[6] = {4, 5, 6, 7, 8, 9};
-			for (int q = 0; q < 6; q++) {
-				const char *rk[3] = {kinds[q], Ts[t], effects[e]};
-				double want = csv_lookup(ref, rk, 3, 3), got = csv_lookup(p, ours, 4, cols[q]);
-				if (isnan(want) && e == 0 && q >= 4) /* camera has 2 levels: sphericity holds, epsilon 1 */
-					want = q == 4 ? csv_lookup(p, ours, 4, 7) : 1.0;
-				double tol = q == 5 ? 1e-4 : 1e-6 * fmax(1.0, fabs(want));
-				if (!(fabs(want - got) <= tol))
-					fail_msg("%s T=%s %s: ours %.9g, R %.9g", kinds[q], Ts[t], effects[e], got, want);
-				checked++;
-			}
-		}
-	fprintf(stderr, "%d statistics checked against R\n", checked);
-	/* Pooled rows exist, and the other outputs are there. */
-	const char *pooled[5] = {"tfr", "8", "", "all", "all"};
-	snprintf(p, sizeof p, "%s/conditions.csv", res);
-	assert_false(isnan(csv_lookup(p, pooled, 5, 6)));
-	const char *files[5] = {"posthoc.csv", "observers.csv", "jod.csv", "tables.md", "conditions.json"};
-	for (int i = 0; i < 5; i++) {
-		snprintf(p, sizeof p, "%s/%s", res, files[i]);
-		assert_true(tu_file_exists(p));
-	}
 }
 
 static void test_import_export(void **state)
@@ -1346,17 +1242,17 @@ static void check_period_tally(const char *res)
 		const char *still[5] = {keys[v][0], keys[v][1], keys[v][2], "calm", "still"};
 		const char *effect[4] = {keys[v][0], keys[v][1], keys[v][2], "camera"};
 		snprintf(p, sizeof p, "%s/conditions.csv", res);
-		double Q = csv_lookup(p, pooled, 5, 6), n = csv_lookup(p, pooled, 5, 5);
+		double Q = tu_csv_lookup(p, pooled, 5, 6), n = tu_csv_lookup(p, pooled, 5, 5);
 		if (!(fabs(Q - (period_variants[v].base + 0.5)) < 1e-9) || n != 8)
 			fail_msg("%s: pooled Q %g over %g ratings, expected %g over 8", period_variants[v].variant, Q, n,
 				 period_variants[v].base + 0.5);
-		assert_true(csv_lookup(p, still, 5, 5) == 4);
+		assert_true(tu_csv_lookup(p, still, 5, 5) == 4);
 		snprintf(p, sizeof p, "%s/anova.csv", res);
-		assert_true(csv_lookup(p, effect, 4, 4) == 1); /* df1 of Camera: its own ANOVA per variant */
+		assert_true(tu_csv_lookup(p, effect, 4, 4) == 1); /* df1 of Camera: its own ANOVA per variant */
 		snprintf(p, sizeof p, "%s/posthoc.csv", res);
-		assert_false(isnan(csv_lookup(p, effect, 4, 8)));
+		assert_false(isnan(tu_csv_lookup(p, effect, 4, 8)));
 		snprintf(p, sizeof p, "%s/jod.csv", res);
-		assert_false(isnan(csv_lookup(p, pooled, 5, 5)));
+		assert_false(isnan(tu_csv_lookup(p, pooled, 5, 5)));
 	}
 	snprintf(p, sizeof p, "%s/conditions.csv", res);
 	char *csv = tu_read_file(p, NULL);
@@ -1768,10 +1664,9 @@ static void test_outputs_not_inputs(void **state)
 	snprintf(p, sizeof p, "%s/full", dir);
 	mkdir(p, 0755);
 	snprintf(cmd, sizeof cmd, "mount -t tmpfs -o size=8k tmpfs %s 2>/dev/null", p);
-	if (geteuid() != 0 || system(cmd) != 0) {
-		fprintf(stderr, "test_outputs_not_inputs: full-disk tally skipped (needs root to mount a tmpfs)\n");
+	if (!tu_require(geteuid() == 0 && system(cmd) == 0,
+			"test_outputs_not_inputs: a tally on a full disk (needs root to mount an 8 KiB tmpfs on %s)", p))
 		return;
-	}
 	snprintf(cmd, sizeof cmd, "%s study tally --db %s --out %s/t --bootstrap 10", TASLAB_BINARY, db, p);
 	int st = tu_run(cmd, out, sizeof out);
 	int entries = dir_entries(p);
@@ -1785,7 +1680,7 @@ static void test_outputs_not_inputs(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_tally_vs_r), cmocka_unit_test(test_import_export), cmocka_unit_test(test_randomisation),
+		cmocka_unit_test(test_import_export), cmocka_unit_test(test_randomisation),
 		cmocka_unit_test(test_server),     cmocka_unit_test(test_crash_safety),  cmocka_unit_test(test_cli),
 		cmocka_unit_test(test_answer_strict), cmocka_unit_test(test_clips_blind), cmocka_unit_test(test_private_db_and_admin),
 		cmocka_unit_test(test_range),      cmocka_unit_test(test_framing),       cmocka_unit_test(test_connection_limit),
@@ -1794,5 +1689,5 @@ int main(void)
 		cmocka_unit_test(test_period_conditions), cmocka_unit_test(test_design_period_rule),
 		cmocka_unit_test(test_old_study_schema), cmocka_unit_test(test_outputs_not_inputs),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

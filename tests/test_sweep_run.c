@@ -1,8 +1,10 @@
 /* test_sweep_run.c — `taslab sweep` and `taslab report` as a user runs them (DESIGN section 9), on lavapipe with the
  * validation layer in every run: bad input gives one line and renders nothing; a tiny sweep writes its runs, clips,
- * metrics, summary.csv, table1.md and report; a rerun redoes nothing; after a SIGKILL only the incomplete runs are
+ * metrics, summary.csv, table1.md and report, and every number of summary.csv is recomputed from the runs' stats.csv
+ * and the metrics' summary.json (check_summary_numbers); a rerun redoes nothing; after a SIGKILL only the incomplete runs are
  * redone (manifest modification times of the complete ones unchanged); a failing run is reported, the others go on,
  * and the exit status says so; --slurm-dry-run prints the batch scripts; `report --study` joins a study's tally. */
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -93,6 +95,181 @@ static void test_bad_input(void **state)
 	expect_bad(args, "holds a different sweep (1 variants vs 2)", file);
 }
 
+/* ---- summary.csv recomputed from the run files (DESIGN section 9, README "summary.csv") ---- */
+
+/* Splits a CSV line (no quoted cells in these files) in place into at most max cells; returns the count. */
+static int split_csv(char *line, char **cell, int max)
+{
+	int n = 0;
+	for (char *p = line; n < max;) {
+		cell[n++] = p;
+		char *c = strpbrk(p, ",\n");
+		if (!c)
+			break;
+		int end = *c == '\n';
+		*c = 0;
+		if (end)
+			break;
+		p = c + 1;
+	}
+	return n;
+}
+
+static int col_index(char *const *head, int n, const char *name)
+{
+	for (int i = 0; i < n; i++)
+		if (!strcmp(head[i], name))
+			return i;
+	fail_msg("no column %s", name);
+	return -1;
+}
+
+/* Column sums, mean and median over a run's stats.csv (one row per frame). */
+typedef struct run_totals {
+	int frames;
+	double shaded, reused, late, reuse_mean, gpu_median;
+	int has_late;
+} run_totals;
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+static run_totals run_stats(const char *sw, const char *run)
+{
+	char p[4096];
+	snprintf(p, sizeof p, "%s/%s/stats.csv", sw, run);
+	char *csv = tu_read_file(p, NULL);
+	if (!csv)
+		fail_msg("cannot read %s", p);
+	char *save = NULL, *line = strtok_r(csv, "\n", &save), *head[64], *cell[64];
+	int nh = split_csv(line, head, 64);
+	int c_sh = col_index(head, nh, "shaded_samples"), c_re = col_index(head, nh, "reuse_fraction");
+	int c_gpu = col_index(head, nh, "gpu_ms_total"), c_ru = col_index(head, nh, "reused_samples");
+	int c_late = col_index(head, nh, "late_samples");
+	run_totals t = {0};
+	double gpu[1024];
+	while ((line = strtok_r(NULL, "\n", &save))) {
+		assert_int_equal(split_csv(line, cell, 64), nh);
+		assert_true(t.frames < 1024);
+		t.shaded += strtod(cell[c_sh], NULL);
+		t.reused += strtod(cell[c_ru], NULL);
+		t.reuse_mean += strtod(cell[c_re], NULL);
+		gpu[t.frames++] = strtod(cell[c_gpu], NULL);
+		if (cell[c_late][0])
+			t.late += strtod(cell[c_late], NULL), t.has_late = 1;
+	}
+	free(csv);
+	assert_true(t.frames > 0);
+	t.reuse_mean /= t.frames;
+	qsort(gpu, (size_t)t.frames, sizeof *gpu, cmp_double);
+	t.gpu_median = t.frames % 2 ? gpu[t.frames / 2] : 0.5 * (gpu[t.frames / 2 - 1] + gpu[t.frames / 2]);
+	return t;
+}
+
+/* The number after "key": in a flat JSON object (metrics summary.json); NaN when absent or null. */
+static double json_number(const char *json, const char *key)
+{
+	char k[128];
+	snprintf(k, sizeof k, "\"%s\":", key);
+	const char *at = strstr(json, k);
+	if (!at)
+		return NAN;
+	char *end;
+	double v = strtod(at + strlen(k), &end);
+	return end == at + strlen(k) ? NAN : v;
+}
+
+static void near(const char *what, const char *row, double got, double want, double tol)
+{
+	if (!(fabs(got - want) <= tol))
+		fail_msg("summary.csv %s of %s: %.9g, recomputed from the run files %.9g (tolerance %g)", what, row, got, want, tol);
+}
+
+/* Every number of summary.csv recomputed from the runs' stats.csv and the metrics' summary.json: frames, reuse %
+ * (mean reuse_fraction), shaded samples (sum) and per frame, reduction % against the baseline run's shaded samples,
+ * median gpu_ms_total and speedup vs ref, every pooled metric, late samples and their share of the reused ones.
+ * Tolerances: half a unit of the last printed decimal (summary.csv prints reuse/reduction/gpu ms/speedup with 4,
+ * shaded_per_frame with 1), speedup and late % relative 1e-4 (ratios of stats.csv's 4-decimal values); metrics 1e-8
+ * relative (printed with 9 significant digits from the same doubles). Returns the number of values checked. */
+static int check_summary_numbers(const char *sw)
+{
+	char p[4096];
+	snprintf(p, sizeof p, "%s/summary.csv", sw);
+	char *csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	char *rows[64], *save = NULL, *head[96];
+	int nrows = 0;
+	char *line = strtok_r(csv, "\n", &save);
+	int nh = split_csv(line, head, 96);
+	while ((line = strtok_r(NULL, "\n", &save)) && nrows < 64)
+		rows[nrows++] = line;
+	char *cells[64][96];
+	for (int r = 0; r < nrows; r++)
+		assert_int_equal(split_csv(rows[r], cells[r], 96), nh);
+	int c_var = col_index(head, nh, "variant"), c_run = col_index(head, nh, "run"), c_base = col_index(head, nh, "baseline");
+	int c_scene = col_index(head, nh, "scene"), c_cam = col_index(head, nh, "camera");
+	int c_first_metric = col_index(head, nh, "maxrgb_mean"), c_late = col_index(head, nh, "late_samples");
+	int checked = 0;
+	for (int r = 0; r < nrows; r++) {
+		char **c = cells[r];
+		const char *id = c[c_run];
+		run_totals t = run_stats(sw, id), ref = {0}, base = {0};
+		for (int q = 0; q < nrows; q++)
+			if (!strcmp(cells[q][c_scene], c[c_scene]) && !strcmp(cells[q][c_cam], c[c_cam])) {
+				if (!strcmp(cells[q][c_var], "ref"))
+					ref = run_stats(sw, cells[q][c_run]);
+				if (!strcmp(cells[q][c_var], c[c_base]))
+					base = run_stats(sw, cells[q][c_run]);
+			}
+		assert_true(ref.frames > 0 && base.frames > 0);
+		near("frames", id, strtod(c[col_index(head, nh, "frames")], NULL), t.frames, 0);
+		near("reuse_percent", id, strtod(c[col_index(head, nh, "reuse_percent")], NULL), 100 * t.reuse_mean, 5e-5);
+		near("shaded_samples", id, strtod(c[col_index(head, nh, "shaded_samples")], NULL), t.shaded, 0);
+		near("shaded_per_frame", id, strtod(c[col_index(head, nh, "shaded_per_frame")], NULL), t.shaded / t.frames, 0.05);
+		near("reduction_percent", id, strtod(c[col_index(head, nh, "reduction_percent")], NULL),
+		     100 * (1 - t.shaded / base.shaded), 5e-5);
+		near("gpu_ms_median", id, strtod(c[col_index(head, nh, "gpu_ms_median")], NULL), t.gpu_median, 5e-5);
+		double want = ref.gpu_median / t.gpu_median;
+		near("speedup_vs_ref", id, strtod(c[col_index(head, nh, "speedup_vs_ref")], NULL), want, 5e-5 + 1e-4 * want);
+		checked += 7;
+		/* the pooled metrics: every column from maxrgb_mean up to late_samples, from summary.json (ref: none) */
+		char *json = NULL;
+		if (strcmp(c[c_var], "ref")) {
+			const char *slash = strrchr(id, '/');
+			snprintf(p, sizeof p, "%s/metrics/%s/%s/%s/summary.json", sw, c[c_scene], c[c_cam], slash + 1);
+			json = tu_read_file(p, NULL);
+			if (!json)
+				fail_msg("cannot read %s", p);
+		}
+		for (int k = c_first_metric; k < c_late; k++) {
+			if (!json) {
+				if (c[k][0])
+					fail_msg("summary.csv: ref row has %s = %s", head[k], c[k]);
+				continue;
+			}
+			double w = json_number(json, head[k]);
+			if (isnan(w))
+				fail_msg("%s: no %s in summary.json (summary.csv has '%s')", id, head[k], c[k]);
+			near(head[k], id, strtod(c[k], NULL), w, 1e-8 * fmax(1.0, fabs(w)));
+			checked++;
+		}
+		free(json);
+		/* late samples (--truth) and their share of the reused samples */
+		if (t.has_late && strcmp(c[c_var], "ref")) {
+			near("late_samples", id, strtod(c[c_late], NULL), t.late, 0);
+			near("late_percent", id, strtod(c[c_late + 1], NULL), 100 * t.late / t.reused, 1e-4 * fmax(1.0, 100 * t.late / t.reused));
+			checked += 2;
+		} else if (c[c_late][0] || c[c_late + 1][0]) {
+			fail_msg("%s: late_samples '%s', late_percent '%s' without late samples in stats.csv", id, c[c_late], c[c_late + 1]);
+		}
+	}
+	free(csv);
+	return checked;
+}
+
 static void check_outputs(const char *sw, const char *const *ids, size_t n)
 {
 	char p[4096];
@@ -119,6 +296,7 @@ static void check_outputs(const char *sw, const char *const *ids, size_t n)
 	assert_null(strstr(csv, "missing"));
 	assert_null(strstr(csv, "partial"));
 	free(csv);
+	fprintf(stderr, "%s: %d summary values recomputed from the run files\n", sw, check_summary_numbers(sw));
 }
 
 static void test_sweep_resume(void **state)
@@ -195,6 +373,7 @@ static void test_truth(void **state)
 	assert_true(late >= 0 && pct >= 0 && pct <= 100);
 	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/ref\n")); /* ref counts nothing */
 	free(csv);
+	assert_true(check_summary_numbers(sw) > 0); /* late_samples and late_percent recomputed too */
 	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--late.svg", sw);
 	assert_true(tu_file_exists(p));
 	snprintf(p, sizeof p, "%s/report/index.html", sw);
@@ -214,8 +393,7 @@ static pid_t start(const char *args, const char *log)
 	pid_t pid = fork();
 	if (pid == 0) {
 		char cmd[8192];
-		snprintf(cmd, sizeof cmd, "exec %s sweep %s >%s 2>&1", TASLAB_BINARY, args, log);
-		setenv("ASAN_OPTIONS", "detect_leaks=0:quarantine_size_mb=8", 1);
+		snprintf(cmd, sizeof cmd, "%s exec %s sweep %s >%s 2>&1", tu_child_env(), TASLAB_BINARY, args, log);
 		execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
 		_exit(127);
 	}

@@ -4,19 +4,19 @@
 # configuration, state and sockets in a temporary folder, submits a tiny sweep with --slurm (a job array, one task
 # per run, and a dependent report job), waits for it, and checks that every frame equals that of a local --jobs 1
 # sweep byte for byte and that the report exists. The daemons are stopped at the end whatever happens.
-# Needs root (the daemons run as root here); skips with a message (exit 77) otherwise.
+# Needs root (the daemons run as root here) and Debian's Slurm and munge: under CI (CI set) their absence fails the
+# test; outside CI it skips with a message (exit 77; tests/require.sh).
 # Usage: test_sweep_slurm.sh TASLAB_BINARY WORK_DIR
 set -euo pipefail
 taslab="$1" work="$2"
-if [ "$(id -u)" -ne 0 ]; then
-  echo "skipped: the Slurm test starts slurmctld, slurmd and munged and needs root"; exit 77
-fi
+source "$(dirname "$0")/require.sh"
+require "test_sweep_slurm: the Slurm test starts slurmctld, slurmd and munged and needs root" test "$(id -u)" -eq 0
 for b in slurmctld slurmd munged sbatch squeue sinfo; do
-  command -v "$b" >/dev/null || { echo "$b is not installed: run scripts/setup"; exit 1; }
+  require "test_sweep_slurm: $b is not installed (run scripts/setup)" test -n "$(command -v "$b")"
 done
 rm -rf "$work" && mkdir -p "$work"/{state,spool,munge}
 chmod 700 "$work/munge"
-export ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=8
+source "$(dirname "$0")/lsan_env.sh"
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done

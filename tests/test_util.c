@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <math.h>
 #include <stdio.h>
 
 #include <stdlib.h>
@@ -26,15 +27,19 @@ const char *tu_tmpdir(const char *name)
 	return path;
 }
 
+const char *tu_child_env(void)
+{
+	/* verify_asan_link_order=0: the preloaded pin library comes before the ASan runtime in the initial library list
+	 * (it only calls dlopen). A small quarantine (also set for in-process tests in tests/CMakeLists.txt) keeps
+	 * use-after-free checks for our allocations while lavapipe's large per-submission buffers bypass it: with the
+	 * default 256 MB each of them lands on fresh pages, which made the TFR analysis 7x slower. */
+	return "export LD_PRELOAD=" TASLAB_LSAN_PIN " ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0:quarantine_size_mb=8;";
+}
+
 int tu_run(const char *cmd, char *out, size_t out_size)
 {
-	char full[8192];
-	/* The taslab child process cannot pin the driver (see above), so LeakSanitizer is off for it;
-	 * the same code paths run in-process with leak checking in test_render and test_golden. A small
-	 * quarantine (also set for in-process tests in tests/CMakeLists.txt) keeps use-after-free checks for
-	 * our allocations while lavapipe's large per-submission buffers bypass it: with the default 256 MB
-	 * each of them lands on fresh pages, which made the TFR analysis 7x slower. */
-	snprintf(full, sizeof full, "ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=8 %s 2>&1", cmd);
+	char full[16384];
+	snprintf(full, sizeof full, "%s %s 2>&1", tu_child_env(), cmd);
 	FILE *p = popen(full, "r");
 	if (!p)
 		return -1;
@@ -123,4 +128,72 @@ void tu_expect_cli_error(const char *args, const char *needle)
 	int st = tu_run(cmd, out, sizeof out);
 	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, needle))
 		fail_msg("'%s' (exit %d) printed:\n%s\nexpected a failure with one line containing '%s'", cmd, st, out, needle);
+}
+
+int tu_ci(void)
+{
+	const char *ci = getenv("CI");
+	return ci && ci[0];
+}
+
+static char tu_skipped[4096];
+
+int tu_require(int ok, const char *fmt, ...)
+{
+	if (ok)
+		return 1;
+	char what[1024];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(what, sizeof what, fmt, ap);
+	va_end(ap);
+	if (tu_ci())
+		fail_msg("missing prerequisite (CI is set, so this fails instead of skipping): %s", what);
+	fprintf(stderr, "SKIPPED: %s\n", what);
+	size_t used = strlen(tu_skipped);
+	snprintf(tu_skipped + used, sizeof tu_skipped - used, "SKIPPED: %s\n", what);
+	return 0;
+}
+
+int tu_finish(int failures)
+{
+	if (failures || !tu_skipped[0])
+		return failures;
+	fprintf(stderr, "%s", tu_skipped);
+	return TU_SKIPPED;
+}
+
+/* Value of column `col` (0-based) in the CSV row whose first `nkey` columns equal key[]. */
+double tu_csv_lookup(const char *path, const char *const *key, int nkey, int col)
+{
+	FILE *f = fopen(path, "r");
+	char line[1024];
+	double v = NAN;
+	while (f && fgets(line, sizeof line, f)) {
+		char *fld[32];
+		int n = 0;
+		for (char *p = line, *c; n < 32; p = c + 1) {
+			fld[n++] = p;
+			if (!(c = strpbrk(p, ",\n")))
+				break;
+			int end = *c == '\n';
+			*c = 0;
+			if (end)
+				break;
+		}
+		int ok = n > col;
+		for (int k = 0; k < nkey && ok; k++) {
+			char *x = fld[k];
+			if (*x == '"')
+				x++, x[strlen(x) - 1] = 0;
+			ok = !strcmp(x, key[k]);
+		}
+		if (ok) {
+			v = fld[col][0] ? strtod(fld[col], NULL) : NAN;
+			break;
+		}
+	}
+	if (f)
+		fclose(f);
+	return v;
 }
