@@ -78,6 +78,37 @@ static void test_request_toml(void **state)
 	/* a NUL in a key would silently stand for another key; JSON refuses it too */
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\n\"jobs\\u0000x\" = 2\n", "bad.toml:2:1: a key contains a NUL");
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\\u0000\"]\n", "bad.toml:1:11: a string contains a NUL");
+	/* issue 31.1: nesting tens of thousands of parts deep (dotted keys, table headers, inline values) overflowed the
+	 * stack inside toml++; the depth is bounded before parsing (the fuzzer's seeds hold the same inputs) */
+	const char *seeds[] = {"crash_deep_dotted_key.toml", "crash_deep_table_header.toml"};
+	for (size_t i = 0; i < 2; i++) {
+		char seed[4096];
+		snprintf(seed, sizeof seed, "%s/tests/fuzz/seeds/sweep/%s", TASLAB_SOURCE_DIR, seeds[i]);
+		sweep_request *r = calloc(1, sizeof *r);
+		int rc = sweep_request_read(seed, r, err, sizeof err);
+		if (rc != TL_ERR_INPUT || !strstr(err, ":2:1: nested deeper than 64 levels") || strchr(err, '\n'))
+			fail_msg("%s: rc %d, '%s'", seeds[i], rc, err);
+		free(r);
+	}
+	char deep[400];
+	size_t len = (size_t)snprintf(deep, sizeof deep, "scenes = [\"calm\"]\nx = ");
+	for (int i = 0; i < 70; i++)
+		deep[len++] = '[';
+	for (int i = 0; i < 70; i++)
+		deep[len++] = ']';
+	snprintf(deep + len, sizeof deep - len, "\n");
+	request_fails_as(dir, "bad.toml", deep, "bad.toml:2:1: nested deeper");
+	/* what stays legal: dots in strings, comments and numbers, a header of two parts, a deep-enough document */
+	const char *fine = "# a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c\n"
+			   "scenes = [\"a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.json\"]\n"
+			   "thresholds = [1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 10.5, 11.5, 12.5, 13.5, 14.5, 15.5, 16.5]\n";
+	sweep_request *r = calloc(1, sizeof *r);
+	const char *pf = write_file(dir, "fine.toml", fine);
+	if (sweep_request_read(pf, r, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(r->threshold_count, 16);
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\n[a.b]\nc.d = 1\n", "unknown key \"a\"");
+	free(r);
 	/* the extension is matched without case */
 	request_fails_as(dir, "bad.TOML", "scenes = [\"calm\"]\nframes = 1979-05-27\n", "bad.TOML:2:10: dates");
 }
