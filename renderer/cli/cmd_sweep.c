@@ -8,10 +8,13 @@
  * holds another sweep) is found before anything is written: one line, exit 2, nothing rendered. */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "sweep_cli.h"
@@ -189,10 +192,32 @@ static bool foreign_folder(const char *dir)
 	struct dirent *e;
 	bool other = false;
 	while ((e = readdir(d)))
-		if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+		if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..") && strcmp(e->d_name, ".taslab-lock"))
 			other = true;
 	closedir(d);
 	return other;
+}
+
+/* Takes DIR/.taslab-lock (flock, exclusive, without waiting). TL_ERR_CONFLICT when another sweep holds it. */
+static int lock_folder(const char *dir, int *fd, char *err, size_t err_size)
+{
+	char p[TL_PATH_MAX + 32];
+	snprintf(p, sizeof p, "%s/.taslab-lock", dir);
+	*fd = open(p, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+	if (*fd < 0)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", p, strerror(errno));
+	if (flock(*fd, LOCK_EX | LOCK_NB)) {
+		int e = errno;
+		close(*fd);
+		*fd = -1;
+		if (e == EWOULDBLOCK)
+			return tl_error(err, err_size, TL_ERR_CONFLICT,
+					"%s is in use by another 'taslab sweep' (it holds %s): wait for it to finish, or stop it "
+					"and run this again to resume",
+					dir, p);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot lock: %s", p, strerror(e));
+	}
+	return TL_OK;
 }
 
 static int sweep_main(void *opts, cli_ctx *ctx)
@@ -206,6 +231,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	int rc = req && spec && old ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	const char *file = ctx->npos ? ctx->pos[0] : NULL;
 	bool resolved = false;
+	int lock_fd = -1;
 	if (!rc && file) {
 		/* SWEEP/sweep.json (resolved): resume that sweep, in its folder */
 		if (sweep_spec_read(file, spec, what, sizeof what) == 0) {
@@ -216,6 +242,9 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 				rc = tl_error(err, err_size, TL_ERR_ARG,
 					      "%s is a resolved sweep: options that change it cannot be added (write a sweep file)",
 					      file);
+		} else if (sweep_file_is_spec(file)) {
+			/* a resolved sweep.json that does not read: its own reason, not the request reader's (issue 31.5) */
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s", what);
 		} else {
 			rc = sweep_request_read(file, req, err, err_size);
 		}
@@ -245,8 +274,11 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 		goto done;
 	/* The folder: new, empty, or holding this very sweep. */
 	snprintf(path, sizeof path, "%s/sweep.json", dir);
-	if (tl_is_file(dir)) {
-		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s is a file (give a folder)", dir);
+	struct stat sb;
+	if (stat(dir, &sb) == 0 && !S_ISDIR(sb.st_mode)) { /* a file, /dev/null, a FIFO: bad input (issue 31.9) */
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s exists and is not a folder (give a folder)", dir);
+	} else if ((o->slurm || o->slurm_dry_run) && (rc = cli_sweep_slurm_check(dir, err, err_size))) {
+		/* paths written into the batch scripts: checked before the folder is touched (issue 31.2) */
 	} else if (tl_is_file(path)) {
 		if ((rc = sweep_spec_read(path, old, err, err_size)))
 			goto done;
@@ -260,8 +292,16 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	}
 	if (rc)
 		goto done;
-	if (!tl_is_file(path) &&
-	    ((rc = tl_mkdirs(dir, err, err_size)) || (rc = sweep_spec_write(path, spec, err, err_size))))
+	/* One sweep at a time in a folder: two identical sweeps started together rendered every run twice (issue 31.9).
+	 * flock is released when the process ends, however it ends; the run processes (--task) do not take it. Under the
+	 * lock, a sweep.json written since the check above is compared again. */
+	if ((rc = tl_mkdirs(dir, err, err_size)) || (rc = lock_folder(dir, &lock_fd, err, err_size)))
+		goto done;
+	if (!tl_is_file(path))
+		rc = sweep_spec_write(path, spec, err, err_size);
+	else if (!(rc = sweep_spec_read(path, old, err, err_size)) && sweep_spec_compare(old, spec, what, sizeof what))
+		rc = tl_error(err, err_size, TL_ERR_ARG, "%s holds a different sweep (%s): use another --out", dir, what);
+	if (rc)
 		goto done;
 	size_t n = sweep_run_count(spec);
 	if (o->slurm || o->slurm_dry_run) {
@@ -288,6 +328,8 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 			      "retry them",
 			      incomplete, n, dir);
 done:
+	if (lock_fd >= 0)
+		close(lock_fd);
 	free(req);
 	free(spec);
 	free(old);

@@ -11,6 +11,7 @@
 
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
+#include "taslab/tl_parse.h"
 #include "toml_json.h"
 
 /* ------------------------------------------------------------------ helpers */
@@ -130,22 +131,29 @@ static int get_bool(const ctx *c, const char *key, json_t *v, bool *out)
 	return TL_OK;
 }
 
+/* "WxH" (the command line's parser, tl_parse.h: nothing wraps) or [W, H]. */
 static int get_size(const ctx *c, const char *key, json_t *v, uint32_t *w, uint32_t *h)
 {
-	if (json_is_string(v)) {
-		const char *s = json_string_value(v);
-		unsigned a, b;
-		char x, tail;
-		if (sscanf(s, "%u%c%u%c", &a, &x, &b, &tail) == 3 && (x == 'x' || x == 'X') && s[0] >= '0' && s[0] <= '9' &&
-		    a >= 1 && b >= 1 && a <= 16384 && b <= 16384 && !strchr(s, '+') && !strchr(s, ' ')) {
-			*w = a, *h = b;
-			return TL_OK;
-		}
-	} else if (json_is_array(v) && json_array_size(v) == 2) {
-		int rc = get_uint(c, key, json_array_get(v, 0), 1, 16384, w);
-		return rc ? rc : get_uint(c, key, json_array_get(v, 1), 1, 16384, h);
+	char why[256];
+	if (json_is_string(v) && !tl_parse_size(json_string_value(v), w, h, why, sizeof why))
+		return TL_OK;
+	if (json_is_array(v) && json_array_size(v) == 2) {
+		int rc = get_uint(c, key, json_array_get(v, 0), 1, TL_SIZE_MAX, w);
+		return rc ? rc : get_uint(c, key, json_array_get(v, 1), 1, TL_SIZE_MAX, h);
 	}
-	return bad(c, key, "must be \"WxH\" or [W, H] with each 1..16384");
+	return bad(c, key, "must be \"WxH\" or [W, H] with each 1..%u", TL_SIZE_MAX);
+}
+
+/* "A:B", "A", ":B" or "A:", checked as `--frames` checks it (tl_parse.h): a range the resolver will accept. */
+static int get_frames(const ctx *c, const char *key, json_t *v, char *dst, size_t n)
+{
+	int rc = get_string(c, key, v, dst, n);
+	uint32_t a, b = TL_FRAME_MAX;
+	bool given;
+	char why[256], pv[80];
+	if (!rc && tl_parse_frames(dst, &a, &b, &given, why, sizeof why))
+		rc = bad(c, key, "'%s' %s", printable(dst, pv, sizeof pv), why);
+	return rc;
 }
 
 /* ------------------------------------------------------------------ request */
@@ -219,7 +227,7 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 			else
 				r->period_count = json_array_size(v), r->set |= SWEEP_SET_PERIODS;
 		} else if (!strcmp(key, "frames")) {
-			rc = get_string(&c, key, v, r->frames, sizeof r->frames);
+			rc = get_frames(&c, key, v, r->frames, sizeof r->frames);
 			r->set |= SWEEP_SET_FRAMES;
 		} else if (!strcmp(key, "size")) {
 			rc = get_size(&c, key, v, &r->width, &r->height);
@@ -316,6 +324,17 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 	return rc;
 }
 
+bool sweep_file_is_spec(const char *path)
+{
+	json_t *j = NULL;
+	char err[256];
+	if (tl_json_read(path, &j, err, sizeof err))
+		return false;
+	bool spec = json_is_object(j) && json_object_get(j, "taslab_sweep");
+	json_decref(j);
+	return spec;
+}
+
 /* Keys of an object must all be in `known` (NULL-terminated). */
 static int only_keys(const ctx *c, const char *where, json_t *o, const char *const *known)
 {
@@ -377,8 +396,8 @@ static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
 		rc = bad(c, "scenes.name", "'%s' is not a folder name", sc->name);
 	if (!rc)
 		rc = get_string(c, "scenes.path", json_object_get(o, "path"), sc->path, sizeof sc->path);
-	if (!rc && (json_array_size(fr) != 2 || get_uint(c, "scenes.frames", json_array_get(fr, 0), 0, 1 << 30, &sc->first) ||
-		    get_uint(c, "scenes.frames", json_array_get(fr, 1), 1, 1 << 30, &sc->end) || sc->end <= sc->first))
+	if (!rc && (json_array_size(fr) != 2 || get_uint(c, "scenes.frames", json_array_get(fr, 0), 0, TL_FRAME_MAX - 1, &sc->first) ||
+		    get_uint(c, "scenes.frames", json_array_get(fr, 1), 1, TL_FRAME_MAX, &sc->end) || sc->end <= sc->first))
 		rc = bad(c, "scenes.frames", "must be [first, end] with first < end");
 	if (!rc)
 		rc = get_number(c, "scenes.fps", json_object_get(o, "fps"), 1, 1000, &sc->fps);

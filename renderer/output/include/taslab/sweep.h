@@ -144,6 +144,9 @@ typedef struct sweep_spec {
 int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size);
 /* TL_ERR_INPUT naming the file and what is wrong (strict: unknown keys, types, ranges, duplicate ids). */
 int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size);
+/* Whether `path` holds a JSON object with a "taslab_sweep" key: a resolved sweep.json (valid or not), so a failure of
+ * sweep_spec_read is the reason to report, not what the request reader says of it (issue 31.5). */
+bool sweep_file_is_spec(const char *path);
 /* 0 when a and b describe the same sweep (same runs, same rendering and metric settings); otherwise 1 with the
  * first difference in `what` ("variants: tfr@8 vs tfr@16"). */
 int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t what_size);
