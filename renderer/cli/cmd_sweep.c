@@ -38,13 +38,15 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 		sweep_run r, ref;
 		sweep_status st, ref_st;
 		sweep_run_at(s, i, &r);
-		sweep_run_status(s, dir, &r, &st);
+		char why[1024];
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why); /* damaged runs: reported before, not read */
 		sweep_run_at(s, r.ref_index, &ref);
-		sweep_run_status(s, dir, &ref, &ref_st);
-		if (!st.run || (st.clip && st.metrics) || !ref_st.run)
+		if (!st.run || (st.clip && st.metrics))
+			continue;
+		sweep_run_status_checked(s, dir, &ref, &ref_st, why, sizeof why);
+		if (!ref_st.run)
 			continue;
 		bool deferred;
-		char why[1024];
 		int trc = cli_sweep_task(s, dir, i, -1, "taslab report", &deferred, why, sizeof why);
 		if (trc)
 			fprintf(stderr, "taslab: run %zu: %s\n", i, why);
@@ -127,6 +129,10 @@ static const cli_opt sweep_options[] = {
 	{.name = "task", .arg = "I",
 	 .help = "run only entry I of the plan (what each Slurm array task and local job runs)",
 	 .type = CLI_STRING, .offset = offsetof(sweep_opts, task)},
+	{.name = "redo-damaged", .arg = NULL,
+	 .help = "render again the runs whose frames no longer match their manifest (missing, extra or mixed-size frames; "
+		 "listed by every sweep), dropping their clips and metrics and the comparisons against a redone ref",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, redo_damaged)},
 	{.name = "no-report", .arg = NULL,
 	 .help = "skip report/index.html (summary.csv and table1.md are still written)",
 	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, no_report)},
@@ -196,6 +202,46 @@ static bool foreign_folder(const char *dir)
 			other = true;
 	closedir(d);
 	return other;
+}
+
+/* Damaged runs (issue 31.8): a run with a manifest whose frames no longer match it (or the spec) is reported here,
+ * once per sweep, and either rendered again (--redo-damaged: its manifest, clip and metrics go, and so do the
+ * comparisons made against it when it is a ref run) or left out of every later step (counted as failed). */
+static size_t damaged_runs(const sweep_spec *s, const char *dir, bool redo, char *err, size_t err_size)
+{
+	size_t n = sweep_run_count(s), damaged = 0;
+	for (size_t i = 0; i < n; i++) {
+		sweep_run r;
+		sweep_status st;
+		char why[1024], p[TL_PATH_MAX + 32];
+		sweep_run_at(s, i, &r);
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
+		if (!st.damaged)
+			continue;
+		damaged++;
+		fprintf(stderr, "taslab sweep: %s/%s/%s is damaged: %s%s\n", s->scenes[r.scene].name,
+			s->scenes[r.scene].cameras[r.camera].name, s->variants[r.variant].id, why,
+			redo ? "; rendering it again" : " (--redo-damaged renders it again)");
+		if (!redo)
+			continue;
+		for (size_t k = 0; k < n; k++) {
+			sweep_run o;
+			sweep_run_at(s, k, &o);
+			if (k != i && !(r.is_ref && o.ref_index == i))
+				continue;
+			sweep_run_path(s, dir, &o, SWEEP_PATH_METRICS, p, sizeof p);
+			strncat(p, "/summary.json", sizeof p - strlen(p) - 1);
+			unlink(p);
+		}
+		sweep_run_path(s, dir, &r, SWEEP_PATH_CLIP, p, sizeof p);
+		unlink(p);
+		sweep_run_path(s, dir, &r, SWEEP_PATH_RUN, p, sizeof p);
+		strncat(p, "/manifest.json", sizeof p - strlen(p) - 1);
+		if (unlink(p) && errno != ENOENT)
+			fprintf(stderr, "taslab sweep: %s: %s\n", p, strerror(errno));
+	}
+	(void)err, (void)err_size;
+	return redo ? 0 : damaged;
 }
 
 /* Takes DIR/.taslab-lock (flock, exclusive, without waiting). TL_ERR_CONFLICT when another sweep holds it. */
@@ -304,6 +350,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	if (rc)
 		goto done;
 	size_t n = sweep_run_count(spec);
+	size_t damaged = damaged_runs(spec, dir, o->redo_damaged && !o->slurm_dry_run, err, err_size);
 	if (o->slurm || o->slurm_dry_run) {
 		rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
 		goto done;
@@ -322,7 +369,12 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 		fprintf(stderr, "taslab sweep: %zu of %zu runs complete in %.1f s -> %s/summary.csv, table1.md%s%s\n",
 			n - incomplete, n, tl_clock_s() - t0, dir, report[0] ? ", " : "", report);
 	printf("%s\n", report[0] ? report : path);
-	if (incomplete)
+	if (incomplete && damaged)
+		rc = tl_error(err, err_size, TL_ERR_INCOMPLETE,
+			      "%zu of %zu runs failed or are incomplete, %zu of them damaged (listed above; their logs: %s/logs/): "
+			      "run the same command again with --redo-damaged to render them again",
+			      incomplete, n, damaged, dir);
+	else if (incomplete)
 		rc = tl_error(err, err_size, TL_ERR_INCOMPLETE,
 			      "%zu of %zu runs failed or are incomplete (their logs: %s/logs/); run the same command again to "
 			      "retry them",

@@ -203,18 +203,33 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 	if (!array)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	size_t len = 0;
+	/* (damaged runs, listed by the sweep, are left out: --redo-damaged has dropped their manifests when asked) */
+	char *todo_run = calloc(n + 1, 1);
+	if (!todo_run) {
+		free(array);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+	for (size_t i = 0; i < n; i++) {
+		sweep_run r;
+		sweep_status st;
+		char why[16];
+		sweep_run_at(s, i, &r);
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
+		todo_run[i] = !st.damaged && !(st.run && st.clip && st.metrics);
+	}
 	for (size_t i = 0; i < n;) {
-		if (sweep_run_complete(s, dir, i)) {
+		if (!todo_run[i]) {
 			i++;
 			continue;
 		}
 		size_t j = i + 1; /* a range of consecutive incomplete runs */
-		while (j < n && !sweep_run_complete(s, dir, j))
+		while (j < n && todo_run[j])
 			j++;
 		len += (size_t)snprintf(array + len, cap - len, j - i > 1 ? "%s%zu-%zu" : "%s%zu", len ? "," : "", i, j - 1);
 		todo += j - i;
 		i = j;
 	}
+	free(todo_run);
 	char words_buf[4096];
 	char *words[MAX_ARGS];
 	size_t nw = 0;
