@@ -170,11 +170,10 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 		char f[TL_PATH_MAX + 32];
 		uint32_t w = 0, h = 0;
 		snprintf(f, sizeof f, "%s/%06zu.%s", path, m->first_frame + i, ext);
-		if (frame_file_size(f, !strcmp(ext, "exr"), &w, &h))
-			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a readable %s frame; render the run again", f, ext);
-		else if (w != m->width || h != m->height)
-			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: %ux%u, the run's frames are %ux%u; render the run again", f,
-				      w, h, m->width, m->height);
+		/* (a header that does not parse is left to the image reader, whose message says what is wrong with it) */
+		if (!frame_file_size(f, !strcmp(ext, "exr"), &w, &h) && (w != m->width || h != m->height))
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: size %ux%u differs from the run's %ux%u; render the run again",
+				      f, w, h, m->width, m->height);
 	}
 	free(seen);
 	return rc;
