@@ -16,6 +16,7 @@
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
+#include "taslab/tl_parse.h"
 #include "test_util.h"
 
 static int count_entries(const char *dir)
@@ -63,7 +64,7 @@ static void test_mkdirs(void **state)
 	FILE *f = fopen(p, "w");
 	fclose(f);
 	snprintf(p, sizeof p, "%s/file/sub", d);
-	assert_int_equal(tl_mkdirs(p, err, sizeof err), TL_ERR_OUTPUT);
+	assert_int_equal(tl_mkdirs(p, err, sizeof err), TL_ERR_ARG); /* the caller's choice: bad input, exit 2 (issue 31.9) */
 	assert_non_null(strstr(err, "not a folder"));
 }
 
@@ -245,7 +246,45 @@ static void test_check_out_dir(void **state)
 	snprintf(p, sizeof p, "%s/file", d);
 	assert_int_equal(tl_write_file(p, "x", 1, err, sizeof err), TL_OK);
 	snprintf(p, sizeof p, "%s/file/sub", d);
-	assert_int_equal(tl_check_out_dir(p, "--out", err, sizeof err), TL_ERR_OUTPUT);
+	assert_int_equal(tl_check_out_dir(p, "--out", err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(tl_check_out_dir("/dev/null", "--out", err, sizeof err), TL_ERR_ARG);
+}
+
+/* tl_parse.h, the one number parser (issue 31.5): nothing wraps at 2^32 or 2^64, digits only, ranges checked. */
+static void test_parse(void **state)
+{
+	(void)state;
+	char why[256];
+	uint64_t v;
+	const char *e;
+	assert_int_equal(tl_parse_u64_prefix("18446744073709551615x", &e, &v), TL_OK);
+	assert_true(v == UINT64_MAX && *e == 'x');
+	assert_int_equal(tl_parse_u64_prefix("18446744073709551616", &e, &v), TL_ERR_ARG);
+	assert_int_equal(tl_parse_u64_prefix("-1", &e, &v), TL_ERR_ARG);
+	assert_int_equal(tl_parse_u64_prefix(" 1", &e, &v), TL_ERR_ARG);
+	assert_int_equal(tl_parse_uint("256", 1, 256, &v, why, sizeof why), TL_OK);
+	assert_int_equal(tl_parse_uint("257", 1, 256, &v, why, sizeof why), TL_ERR_ARG);
+	assert_string_equal(why, "must be a whole number in [1, 256]");
+	assert_int_equal(tl_parse_uint("1e2", 1, 256, &v, why, sizeof why), TL_ERR_ARG);
+	uint32_t w, h, a, b;
+	bool given;
+	assert_int_equal(tl_parse_size("16384X1", &w, &h, why, sizeof why), TL_OK);
+	assert_true(w == 16384 && h == 1);
+	const char *bad_sizes[] = {"4294967297x1", "1x4294967297", "0x5", "16385x1", "+5x5", "5x5 ", "5x", "x5", "5*5", ""};
+	for (size_t i = 0; i < sizeof bad_sizes / sizeof bad_sizes[0]; i++)
+		if (tl_parse_size(bad_sizes[i], &w, &h, why, sizeof why) != TL_ERR_ARG)
+			fail_msg("size '%s' accepted", bad_sizes[i]);
+	b = 300;
+	assert_int_equal(tl_parse_frames("10:", &a, &b, &given, why, sizeof why), TL_OK);
+	assert_true(a == 10 && b == 300 && !given);
+	assert_int_equal(tl_parse_frames("1073741823", &a, &b, &given, why, sizeof why), TL_OK);
+	assert_true(a == TL_FRAME_MAX - 1 && b == TL_FRAME_MAX && given);
+	const char *bad_frames[] = {"4294967290:4294967295", "1073741824", "0:1073741825", "5:5", "9:3", "-1:3", "1:2:3", ""};
+	for (size_t i = 0; i < sizeof bad_frames / sizeof bad_frames[0]; i++) {
+		b = 300;
+		if (tl_parse_frames(bad_frames[i], &a, &b, &given, why, sizeof why) != TL_ERR_ARG)
+			fail_msg("frames '%s' accepted", bad_frames[i]);
+	}
 }
 
 static void test_paths(void **state)
@@ -327,7 +366,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_errors),	   cmocka_unit_test(test_mkdirs), cmocka_unit_test(test_atomic_write),
-		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths),
+		cmocka_unit_test(test_atomic_full_disk), cmocka_unit_test(test_clean_temps), cmocka_unit_test(test_paths), cmocka_unit_test(test_parse),
 		cmocka_unit_test(test_json), cmocka_unit_test(test_atomic_set), cmocka_unit_test(test_check_out_dir), cmocka_unit_test(test_buf),
 	};
 	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));

@@ -44,6 +44,15 @@ static void test_bad_inputs(void **state)
 
 	snprintf(args, sizeof args, "--scene turntable --method warp --out %s", run);
 	expect_failure(args, "unknown method 'warp'", run);
+	/* issue 31.9: the variant's T and --threshold both given rendered T = 16 under the name tarc@8 */
+	snprintf(args, sizeof args, "--scene turntable --method tarc@8 --threshold 16 --out %s", run);
+	expect_failure(args, "--threshold conflicts with --method tarc@8", run);
+	snprintf(args, sizeof args, "--scene turntable --method tasa-oracle-oracle@8 --out %s", run);
+	expect_failure(args, "'-oracle' is given twice", run);
+	snprintf(args, sizeof args, "--scene turntable --size 4294967297x1 --out %s", run);
+	expect_failure(args, "--size '4294967297x1' is not WIDTHxHEIGHT", run);
+	snprintf(args, sizeof args, "--scene turntable --frames 1073741823:1073741825 --out %s", run);
+	expect_failure(args, "--frames '1073741823:1073741825' is not A:B", run);
 	snprintf(args, sizeof args, "--scene turntable --size 0x10 --out %s", run);
 	expect_failure(args, "--size", run);
 	snprintf(args, sizeof args, "--scene turntable --size 96x54 --frames 9:3 --out %s", run);

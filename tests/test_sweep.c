@@ -78,6 +78,41 @@ static void test_request_toml(void **state)
 	/* a NUL in a key would silently stand for another key; JSON refuses it too */
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\n\"jobs\\u0000x\" = 2\n", "bad.toml:2:1: a key contains a NUL");
 	request_fails_as(dir, "bad.toml", "scenes = [\"calm\\u0000\"]\n", "bad.toml:1:11: a string contains a NUL");
+	/* issue 31.1: nesting tens of thousands of parts deep (dotted keys, table headers, inline values) overflowed the
+	 * stack inside toml++; the depth is bounded before parsing (the fuzzer's seeds hold the same inputs) */
+	const char *seeds[] = {"crash_deep_dotted_key.toml", "crash_deep_table_header.toml"};
+	for (size_t i = 0; i < 2; i++) {
+		char seed[4096];
+		snprintf(seed, sizeof seed, "%s/tests/fuzz/seeds/sweep/%s", TASLAB_SOURCE_DIR, seeds[i]);
+		sweep_request *r = calloc(1, sizeof *r);
+		int rc = sweep_request_read(seed, r, err, sizeof err);
+		if (rc != TL_ERR_INPUT || !strstr(err, ":2:1: nested deeper than 64 levels") || strchr(err, '\n'))
+			fail_msg("%s: rc %d, '%s'", seeds[i], rc, err);
+		free(r);
+	}
+	char deep[400];
+	size_t len = (size_t)snprintf(deep, sizeof deep, "scenes = [\"calm\"]\nx = ");
+	for (int i = 0; i < 70; i++)
+		deep[len++] = '[';
+	for (int i = 0; i < 70; i++)
+		deep[len++] = ']';
+	snprintf(deep + len, sizeof deep - len, "\n");
+	request_fails_as(dir, "bad.toml", deep, "bad.toml:2:1: nested deeper");
+	/* what stays legal: dots in strings, comments and numbers, a header of two parts, a deep-enough document */
+	const char *fine = "# a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c\n"
+			   "scenes = [\"a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r.s.t.u.v.w.x.y.z.a.b.c.json\"]\n"
+			   "thresholds = [1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5, 8.5, 9.5, 10.5, 11.5, 12.5, 13.5, 14.5, 15.5, 16.5]\n";
+	sweep_request *r = calloc(1, sizeof *r);
+	const char *pf = write_file(dir, "fine.toml", fine);
+	if (sweep_request_read(pf, r, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(r->threshold_count, 16);
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\n[a.b]\nc.d = 1\n", "unknown key \"a\"");
+	free(r);
+	/* issue 31.5: TOML's inf and nan said "out of memory" (jansson has neither) */
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\nfps = inf\n", "bad.toml:2:7: inf and nan are not sweep values");
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\nthresholds = [nan]\n", "bad.toml:2:15: inf and nan");
+	request_fails_as(dir, "bad.toml", "scenes = [\"calm\"]\nsize = \"4294967297x1\"\n", "\"size\"");
 	/* the extension is matched without case */
 	request_fails_as(dir, "bad.TOML", "scenes = [\"calm\"]\nframes = 1979-05-27\n", "bad.TOML:2:10: dates");
 }
@@ -115,6 +150,7 @@ static void test_request_file(void **state)
 	assert_int_equal(sweep_request_read(p, r, err, sizeof err), 0);
 	assert_true(r->cameras_all && r->methods_all && r->width == 96 && r->height == 54);
 	free(r);
+	sweep_request *r2 = calloc(1, sizeof *r2);
 
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"colour\": 1}", "unknown key \"colour\"");
 	request_fails(dir, "{\"scenes\": \"calm\"}", "\"scenes\": must be a list");
@@ -122,6 +158,20 @@ static void test_request_file(void **state)
 	request_fails(dir, "{\"scenes\": [\"\"]}", "must not be empty");
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": \"0x5\"}", "\"size\"");
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": [1, 2, 3]}", "\"size\"");
+	/* issue 31.5: one number parser (tl_parse.h) for the command line and the file: nothing wraps ("4294967297x1"
+	 * was read as 1x1 by sscanf), and frames are checked as --frames checks them, below TL_FRAME_MAX */
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": \"4294967297x1\"}", "\"size\": must be \"WxH\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": \"96x18446744073709551617\"}", "\"size\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": \"+96x54\"}", "\"size\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"size\": [4294967297, 1]}", "\"size\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"frames\": \"4294967290:4294967295\"}",
+		      "\"frames\": '4294967290:4294967295' is not A:B");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"frames\": \"1073741824\"}", "\"frames\"");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"frames\": \"9:3\"}", "\"frames\": '9:3' is empty");
+	request_fails(dir, "{\"scenes\": [\"calm\"], \"frames\": \"-1:3\"}", "\"frames\"");
+	p = write_file(dir, "edge.json", "{\"scenes\": [\"calm\"], \"frames\": \"1073741822:1073741824\", \"size\": \"16384X1\"}");
+	assert_int_equal(sweep_request_read(p, r2, err, sizeof err), 0); /* the largest frames and size are fine */
+	assert_true(r2->width == 16384 && r2->height == 1);
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"thresholds\": [0]}", "\"thresholds\"");
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"periods\": [1.5]}", "\"periods\"");
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"validation\": 1}", "\"validation\"");
@@ -131,6 +181,7 @@ static void test_request_file(void **state)
 	request_fails(dir, "{\"scenes\": [\"calm\"],}", "bad.json:1");
 	request_fails(dir, "{\"scenes\": [\"calm\"], \"scenes\": [\"x\"]}", "bad.json");
 	request_fails(dir, "{\"taslab_sweep\": 1}", "resolved sweep.json");
+	free(r2);
 }
 
 /* Resolution through the same path as `taslab sweep`: options onto a request, then the resolver. */
@@ -219,6 +270,8 @@ static void test_resolve(void **state)
 	resolve_fails(&b, "'tfr@8' is listed twice");
 	b.variants = "ref,ref@8";
 	resolve_fails(&b, "variants:");
+	b.variants = "ref,tarc-oracle-oracle@8"; /* issue 31.9: was accepted as tarc-oracle@8 */
+	resolve_fails(&b, "variant 'tarc-oracle-oracle@8': '-oracle' is given twice");
 	b = o;
 	b.scenes = "turntable,no_such_scene";
 	resolve_fails(&b, "no_such_scene");
@@ -232,6 +285,8 @@ static void test_resolve(void **state)
 	b = o;
 	b.frames = "9:3";
 	resolve_fails(&b, "--frames");
+	b.frames = "4294967290:4294967295"; /* issue 31.5: written negative into sweep.json ((int) of a uint32) */
+	resolve_fails(&b, "--frames '4294967290:4294967295' is not A:B");
 	b.frames = NULL;
 	b.baseline = "tfr@4";
 	resolve_fails(&b, "baseline: tfr@4 is not one of the variants");
@@ -379,6 +434,18 @@ static void test_spec_bad(void **state)
 		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [0, 3], \"fps\": 60, "
 		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"fast\"}]}], \"variants\": [" REF "], " TAIL,
 		   "stationary or moving");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [-6, -1], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}], \"variants\": [" REF "], " TAIL,
+		   "\"scenes.frames\"");
+	spec_fails(dir,
+		   "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [0, 1073741825], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}], \"variants\": [" REF "], " TAIL,
+		   "\"scenes.frames\"");
+	/* a resolved sweep.json is recognised as one however broken, so its own reason is reported (issue 31.5) */
+	assert_true(sweep_file_is_spec(write_file(dir, "sweep.json", "{\"taslab_sweep\": 7, \"scenes\": 1}")));
+	assert_false(sweep_file_is_spec(write_file(dir, "req.json", "{\"scenes\": [\"calm\"]}")));
+	assert_false(sweep_file_is_spec(write_file(dir, "req.json", "[1]")));
 }
 
 /* summary.csv values by column name, exceed_T at the variant's own T. */

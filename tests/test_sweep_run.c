@@ -56,7 +56,7 @@ static void test_bad_input(void **state)
 	(void)state;
 	char dir[4096];
 	snprintf(dir, sizeof dir, "%s", tu_tmpdir("sweep_bad"));
-	char args[8192], sw[4096], file[4096];
+	char args[8192], sw[4096], file[4096], other[4096];
 	snprintf(sw, sizeof sw, "%s/sw", dir);
 	snprintf(args, sizeof args, "--scenes turntable,nowhere --variants ref --out %s", sw);
 	expect_bad(args, "nowhere", sw);
@@ -74,8 +74,24 @@ static void test_bad_input(void **state)
 	fclose(f);
 	snprintf(args, sizeof args, "%s", file);
 	expect_bad(args, "unknown key \"treshold\"", sw);
+	/* issue 31.5: a resolved sweep.json that does not read reports its own reason (its frames), not what the
+	 * request reader says of it ("device": must not be empty) */
+	snprintf(file, sizeof file, "%s/broken/sweep.json", dir);
+	snprintf(other, sizeof other, "%s/broken", dir);
+	mkdir_p(other);
+	f = fopen(file, "w");
+	fprintf(f, "{\"taslab_sweep\": 1, \"scenes\": [{\"name\": \"t\", \"path\": \"/x\", \"frames\": [-6, -1], \"fps\": 60, "
+		   "\"cameras\": [{\"name\": \"o\", \"motion\": \"moving\"}]}], \"variants\": [{\"variant\": \"ref\", "
+		   "\"id\": \"ref\", \"method\": \"ref\", \"T\": null, \"period\": null}], \"size\": [4, 4], \"baseline\": "
+		   "\"ref\", \"metrics\": \"all\", \"ppd\": 67, \"device\": \"\", \"validation\": false, \"ocio_config\": \"\", "
+		   "\"display\": \"\", \"view\": \"\", \"display_transform\": \"d\"}\n");
+	fclose(f);
+	snprintf(args, sizeof args, "%s", file);
+	expect_bad(args, "\"scenes.frames\": must be [first, end]", NULL);
+	assert_int_equal(sweep(args), 2);
+	snprintf(args, sizeof args, "%s --task 0", file);
+	expect_bad(args, "\"scenes.frames\"", NULL);
 	/* a folder that holds other files, or another sweep */
-	char other[4096];
 	snprintf(other, sizeof other, "%s/notes", dir);
 	mkdir_p(other);
 	snprintf(file, sizeof file, "%s/notes/x.txt", dir);

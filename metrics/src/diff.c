@@ -311,6 +311,10 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		snprintf(err, err_size, "EXR comparison needs a display transform");
 		return -1;
 	}
+	/* An old summary must not look like this comparison's result, also when the runs are refused below (a frame
+	 * missing or of another size than the manifest's, issue 31.8). */
+	snprintf(path, sizeof path, "%s/summary.json", d->out);
+	unlink(path);
 	mtr_compare_desc cd = {.metrics = d->metrics, .options = d->options, .option_count = d->option_count,
 			       .threads = d->threads};
 	if ((rc = mtr_comparer_create(&cd, &cmp, err, err_size)))
@@ -343,8 +347,6 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 			goto done;
 	}
 	rc = TL_ERR_INPUT;
-	snprintf(path, sizeof path, "%s/summary.json", d->out);
-	unlink(path); /* an old summary must not look like this comparison's result */
 	stats = calloc(ra.n, sizeof *stats);
 	if (!stats) {
 		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");

@@ -109,7 +109,8 @@ int mtr_sweep_collect(const sweep_spec *s, const char *dir, mtr_sweep_row **rows
 	for (size_t i = 0; !rc && i < n; i++) {
 		mtr_sweep_row *row = &rows[i];
 		sweep_run_at(s, i, &row->run);
-		sweep_run_status(s, dir, &row->run, &row->status);
+		char why[1024];
+		sweep_run_status_checked(s, dir, &row->run, &row->status, why, sizeof why); /* a damaged run is not read */
 		for (int c = 0; c < MTR_SWEEP_MAX_COLUMNS; c++)
 			row->metric[c] = NAN;
 		const sweep_scene *sc = &s->scenes[row->run.scene];
@@ -232,7 +233,9 @@ int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *r
 		const mtr_sweep_row *r = &rows[i];
 		const sweep_scene *sc = &s->scenes[r->run.scene];
 		const sweep_variant *v = &s->variants[r->run.variant];
-		const char *status = !r->status.run ? "missing" : r->status.clip && r->status.metrics ? "complete" : "partial";
+		const char *status = r->status.damaged ? "damaged"
+				     : !r->status.run  ? "missing"
+				     : r->status.clip && r->status.metrics ? "complete" : "partial";
 		fprintf(f, "%s,%s,%s,%s,%s", sc->name, sc->cameras[r->run.camera].name, sc->cameras[r->run.camera].motion,
 			v->method, v->variant);
 		cell(f, v->T, "%g");

@@ -53,8 +53,17 @@ int cli_method_config(const char *method, const cli_method_args *args, method_co
 {
 	int rc = method_find(method) ? method_config_init(out, method, err, err_size)
 				     : method_config_parse_variant(out, method, err, err_size);
-	for (size_t i = 0; !rc && args && i < args->n; i++)
+	/* What the variant sets (tarc@8's T) is not set again by an option: `--method tarc@8 --threshold 16` rendered
+	 * T = 16 under the name tarc@8 (issue 31.9). */
+	const uint32_t from_variant = rc ? 0 : out->given;
+	for (size_t i = 0; !rc && args && i < args->n; i++) {
+		for (size_t k = 0; k < out->method->option_count; k++)
+			if ((from_variant & (1u << k)) && !strcmp(out->method->options[k].name, args->name[i]))
+				return tl_error(err, err_size, TL_ERR_ARG,
+						"--%s conflicts with --method %s, which sets it already (give one of the two)",
+						args->name[i], method);
 		rc = method_config_set(out, args->name[i], args->value[i], err, err_size);
+	}
 	return rc ? rc : method_config_check(out, err, err_size);
 }
 

@@ -8,10 +8,13 @@
  * holds another sweep) is found before anything is written: one line, exit 2, nothing rendered. */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "sweep_cli.h"
@@ -35,13 +38,15 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 		sweep_run r, ref;
 		sweep_status st, ref_st;
 		sweep_run_at(s, i, &r);
-		sweep_run_status(s, dir, &r, &st);
+		char why[1024];
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why); /* damaged runs: reported before, not read */
 		sweep_run_at(s, r.ref_index, &ref);
-		sweep_run_status(s, dir, &ref, &ref_st);
-		if (!st.run || (st.clip && st.metrics) || !ref_st.run)
+		if (!st.run || (st.clip && st.metrics))
+			continue;
+		sweep_run_status_checked(s, dir, &ref, &ref_st, why, sizeof why);
+		if (!ref_st.run)
 			continue;
 		bool deferred;
-		char why[1024];
 		int trc = cli_sweep_task(s, dir, i, -1, "taslab report", &deferred, why, sizeof why);
 		if (trc)
 			fprintf(stderr, "taslab: run %zu: %s\n", i, why);
@@ -124,6 +129,10 @@ static const cli_opt sweep_options[] = {
 	{.name = "task", .arg = "I",
 	 .help = "run only entry I of the plan (what each Slurm array task and local job runs)",
 	 .type = CLI_STRING, .offset = offsetof(sweep_opts, task)},
+	{.name = "redo-damaged", .arg = NULL,
+	 .help = "render again the runs whose frames no longer match their manifest (missing, extra or mixed-size frames; "
+		 "listed by every sweep), dropping their clips and metrics and the comparisons against a redone ref",
+	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, redo_damaged)},
 	{.name = "no-report", .arg = NULL,
 	 .help = "skip report/index.html (summary.csv and table1.md are still written)",
 	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, no_report)},
@@ -189,10 +198,72 @@ static bool foreign_folder(const char *dir)
 	struct dirent *e;
 	bool other = false;
 	while ((e = readdir(d)))
-		if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+		if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..") && strcmp(e->d_name, ".taslab-lock"))
 			other = true;
 	closedir(d);
 	return other;
+}
+
+/* Damaged runs (issue 31.8): a run with a manifest whose frames no longer match it (or the spec) is reported here,
+ * once per sweep, and either rendered again (--redo-damaged: its manifest, clip and metrics go, and so do the
+ * comparisons made against it when it is a ref run) or left out of every later step (counted as failed). */
+static size_t damaged_runs(const sweep_spec *s, const char *dir, bool redo, char *err, size_t err_size)
+{
+	size_t n = sweep_run_count(s), damaged = 0;
+	for (size_t i = 0; i < n; i++) {
+		sweep_run r;
+		sweep_status st;
+		char why[1024], p[TL_PATH_MAX + 32];
+		sweep_run_at(s, i, &r);
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
+		if (!st.damaged)
+			continue;
+		damaged++;
+		fprintf(stderr, "taslab sweep: %s/%s/%s is damaged: %s%s\n", s->scenes[r.scene].name,
+			s->scenes[r.scene].cameras[r.camera].name, s->variants[r.variant].id, why,
+			redo ? "; rendering it again" : " (--redo-damaged renders it again)");
+		if (!redo)
+			continue;
+		for (size_t k = 0; k < n; k++) {
+			sweep_run o;
+			sweep_run_at(s, k, &o);
+			if (k != i && !(r.is_ref && o.ref_index == i))
+				continue;
+			sweep_run_path(s, dir, &o, SWEEP_PATH_METRICS, p, sizeof p);
+			strncat(p, "/summary.json", sizeof p - strlen(p) - 1);
+			unlink(p);
+		}
+		sweep_run_path(s, dir, &r, SWEEP_PATH_CLIP, p, sizeof p);
+		unlink(p);
+		sweep_run_path(s, dir, &r, SWEEP_PATH_RUN, p, sizeof p);
+		strncat(p, "/manifest.json", sizeof p - strlen(p) - 1);
+		if (unlink(p) && errno != ENOENT)
+			fprintf(stderr, "taslab sweep: %s: %s\n", p, strerror(errno));
+	}
+	(void)err, (void)err_size;
+	return redo ? 0 : damaged;
+}
+
+/* Takes DIR/.taslab-lock (flock, exclusive, without waiting). TL_ERR_CONFLICT when another sweep holds it. */
+static int lock_folder(const char *dir, int *fd, char *err, size_t err_size)
+{
+	char p[TL_PATH_MAX + 32];
+	snprintf(p, sizeof p, "%s/.taslab-lock", dir);
+	*fd = open(p, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+	if (*fd < 0)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", p, strerror(errno));
+	if (flock(*fd, LOCK_EX | LOCK_NB)) {
+		int e = errno;
+		close(*fd);
+		*fd = -1;
+		if (e == EWOULDBLOCK)
+			return tl_error(err, err_size, TL_ERR_CONFLICT,
+					"%s is in use by another 'taslab sweep' (it holds %s): wait for it to finish, or stop it "
+					"and run this again to resume",
+					dir, p);
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot lock: %s", p, strerror(e));
+	}
+	return TL_OK;
 }
 
 static int sweep_main(void *opts, cli_ctx *ctx)
@@ -206,6 +277,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	int rc = req && spec && old ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	const char *file = ctx->npos ? ctx->pos[0] : NULL;
 	bool resolved = false;
+	int lock_fd = -1;
 	if (!rc && file) {
 		/* SWEEP/sweep.json (resolved): resume that sweep, in its folder */
 		if (sweep_spec_read(file, spec, what, sizeof what) == 0) {
@@ -216,6 +288,9 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 				rc = tl_error(err, err_size, TL_ERR_ARG,
 					      "%s is a resolved sweep: options that change it cannot be added (write a sweep file)",
 					      file);
+		} else if (sweep_file_is_spec(file)) {
+			/* a resolved sweep.json that does not read: its own reason, not the request reader's (issue 31.5) */
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s", what);
 		} else {
 			rc = sweep_request_read(file, req, err, err_size);
 		}
@@ -245,8 +320,11 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 		goto done;
 	/* The folder: new, empty, or holding this very sweep. */
 	snprintf(path, sizeof path, "%s/sweep.json", dir);
-	if (tl_is_file(dir)) {
-		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s is a file (give a folder)", dir);
+	struct stat sb;
+	if (stat(dir, &sb) == 0 && !S_ISDIR(sb.st_mode)) { /* a file, /dev/null, a FIFO: bad input (issue 31.9) */
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s exists and is not a folder (give a folder)", dir);
+	} else if ((o->slurm || o->slurm_dry_run) && (rc = cli_sweep_slurm_check(dir, err, err_size))) {
+		/* paths written into the batch scripts: checked before the folder is touched (issue 31.2) */
 	} else if (tl_is_file(path)) {
 		if ((rc = sweep_spec_read(path, old, err, err_size)))
 			goto done;
@@ -260,10 +338,19 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	}
 	if (rc)
 		goto done;
-	if (!tl_is_file(path) &&
-	    ((rc = tl_mkdirs(dir, err, err_size)) || (rc = sweep_spec_write(path, spec, err, err_size))))
+	/* One sweep at a time in a folder: two identical sweeps started together rendered every run twice (issue 31.9).
+	 * flock is released when the process ends, however it ends; the run processes (--task) do not take it. Under the
+	 * lock, a sweep.json written since the check above is compared again. */
+	if ((rc = tl_mkdirs(dir, err, err_size)) || (rc = lock_folder(dir, &lock_fd, err, err_size)))
+		goto done;
+	if (!tl_is_file(path))
+		rc = sweep_spec_write(path, spec, err, err_size);
+	else if (!(rc = sweep_spec_read(path, old, err, err_size)) && sweep_spec_compare(old, spec, what, sizeof what))
+		rc = tl_error(err, err_size, TL_ERR_ARG, "%s holds a different sweep (%s): use another --out", dir, what);
+	if (rc)
 		goto done;
 	size_t n = sweep_run_count(spec);
+	size_t damaged = damaged_runs(spec, dir, o->redo_damaged && !o->slurm_dry_run, err, err_size);
 	if (o->slurm || o->slurm_dry_run) {
 		rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
 		goto done;
@@ -282,12 +369,19 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 		fprintf(stderr, "taslab sweep: %zu of %zu runs complete in %.1f s -> %s/summary.csv, table1.md%s%s\n",
 			n - incomplete, n, tl_clock_s() - t0, dir, report[0] ? ", " : "", report);
 	printf("%s\n", report[0] ? report : path);
-	if (incomplete)
+	if (incomplete && damaged)
+		rc = tl_error(err, err_size, TL_ERR_INCOMPLETE,
+			      "%zu of %zu runs failed or are incomplete, %zu of them damaged (listed above; their logs: %s/logs/): "
+			      "run the same command again with --redo-damaged to render them again",
+			      incomplete, n, damaged, dir);
+	else if (incomplete)
 		rc = tl_error(err, err_size, TL_ERR_INCOMPLETE,
 			      "%zu of %zu runs failed or are incomplete (their logs: %s/logs/); run the same command again to "
 			      "retry them",
 			      incomplete, n, dir);
 done:
+	if (lock_fd >= 0)
+		close(lock_fd);
 	free(req);
 	free(spec);
 	free(old);

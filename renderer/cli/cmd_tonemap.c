@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "taslab/colour.h"
 #include "taslab/imageio.h"
+#include "taslab/run.h"
 #include "taslab/tl_fs.h"
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
@@ -128,7 +129,20 @@ static int tonemap_main(void *opts, cli_ctx *ctx)
 	char **names = NULL;
 	size_t n = 0;
 	if (tl_is_dir(input)) {
+		/* a run folder is checked against its manifest first: a missing, extra or mixed-size frame gave a gapped PNG
+		 * sequence and exit 0 (issue 31.8) */
+		snprintf(frames, sizeof frames, "%s/manifest.json", input);
+		bool is_run = tl_is_file(frames);
 		snprintf(frames, sizeof frames, "%s/frames", input);
+		if (is_run || tl_is_dir(frames)) {
+			run_manifest m;
+			int crc = run_check(input, &m, err, err_size);
+			if (!crc && !m.exr)
+				crc = tl_error(err, err_size, TL_ERR_INPUT,
+					       "%s: the run was rendered with --no-exr: no scene-linear frames to tone-map", input);
+			if (crc)
+				return crc;
+		}
 		snprintf(dir, sizeof dir, "%s", tl_is_dir(frames) ? frames : input);
 		DIR *d = opendir(dir);
 		struct dirent *e;

@@ -79,7 +79,7 @@ typedef struct sweep_opts {
 	const char *device, *ocio_config, *display, *view;
 	bool validation, truth;
 	uint32_t jobs;
-	bool slurm, slurm_dry_run, no_report, quiet;
+	bool slurm, slurm_dry_run, no_report, quiet, redo_damaged;
 	const char *slurm_opts, *task;
 } sweep_opts;
 

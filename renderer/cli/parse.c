@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "taslab/tl_fs.h"
+#include "taslab/tl_parse.h"
 #include "taslab/version.h"
 #include "taslab/vkdev.h"
 
@@ -18,65 +19,31 @@
 
 /* ------------------------------------------------------------------ value parsers */
 
+/* Whole numbers, sizes and frame ranges come from base/tl_parse.h: the sweep file reader uses the same parser, so a
+ * value means the same on the command line and in a file (issue 31.5). */
 static int parse_u32(const char *s, const char **end, uint32_t *out)
 {
-	if (*s < '0' || *s > '9')
-		return TL_ERR_ARG;
-	errno = 0;
-	char *e;
-	unsigned long v = strtoul(s, &e, 10);
-	if (errno || v > 0xFFFFFFFFul)
+	uint64_t v;
+	if (tl_parse_u64_prefix(s, end, &v) || v > UINT32_MAX)
 		return TL_ERR_ARG;
 	*out = (uint32_t)v;
-	*end = e;
 	return 0;
 }
 
 int cli_parse_size(const char *s, uint32_t *w, uint32_t *h, char *err, size_t err_size)
 {
-	const char *e;
-	if (!s || parse_u32(s, &e, w) || (*e != 'x' && *e != 'X') || parse_u32(e + 1, &e, h) || *e ||
-	    *w < 1 || *h < 1 || *w > 16384 || *h > 16384) {
-		snprintf(err, err_size, "--size '%s' is not WIDTHxHEIGHT with each 1..16384 (e.g. --size 960x540)", s ? s : "");
-		return TL_ERR_ARG;
-	}
+	char why[256];
+	if (tl_parse_size(s, w, h, why, sizeof why))
+		return tl_error(err, err_size, TL_ERR_ARG, "--size '%s' %s", s ? s : "", why);
 	return 0;
 }
 
 int cli_parse_frames(const char *s, uint32_t *a, uint32_t *b_inout, bool *b_given, char *err, size_t err_size)
 {
-	const char *e = s;
-	uint32_t lo = 0, hi = *b_inout;
-	*b_given = false;
-	if (!s || !*s)
-		goto bad;
-	if (*e != ':' && parse_u32(e, &e, &lo))
-		goto bad;
-	if (*e == 0) { /* single frame */
-		if (e == s)
-			goto bad;
-		hi = lo + 1;
-		*b_given = true;
-	} else if (*e == ':') {
-		e++;
-		if (*e) {
-			if (parse_u32(e, &e, &hi) || *e)
-				goto bad;
-			*b_given = true;
-		}
-	} else {
-		goto bad;
-	}
-	if (hi <= lo) {
-		snprintf(err, err_size, "--frames '%s' is empty: A:B renders frames A..B-1, so B must exceed A", s);
-		return TL_ERR_ARG;
-	}
-	*a = lo;
-	*b_inout = hi;
+	char why[256];
+	if (tl_parse_frames(s, a, b_inout, b_given, why, sizeof why))
+		return tl_error(err, err_size, TL_ERR_ARG, "--frames '%s' %s", s ? s : "", why);
 	return 0;
-bad:
-	snprintf(err, err_size, "--frames '%s' is not A:B, A, :B or A: (e.g. --frames 0:60 for frames 0..59)", s ? s : "");
-	return TL_ERR_ARG;
 }
 
 int cli_parse_float(const char *s, const char *what, double lo, double hi, double *out, char *err, size_t err_size)
@@ -200,22 +167,10 @@ int cli_parse_float_list(const char *s, const char *what, double lo, double hi, 
 
 int cli_parse_uint(const char *s, const char *what, uint64_t lo, uint64_t hi, uint64_t *out, char *err, size_t err_size)
 {
-	uint64_t v = 0;
-	const char *p = s;
-	if (!s || !*s)
-		goto bad;
-	for (; *p; p++) {
-		if (*p < '0' || *p > '9' || v > (UINT64_MAX - 9) / 10)
-			goto bad;
-		v = v * 10 + (uint64_t)(*p - '0');
-	}
-	if (v < lo || v > hi)
-		goto bad;
-	*out = v;
+	char why[128];
+	if (tl_parse_uint(s, lo, hi, out, why, sizeof why))
+		return tl_error(err, err_size, TL_ERR_ARG, "%s '%s' %s", what, s ? s : "", why);
 	return TL_OK;
-bad:
-	return tl_error(err, err_size, TL_ERR_ARG, "%s '%s' must be a whole number in [%llu, %llu]", what, s ? s : "",
-			(unsigned long long)lo, (unsigned long long)hi);
 }
 
 const char *cli_scenes_dir(void)

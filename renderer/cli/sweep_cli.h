@@ -40,6 +40,10 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts, bool dry_run, char *err,
 		    size_t err_size);
 
+/* Checks before the sweep folder is touched that nothing written into the Slurm scripts (the folder's path, the
+ * current folder when that path is relative, the taslab binary's path) holds a control character. TL_ERR_ARG. */
+int cli_sweep_slurm_check(const char *dir, char *err, size_t err_size);
+
 /* The closing step (and `taslab report`): clips and comparisons still missing for complete runs are made, then
  * DIR/summary.csv, DIR/table1.md and DIR/report/index.html (with the study's tallies when `study` is given).
  * *incomplete: runs without run, clip or metrics at the end. */

@@ -73,6 +73,17 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	if (!rc && cam < 0)
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s has no camera path '%s' any more", sc->path,
 			      sc->cameras[r->camera].name);
+	/* the inputs the sweep was resolved from, by content: a run of an edited scene (or asset) is never mixed into a
+	 * sweep of the old one (issue 31.4) */
+	char digest[SCENE_DIGEST_HEX > COLOUR_DIGEST_HEX ? SCENE_DIGEST_HEX : COLOUR_DIGEST_HEX];
+	if (!rc) {
+		scene_digest(scn, digest);
+		if (strcmp(digest, sc->digest))
+			rc = tl_error(err, err_size, TL_ERR_INPUT,
+				      "%s or one of its assets changed since the sweep was resolved (content digest %s, the sweep's "
+				      "%s): start a new sweep (another --out) for the changed scene",
+				      sc->path, digest, sc->digest[0] ? sc->digest : "none");
+	}
 	colour_desc cd = {.config_path = s->ocio_config[0] ? s->ocio_config : NULL, .display = s->display[0] ? s->display : NULL,
 			  .view = s->view[0] ? s->view : NULL};
 	if (!rc)
@@ -80,6 +91,14 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	if (!rc && strcmp(colour_name(col), s->display_transform))
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "the display transform is now '%s', the sweep's is '%s'",
 			      colour_name(col), s->display_transform);
+	if (!rc) {
+		colour_digest(col, digest);
+		if (strcmp(digest, s->colour_digest))
+			rc = tl_error(err, err_size, TL_ERR_INPUT,
+				      "the OpenColorIO config or one of its LUTs changed since the sweep was resolved (content "
+				      "digest %s, the sweep's %s): start a new sweep (another --out)",
+				      digest, s->colour_digest[0] ? s->colour_digest : "none");
+	}
 	vkdev_desc dd = {.device = s->device[0] ? s->device : NULL, .validation = s->validation};
 	if (!rc && vkdev_create(&dd, &dev, err, err_size))
 		rc = TL_ERR_VULKAN;
@@ -116,7 +135,11 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 	sweep_run_path(s, dir, &r, SWEEP_PATH_RUN, run_dir, sizeof run_dir);
 	sweep_run_path(s, dir, &r, SWEEP_PATH_CLIP, clip, sizeof clip);
 	sweep_run_path(s, dir, &r, SWEEP_PATH_METRICS, metrics, sizeof metrics);
-	sweep_run_status(s, dir, &r, &st);
+	char why[1024];
+	sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
+	if (st.damaged) /* never re-rendered behind the user's back, never read: the sweep lists it (issue 31.8) */
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s (a damaged run: 'taslab sweep %s/sweep.json --redo-damaged' "
+			        "renders it again)", why, dir);
 	int rc = TL_OK;
 	double t0 = tl_clock_s();
 	if (!st.run) {
@@ -139,7 +162,9 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 	if (st.metrics)
 		return TL_OK;
 	sweep_run_at(s, r.ref_index, &ref);
-	sweep_run_status(s, dir, &ref, &ref_st);
+	sweep_run_status_checked(s, dir, &ref, &ref_st, why, sizeof why);
+	if (ref_st.damaged)
+		return tl_error(err, err_size, TL_ERR_INPUT, "its ref run is damaged: %s", why);
 	if (!ref_st.run) {
 		*deferred = true; /* the ref run is not complete yet: compared later (local runner or report job) */
 		fprintf(stderr, "taslab sweep: %s: the ref run is not complete yet; its metrics are computed later\n", run_dir);
@@ -297,10 +322,16 @@ int cli_sweep_local(const sweep_spec *s, const char *dir, unsigned jobs, bool qu
 	for (size_t i = 0; i < n; i++) {
 		sweep_run r;
 		sweep_status st;
+		char why[1024];
 		sweep_run_at(s, i, &r);
-		sweep_run_status(s, dir, &r, &st);
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
 		if (st.run && st.clip && st.metrics) {
 			done_runs++;
+			continue;
+		}
+		if (st.damaged) { /* listed once by the sweep (cmd_sweep.c): failed, not retried behind the user's back */
+			failed[i] = true;
+			failed_runs++;
 			continue;
 		}
 		queue[qtail++] = i;

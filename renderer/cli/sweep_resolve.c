@@ -156,6 +156,7 @@ static int resolve_scene(const sweep_request *r, size_t i, sweep_spec *s, char *
 		goto done;
 	}
 	snprintf(sc->name, sizeof sc->name, "%s", scn->name);
+	scene_digest(scn, sc->digest); /* the sweep's identity holds the scene's content, not only its path (31.4) */
 	for (size_t q = 0; q < i; q++)
 		if (!strcmp(s->scenes[q].name, sc->name)) {
 			rc = tl_error(err, err_size, TL_ERR_ARG, "scenes: scene '%s' is listed twice", sc->name);
@@ -366,6 +367,7 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	if ((rc = colour_create(&cd, &col, err, err_size)))
 		return rc;
 	snprintf(s->display_transform, sizeof s->display_transform, "%s", colour_name(col));
+	colour_digest(col, s->colour_digest);
 	colour_destroy(&col);
 	return TL_OK;
 }

@@ -50,9 +50,14 @@ static int split_words(const char *s, char *buf, size_t buf_size, char **words, 
 	return TL_OK;
 }
 
-/* Shell single-quoting for the batch scripts. */
+/* Shell single-quoting for the batch scripts and the dry run's sbatch command lines: inside '…' the shell expands
+ * nothing, and a ' is written as '\''. Words of only safe characters are written as they are. */
 static void sq(FILE *f, const char *s)
 {
+	if (*s && strspn(s, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-+=.,:/@%") == strlen(s)) {
+		fputs(s, f);
+		return;
+	}
 	fputc('\'', f);
 	for (; *s; s++)
 		if (*s == '\'')
@@ -60,6 +65,45 @@ static void sq(FILE *f, const char *s)
 		else
 			fputc(*s, f);
 	fputc('\'', f);
+}
+
+/* A path that will be written into a batch script or a #SBATCH-style option: control characters are refused (issue
+ * 31.2: a newline in the sweep folder's path, written into `#SBATCH --output=…`, ran the rest of the line as a command
+ * when the script was run). */
+static int script_path_ok(const char *what, const char *path, char *err, size_t err_size)
+{
+	for (const unsigned char *p = (const unsigned char *)path; *p; p++)
+		if (*p < 0x20 || *p == 0x7f)
+			return tl_error(err, err_size, TL_ERR_ARG,
+					"%s holds a control character (0x%02x at byte %zu): it would be written into the Slurm "
+					"batch scripts; use a path without one",
+					what, *p, (size_t)(p - (const unsigned char *)path));
+	return TL_OK;
+}
+
+int cli_sweep_slurm_check(const char *dir, char *err, size_t err_size)
+{
+	char self[TL_PATH_MAX], cwd[TL_PATH_MAX];
+	int rc = script_path_ok("the sweep folder's path", dir, err, err_size);
+	if (!rc && dir[0] != '/' && getcwd(cwd, sizeof cwd))
+		rc = script_path_ok("the current folder's path (the sweep folder is relative to it)", cwd, err, err_size);
+	if (!rc)
+		rc = cli_sweep_self(self, sizeof self, err, err_size);
+	if (!rc)
+		rc = script_path_ok("the taslab binary's path", self, err, err_size);
+	return rc;
+}
+
+/* sbatch's --output pattern for `path`: a '%' of the path is written "%%" (Slurm's filename pattern). */
+static void output_opt(char *out, size_t n, const char *dir, const char *file)
+{
+	size_t len = (size_t)snprintf(out, n, "--output=");
+	for (const char *p = dir; *p && len + 3 < n; p++) {
+		if (*p == '%')
+			out[len++] = '%';
+		out[len++] = *p;
+	}
+	snprintf(out + len, n - len, "/slurm/logs/%s", file);
 }
 
 /* Runs argv, returns its exit status; stdout into out (first line). */
@@ -109,9 +153,12 @@ static int write_script(const char *path, const char *kind, const char *self, co
 	if (rc)
 		return rc;
 	FILE *f = a.f;
+	(void)dir;
+	/* No path in a comment or #SBATCH line (the log files' --output is an sbatch argument): every path in the script
+	 * is a single-quoted shell word. */
 	fprintf(f, "#!/bin/bash\n# taslab sweep: %s (written by 'taslab sweep --slurm'; DESIGN section 9)\n", kind);
 	if (!strcmp(kind, "runs")) {
-		fprintf(f, "#SBATCH --job-name=taslab-sweep\n#SBATCH --output=%s/slurm/logs/run-%%A_%%a.out\n", dir);
+		fprintf(f, "#SBATCH --job-name=taslab-sweep\n");
 		fprintf(f, "# one array task per run: render + clip + metrics of run $SLURM_ARRAY_TASK_ID of the plan\n");
 		fprintf(f, "exec ");
 		sq(f, self);
@@ -119,7 +166,7 @@ static int write_script(const char *path, const char *kind, const char *self, co
 		sq(f, body_arg);
 		fprintf(f, " --task \"$SLURM_ARRAY_TASK_ID\"\n");
 	} else {
-		fprintf(f, "#SBATCH --job-name=taslab-report\n#SBATCH --output=%s/slurm/logs/report-%%j.out\n", dir);
+		fprintf(f, "#SBATCH --job-name=taslab-report\n");
 		fprintf(f, "# after the runs (afterany): missing comparisons, summary.csv, table1.md, report/index.html\n");
 		fprintf(f, "exec ");
 		sq(f, self);
@@ -134,7 +181,9 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 		    size_t err_size)
 {
 	char self[TL_PATH_MAX], adir[TL_PATH_MAX], path[TL_PATH_MAX], runs_sh[TL_PATH_MAX], report_sh[TL_PATH_MAX];
-	int rc = cli_sweep_self(self, sizeof self, err, err_size);
+	int rc = cli_sweep_slurm_check(dir, err, err_size);
+	if (!rc)
+		rc = cli_sweep_self(self, sizeof self, err, err_size);
 	if (rc)
 		return rc;
 	char *abs = realpath(dir, NULL);
@@ -142,6 +191,11 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", dir, strerror(errno));
 	snprintf(adir, sizeof adir, "%s", abs);
 	free(abs);
+	if ((rc = script_path_ok("the sweep folder's path", adir, err, err_size)))
+		return rc;
+	char run_out[TL_PATH_MAX + 64], report_out[TL_PATH_MAX + 64];
+	output_opt(run_out, sizeof run_out, adir, "run-%A_%a.out");
+	output_opt(report_out, sizeof report_out, adir, "report-%j.out");
 	/* the array: incomplete runs only (a sweep started locally finishes on the cluster) */
 	size_t n = sweep_run_count(s), todo = 0;
 	size_t cap = 16 * n + 64;
@@ -149,18 +203,33 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 	if (!array)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	size_t len = 0;
+	/* (damaged runs, listed by the sweep, are left out: --redo-damaged has dropped their manifests when asked) */
+	char *todo_run = calloc(n + 1, 1);
+	if (!todo_run) {
+		free(array);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+	for (size_t i = 0; i < n; i++) {
+		sweep_run r;
+		sweep_status st;
+		char why[16];
+		sweep_run_at(s, i, &r);
+		sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
+		todo_run[i] = !st.damaged && !(st.run && st.clip && st.metrics);
+	}
 	for (size_t i = 0; i < n;) {
-		if (sweep_run_complete(s, dir, i)) {
+		if (!todo_run[i]) {
 			i++;
 			continue;
 		}
 		size_t j = i + 1; /* a range of consecutive incomplete runs */
-		while (j < n && !sweep_run_complete(s, dir, j))
+		while (j < n && todo_run[j])
 			j++;
 		len += (size_t)snprintf(array + len, cap - len, j - i > 1 ? "%s%zu-%zu" : "%s%zu", len ? "," : "", i, j - 1);
 		todo += j - i;
 		i = j;
 	}
+	free(todo_run);
 	char words_buf[4096];
 	char *words[MAX_ARGS];
 	size_t nw = 0;
@@ -189,6 +258,7 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 	argv[a++] = "sbatch";
 	argv[a++] = "--parsable";
 	argv[a++] = array_opt;
+	argv[a++] = run_out;
 	for (size_t k = 0; k < nw; k++)
 		argv[a++] = words[k];
 	argv[a++] = runs_sh;
@@ -202,16 +272,24 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 				free(text);
 			}
 		}
+		/* shell-quoted, so the lines can be pasted into a shell as they are (issue 31.9) */
 		printf("# ---- submission (%zu of %zu runs)\n", todo, n);
 		if (todo)
-			for (size_t k = 0; k < a; k++)
-				printf("%s%s", k ? " " : "", argv[k]);
+			for (size_t k = 0; k < a; k++) {
+				fputs(k ? " " : "", stdout);
+				sq(stdout, argv[k]);
+			}
 		else
 			printf("# nothing to render: every run is complete");
-		printf("\nsbatch --parsable%s", todo ? " --dependency=afterany:<JOBID>" : "");
-		for (size_t k = 0; k < nw; k++)
-			printf(" %s", words[k]);
-		printf(" %s\n", report_sh);
+		printf("\nsbatch --parsable%s ", todo ? " --dependency=afterany:\"$JOBID\"" : "");
+		sq(stdout, report_out);
+		for (size_t k = 0; k < nw; k++) {
+			fputc(' ', stdout);
+			sq(stdout, words[k]);
+		}
+		fputc(' ', stdout);
+		sq(stdout, report_sh);
+		fputc('\n', stdout);
 		free(array);
 		return TL_OK;
 	}
@@ -222,6 +300,19 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 			return rc;
 		}
 		snprintf(jobid, sizeof jobid, "%.*s", (int)strcspn(out, ";"), out); /* "ID" or "ID;cluster" */
+		/* the id goes into the report job's --dependency: digits only (issue 31.9) */
+		if (!jobid[0] || strspn(jobid, "0123456789") != strlen(jobid) || strcspn(out, ";") >= sizeof jobid) {
+			char shown[80];
+			size_t k = 0;
+			for (; out[k] && k < sizeof shown - 1 && k < 60; k++)
+				shown[k] = (unsigned char)out[k] < 0x20 || out[k] == 0x7f ? '?' : out[k];
+			shown[k] = 0;
+			free(array);
+			return tl_error(err, err_size, TL_ERR_OUTPUT,
+					"sbatch printed '%s', not a job id (digits, with --parsable): the array may be submitted; "
+					"check squeue before submitting again",
+					shown);
+		}
 		fprintf(stderr, "taslab sweep: submitted %zu run(s) as Slurm job array %s\n", todo, jobid);
 	}
 	a = 0;
@@ -231,6 +322,7 @@ int cli_sweep_slurm(const sweep_spec *s, const char *dir, const char *slurm_opts
 		snprintf(dep, sizeof dep, "--dependency=afterany:%s", jobid);
 		argv[a++] = dep;
 	}
+	argv[a++] = report_out;
 	for (size_t k = 0; k < nw; k++)
 		argv[a++] = words[k];
 	argv[a++] = report_sh;

@@ -43,7 +43,14 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 	char api[32];
 	snprintf(api, sizeof api, "%u.%u.%u", VK_API_VERSION_MAJOR(d->dev->props.apiVersion),
 		 VK_API_VERSION_MINOR(d->dev->props.apiVersion), VK_API_VERSION_PATCH(d->dev->props.apiVersion));
+	char scene_hex[SCENE_DIGEST_HEX], colour_hex[COLOUR_DIGEST_HEX];
+	scene_digest(scn, scene_hex);
+	colour_hex[0] = 0;
+	if (d->colour)
+		colour_digest(d->colour, colour_hex);
 	run_info info = {
+		.scene_digest = scene_hex,
+		.colour_digest = colour_hex[0] ? colour_hex : NULL,
 		.scene_name = scn->name,
 		.scene_path = d->scene_path,
 		.camera = scn->cameras[d->camera].name,

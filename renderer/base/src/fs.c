@@ -29,8 +29,10 @@ int tl_mkdirs(const char *path, char *err, size_t err_size)
 				return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot create folder: %s (choose a writable --out)",
 						buf, strerror(errno));
 			struct stat sb;
+			/* a file, /dev/null, a FIFO where a folder is asked for: the caller's choice, so bad input (exit 2,
+			 * issue 31.9) */
 			if (stat(buf, &sb) != 0 || !S_ISDIR(sb.st_mode))
-				return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: exists and is not a folder (choose another --out)",
+				return tl_error(err, err_size, TL_ERR_ARG, "%s: exists and is not a folder (choose another --out)",
 						buf);
 			*p = c;
 			if (!c)

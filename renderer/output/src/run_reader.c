@@ -41,6 +41,8 @@ int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_si
 	}
 	copy_str(in, "scene", m->scene, sizeof m->scene);
 	copy_str(in, "scene_path", m->scene_path, sizeof m->scene_path);
+	copy_str(in, "scene_digest", m->scene_digest, sizeof m->scene_digest);
+	copy_str(in, "colour_digest", m->colour_digest, sizeof m->colour_digest);
 	copy_str(in, "camera", m->camera, sizeof m->camera);
 	copy_str(in, "camera_motion", m->camera_motion, sizeof m->camera_motion);
 	copy_str(in, "method", m->method, sizeof m->method);
@@ -83,6 +85,53 @@ static long frame_number(const char *name, const char *ext)
 	return strtol(name, NULL, 10);
 }
 
+static uint32_t be32(const unsigned char *p) { return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]; }
+static int32_t le32(const unsigned char *p) { return (int32_t)((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24); }
+
+/* The pixel size a frame file declares, from its header alone (cheap enough for every frame of a run): a PNG's IHDR
+ * (PNG spec 11.2.2: the first chunk, width and height big-endian), an OpenEXR's dataWindow attribute (OpenEXR file
+ * layout: magic 76 2f 31 01, version, then name\0 type\0 int32 size, value ...; box2i = xMin yMin xMax yMax). 0 when
+ * it declares one, -1 when the header cannot be read. */
+static int frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h)
+{
+	unsigned char b[4096];
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return -1;
+	size_t n = fread(b, 1, sizeof b, f);
+	fclose(f);
+	if (!exr) {
+		static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+		if (n < 24 || memcmp(b, sig, 8) || memcmp(b + 12, "IHDR", 4))
+			return -1;
+		*w = be32(b + 16), *h = be32(b + 20);
+		return 0;
+	}
+	if (n < 8 || b[0] != 0x76 || b[1] != 0x2f || b[2] != 0x31 || b[3] != 0x01)
+		return -1;
+	for (size_t i = 8; i < n && b[i];) {
+		const unsigned char *name = b + i, *nul = memchr(name, 0, n - i);
+		if (!nul)
+			return -1;
+		const unsigned char *type = nul + 1, *tnul = type < b + n ? memchr(type, 0, (size_t)(b + n - type)) : NULL;
+		if (!tnul || tnul + 5 > b + n)
+			return -1;
+		int32_t size = le32(tnul + 1);
+		const unsigned char *value = tnul + 5;
+		if (size < 0 || value + size > b + n)
+			return -1;
+		if (!strcmp((const char *)name, "dataWindow") && !strcmp((const char *)type, "box2i") && size == 16) {
+			int64_t x0 = le32(value), y0 = le32(value + 4), x1 = le32(value + 8), y1 = le32(value + 12);
+			if (x1 < x0 || y1 < y0)
+				return -1;
+			*w = (uint32_t)(x1 - x0 + 1), *h = (uint32_t)(y1 - y0 + 1);
+			return 0;
+		}
+		i = (size_t)(value + size - b);
+	}
+	return -1;
+}
+
 int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size)
 {
 	char path[TL_PATH_MAX];
@@ -116,6 +165,16 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 				      !strcmp(ext, "png") && !m->png   ? "; the run was rendered with --no-png"
 				      : !strcmp(ext, "exr") && !m->exr ? "; the run was rendered with --no-exr"
 								       : "; render the run again");
+	/* every frame of the manifest's size: a frame copied in from another run is not one of this run's (issue 31.8) */
+	for (size_t i = 0; !rc && i < count; i++) {
+		char f[TL_PATH_MAX + 32];
+		uint32_t w = 0, h = 0;
+		snprintf(f, sizeof f, "%s/%06zu.%s", path, m->first_frame + i, ext);
+		/* (a header that does not parse is left to the image reader, whose message says what is wrong with it) */
+		if (!frame_file_size(f, !strcmp(ext, "exr"), &w, &h) && (w != m->width || h != m->height))
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: size %ux%u differs from the run's %ux%u; render the run again",
+				      f, w, h, m->width, m->height);
+	}
 	free(seen);
 	return rc;
 }
@@ -232,5 +291,17 @@ nomem:
 fail:
 	free(text);
 	run_stats_free(s);
+	return rc;
+}
+
+int run_check(const char *dir, run_manifest *m, char *err, size_t err_size)
+{
+	int rc = run_manifest_read(dir, m, err, err_size);
+	if (!rc && m->png)
+		rc = run_check_frames(dir, m, "png", err, err_size);
+	if (!rc && m->exr)
+		rc = run_check_frames(dir, m, "exr", err, err_size);
+	if (!rc && !m->png && !m->exr)
+		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: the run has no frames (neither PNG nor EXR)", dir);
 	return rc;
 }

@@ -116,8 +116,9 @@ static json_t *inputs_json(const run_info *in)
 	for (size_t i = 0; i < in->derived_count; i++)
 		json_object_set_new(derived, in->derived[i].key, option_json(&in->derived[i]));
 	/* Frames as 64-bit JSON integers: a frame number is a uint32_t (an int turned frames >= 2^31 negative). */
-	return json_pack("{s:s, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
-			 in->scene_name, "scene_path", in->scene_path, "camera", in->camera, "camera_motion",
+	return json_pack("{s:s, s:s?, s:s?, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
+			 in->scene_name, "scene_digest", in->scene_digest, "colour_digest", in->colour_digest, "scene_path",
+			 in->scene_path, "camera", in->camera, "camera_motion",
 			 in->camera_motion, "method", in->method, "variant", in->variant, "threshold",
 			 isfinite(in->threshold) ? json_real(in->threshold) : json_null(), "period",
 			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "method_derived", derived, "frames",

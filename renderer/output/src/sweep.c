@@ -9,8 +9,10 @@
 #include <string.h>
 #include <strings.h>
 
+#include "taslab/run.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
+#include "taslab/tl_parse.h"
 #include "toml_json.h"
 
 /* ------------------------------------------------------------------ helpers */
@@ -130,22 +132,29 @@ static int get_bool(const ctx *c, const char *key, json_t *v, bool *out)
 	return TL_OK;
 }
 
+/* "WxH" (the command line's parser, tl_parse.h: nothing wraps) or [W, H]. */
 static int get_size(const ctx *c, const char *key, json_t *v, uint32_t *w, uint32_t *h)
 {
-	if (json_is_string(v)) {
-		const char *s = json_string_value(v);
-		unsigned a, b;
-		char x, tail;
-		if (sscanf(s, "%u%c%u%c", &a, &x, &b, &tail) == 3 && (x == 'x' || x == 'X') && s[0] >= '0' && s[0] <= '9' &&
-		    a >= 1 && b >= 1 && a <= 16384 && b <= 16384 && !strchr(s, '+') && !strchr(s, ' ')) {
-			*w = a, *h = b;
-			return TL_OK;
-		}
-	} else if (json_is_array(v) && json_array_size(v) == 2) {
-		int rc = get_uint(c, key, json_array_get(v, 0), 1, 16384, w);
-		return rc ? rc : get_uint(c, key, json_array_get(v, 1), 1, 16384, h);
+	char why[256];
+	if (json_is_string(v) && !tl_parse_size(json_string_value(v), w, h, why, sizeof why))
+		return TL_OK;
+	if (json_is_array(v) && json_array_size(v) == 2) {
+		int rc = get_uint(c, key, json_array_get(v, 0), 1, TL_SIZE_MAX, w);
+		return rc ? rc : get_uint(c, key, json_array_get(v, 1), 1, TL_SIZE_MAX, h);
 	}
-	return bad(c, key, "must be \"WxH\" or [W, H] with each 1..16384");
+	return bad(c, key, "must be \"WxH\" or [W, H] with each 1..%u", TL_SIZE_MAX);
+}
+
+/* "A:B", "A", ":B" or "A:", checked as `--frames` checks it (tl_parse.h): a range the resolver will accept. */
+static int get_frames(const ctx *c, const char *key, json_t *v, char *dst, size_t n)
+{
+	int rc = get_string(c, key, v, dst, n);
+	uint32_t a, b = TL_FRAME_MAX;
+	bool given;
+	char why[256], pv[80];
+	if (!rc && tl_parse_frames(dst, &a, &b, &given, why, sizeof why))
+		rc = bad(c, key, "'%s' %s", printable(dst, pv, sizeof pv), why);
+	return rc;
 }
 
 /* ------------------------------------------------------------------ request */
@@ -219,7 +228,7 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 			else
 				r->period_count = json_array_size(v), r->set |= SWEEP_SET_PERIODS;
 		} else if (!strcmp(key, "frames")) {
-			rc = get_string(&c, key, v, r->frames, sizeof r->frames);
+			rc = get_frames(&c, key, v, r->frames, sizeof r->frames);
 			r->set |= SWEEP_SET_FRAMES;
 		} else if (!strcmp(key, "size")) {
 			rc = get_size(&c, key, v, &r->width, &r->height);
@@ -296,9 +305,9 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 		for (size_t k = 0; k < sc->camera_count; k++)
 			json_array_append_new(cams, json_pack("{s:s, s:s}", "name", sc->cameras[k].name, "motion",
 							      sc->cameras[k].motion));
-		json_array_append_new(scenes, json_pack("{s:s, s:s, s:[i,i], s:f, s:o}", "name", sc->name, "path", sc->path,
-							"frames", (int)sc->first, (int)sc->end, "fps", sc->fps, "cameras",
-							cams));
+		json_array_append_new(scenes, json_pack("{s:s, s:s, s:s, s:[i,i], s:f, s:o}", "name", sc->name, "path", sc->path,
+							"digest", sc->digest, "frames", (int)sc->first, (int)sc->end, "fps",
+							sc->fps, "cameras", cams));
 	}
 	for (size_t i = 0; i < s->variant_count; i++) {
 		const sweep_variant *v = &s->variants[i];
@@ -306,14 +315,25 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 							  "method", v->method, "T", jnum(v->T), "period",
 							  v->period ? json_integer(v->period) : json_null()));
 	}
-	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:b, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
+	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:b, s:s, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
 			      "scenes", scenes, "variants", variants, "size", (int)s->width, (int)s->height, "baseline",
 			      s->baseline, "metrics", s->metrics, "ppd", s->ppd, "device", s->device, "validation",
 			      (int)s->validation, "truth", (int)s->truth, "ocio_config", s->ocio_config, "display", s->display, "view", s->view,
-			      "display_transform", s->display_transform);
+			      "display_transform", s->display_transform, "colour_digest", s->colour_digest);
 	int rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
 	return rc;
+}
+
+bool sweep_file_is_spec(const char *path)
+{
+	json_t *j = NULL;
+	char err[256];
+	if (tl_json_read(path, &j, err, sizeof err))
+		return false;
+	bool spec = json_is_object(j) && json_object_get(j, "taslab_sweep");
+	json_decref(j);
+	return spec;
 }
 
 /* Keys of an object must all be in `known` (NULL-terminated). */
@@ -368,7 +388,7 @@ static int read_variant(const ctx *c, json_t *o, sweep_variant *v)
 
 static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
 {
-	static const char *const keys[] = {"name", "path", "frames", "fps", "cameras", NULL};
+	static const char *const keys[] = {"name", "path", "digest", "frames", "fps", "cameras", NULL};
 	int rc = only_keys(c, "scenes", o, keys);
 	json_t *fr = json_object_get(o, "frames"), *cams = json_object_get(o, "cameras");
 	if (!rc)
@@ -377,8 +397,11 @@ static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
 		rc = bad(c, "scenes.name", "'%s' is not a folder name", sc->name);
 	if (!rc)
 		rc = get_string(c, "scenes.path", json_object_get(o, "path"), sc->path, sizeof sc->path);
-	if (!rc && (json_array_size(fr) != 2 || get_uint(c, "scenes.frames", json_array_get(fr, 0), 0, 1 << 30, &sc->first) ||
-		    get_uint(c, "scenes.frames", json_array_get(fr, 1), 1, 1 << 30, &sc->end) || sc->end <= sc->first))
+	/* a sweep.json made before digests were recorded has none: "" (it resumes only as a different sweep) */
+	if (!rc && json_object_get(o, "digest"))
+		rc = get_string_or_empty(c, "scenes.digest", json_object_get(o, "digest"), sc->digest, sizeof sc->digest);
+	if (!rc && (json_array_size(fr) != 2 || get_uint(c, "scenes.frames", json_array_get(fr, 0), 0, TL_FRAME_MAX - 1, &sc->first) ||
+		    get_uint(c, "scenes.frames", json_array_get(fr, 1), 1, TL_FRAME_MAX, &sc->end) || sc->end <= sc->first))
 		rc = bad(c, "scenes.frames", "must be [first, end] with first < end");
 	if (!rc)
 		rc = get_number(c, "scenes.fps", json_object_get(o, "fps"), 1, 1000, &sc->fps);
@@ -415,7 +438,7 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	ctx c = {path, err, err_size};
 	static const char *const keys[] = {"taslab_sweep", "scenes", "variants", "size", "baseline", "metrics", "ppd",
 					   "device", "validation", "truth", "ocio_config", "display", "view",
-					   "display_transform", NULL};
+					   "display_transform", "colour_digest", NULL};
 	json_t *scenes = json_object_get(j, "scenes"), *variants = json_object_get(j, "variants");
 	if (!json_is_object(j) || json_integer_value(json_object_get(j, "taslab_sweep")) != 1)
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab sweep.json (no \"taslab_sweep\": 1)", path);
@@ -475,6 +498,9 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	if (!rc)
 		rc = get_string(&c, "display_transform", json_object_get(j, "display_transform"), s->display_transform,
 				sizeof s->display_transform);
+	if (!rc && json_object_get(j, "colour_digest"))
+		rc = get_string_or_empty(&c, "colour_digest", json_object_get(j, "colour_digest"), s->colour_digest,
+					 sizeof s->colour_digest);
 	json_decref(j);
 	return rc;
 }
@@ -503,6 +529,9 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 			return differ(what, n, "scene %s (%s) vs %s (%s)", x->name, x->path, y->name, y->path);
 		if (x->first != y->first || x->end != y->end)
 			return differ(what, n, "%s: frames %u:%u vs %u:%u", x->name, x->first, x->end, y->first, y->end);
+		if (strcmp(x->digest, y->digest)) /* the scene file or one of its assets changed (issue 31.4) */
+			return differ(what, n, "%s: the scene file or its assets changed (content digest %s vs %s)", x->name,
+				      x->digest[0] ? x->digest : "none", y->digest[0] ? y->digest : "none");
 		if (x->fps != y->fps)
 			return differ(what, n, "%s: fps %g vs %g", x->name, x->fps, y->fps);
 		if (x->camera_count != y->camera_count)
@@ -532,6 +561,9 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 	if (strcmp(a->display_transform, b->display_transform) || strcmp(a->ocio_config, b->ocio_config) ||
 	    strcmp(a->display, b->display) || strcmp(a->view, b->view))
 		return differ(what, n, "display transform %s vs %s", a->display_transform, b->display_transform);
+	if (strcmp(a->colour_digest, b->colour_digest))
+		return differ(what, n, "the OpenColorIO config or one of its LUTs changed (content digest %s vs %s)",
+			      a->colour_digest[0] ? a->colour_digest : "none", b->colour_digest[0] ? b->colour_digest : "none");
 	return 0;
 }
 
@@ -606,14 +638,48 @@ void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, 
 	sweep_run_path(s, dir, r, SWEEP_PATH_METRICS, p, sizeof p);
 	snprintf(q, sizeof q, "%s/summary.json", p);
 	st->metrics = r->is_ref ? st->run : tl_is_file(q);
+	st->damaged = false;
+}
+
+void sweep_run_status_checked(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st, char *why,
+			      size_t why_size)
+{
+	sweep_run_status(s, dir, r, st);
+	if (why_size)
+		why[0] = 0;
+	if (!st->run)
+		return;
+	char p[TL_PATH_MAX];
+	run_manifest m;
+	sweep_run_path(s, dir, r, SWEEP_PATH_RUN, p, sizeof p);
+	const sweep_scene *sc = &s->scenes[r->scene];
+	const sweep_variant *v = &s->variants[r->variant];
+	int rc = run_check(p, &m, why, why_size);
+	if (!rc && (strcmp(m.variant, v->variant) || strcmp(m.camera, sc->cameras[r->camera].name)))
+		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: the manifest is of %s on '%s', the sweep's run is %s on '%s'", p,
+			      m.variant, m.camera, v->variant, sc->cameras[r->camera].name);
+	/* made from other inputs than the sweep's: the scene, an asset, the config or a LUT changed in between (31.4) */
+	if (!rc && (strcmp(m.scene_digest, sc->digest) || strcmp(m.colour_digest, s->colour_digest)))
+		rc = tl_error(why, why_size, TL_ERR_INPUT,
+			      "%s: made from other inputs (scene digest %s, colour digest %s; the sweep's: %s, %s)", p,
+			      m.scene_digest[0] ? m.scene_digest : "none", m.colour_digest[0] ? m.colour_digest : "none",
+			      sc->digest[0] ? sc->digest : "none", s->colour_digest[0] ? s->colour_digest : "none");
+	if (!rc && (m.first_frame != sc->first || m.last_frame + 1 != sc->end || m.width != s->width || m.height != s->height))
+		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: frames %u..%u at %ux%u, the sweep's are %u..%u at %ux%u", p,
+			      m.first_frame, m.last_frame, m.width, m.height, sc->first, sc->end - 1, s->width, s->height);
+	if (rc) {
+		st->damaged = true;
+		st->run = st->clip = st->metrics = false;
+	}
 }
 
 bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index)
 {
 	sweep_run r;
 	sweep_status st;
+	char why[16];
 	if (sweep_run_at(s, index, &r))
 		return false;
-	sweep_run_status(s, dir, &r, &st);
+	sweep_run_status_checked(s, dir, &r, &st, why, sizeof why);
 	return st.run && st.clip && st.metrics;
 }

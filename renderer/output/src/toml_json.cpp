@@ -7,12 +7,14 @@
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <new>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <toml++/toml.h>
 
@@ -41,6 +43,83 @@ std::string printable(std::string_view s)
 std::string at(const toml::source_region &r)
 {
 	return std::to_string(r.begin.line) + ":" + std::to_string(r.begin.column) + ": ";
+}
+
+/* Bounds the nesting of a document before toml++ sees it (issue 31.1): toml++ builds (and destroys) nested tables
+ * recursively, so `a.a.a…` or `[a.a.a…]` tens of thousands of parts deep — a 100 KB file — overflowed the stack.
+ * Counts, outside strings and comments, the parts of the current table header, of a dotted key and of open inline
+ * arrays and tables: an over-estimate of the depth toml++ would build (a float's '.' counts too), so a document that
+ * passes nests at most `max` levels. Returns the 1-based line where the bound is crossed, 0 when it holds. */
+size_t toml_too_deep(std::string_view s, int max)
+{
+	std::vector<int> base; /* depth at each open '[' / '{' of a value */
+	size_t line = 1;
+	int header = 0, dots = 0, key_dots = 0;
+	bool line_start = true, in_header = false;
+	for (size_t i = 0; i < s.size(); i++) {
+		const char c = s[i];
+		const int depth = (base.empty() ? (in_header ? 0 : header) : base.back()) + key_dots + dots + 1;
+		if (depth > max)
+			return line;
+		if (c == '\n') {
+			line++;
+			dots = 0;
+			if (base.empty())
+				key_dots = 0, in_header = false;
+			line_start = true;
+			continue;
+		}
+		if (c == ' ' || c == '\t' || c == '\r')
+			continue;
+		const bool first = line_start;
+		line_start = false;
+		if (c == '#') { /* a comment: to the end of the line */
+			while (i + 1 < s.size() && s[i + 1] != '\n')
+				i++;
+		} else if (c == '"' || c == '\'') {
+			const bool triple = s.substr(i, 3) == std::string_view(c == '"' ? "\"\"\"" : "'''", 3);
+			i += triple ? 3 : 1;
+			for (; i < s.size(); i++) {
+				if (c == '"' && s[i] == '\\') {
+					i++;
+					continue;
+				}
+				if (s[i] == '\n') {
+					line++;
+					if (!triple)
+						break; /* unterminated: toml++ says so */
+				}
+				if (s[i] == c && (!triple || s.substr(i, 3) == std::string_view(c == '"' ? "\"\"\"" : "'''", 3))) {
+					i += triple ? 2 : 0;
+					break;
+				}
+			}
+		} else if (c == '.') {
+			dots++;
+		} else if (c == '[' && first && base.empty()) { /* [table] or [[array of tables]] */
+			in_header = true;
+			header = 0;
+			dots = key_dots = 0;
+		} else if (c == ']' && in_header && base.empty()) {
+			header = dots + 1;
+			in_header = false;
+			while (i + 1 < s.size() && s[i + 1] == ']')
+				i++;
+		} else if (c == '[' || c == '{') {
+			base.push_back(depth);
+			dots = key_dots = 0;
+		} else if (c == ']' || c == '}') {
+			if (!base.empty())
+				base.pop_back();
+			dots = key_dots = 0;
+		} else if (c == '=') {
+			key_dots += dots;
+			dots = 0;
+		} else if (c == ',') {
+			dots = key_dots = 0;
+		}
+	}
+	return 0;
 }
 
 json_ptr convert(const toml::node &n, int depth, std::string &why);
@@ -101,8 +180,14 @@ json_ptr convert(const toml::node &n, int depth, std::string &why)
 	}
 	if (auto i = n.as_integer())
 		o = json_integer((json_int_t)i->get());
-	else if (auto f = n.as_floating_point())
+	else if (auto f = n.as_floating_point()) {
+		/* jansson has no inf or nan (json_real gives NULL): say so, not "out of memory" (issue 31.5) */
+		if (!std::isfinite(f->get())) {
+			why = at(n.source()) + "inf and nan are not sweep values (give a finite number)";
+			return nullptr;
+		}
 		o = json_real(f->get());
+	}
 	else if (auto b = n.as_boolean())
 		o = json_boolean(b->get());
 	else {
@@ -128,8 +213,13 @@ extern "C" int tl_toml_read(const char *path, json_t **out, char *err, size_t er
 	try {
 		std::string why;
 		try {
-			toml::table doc = toml::parse(std::string_view(text, len), std::string_view(path));
-			*out = convert_table(doc, 0, why).release();
+			if (size_t line = toml_too_deep(std::string_view(text, len), TOML_MAX_DEPTH)) {
+				why = std::to_string(line) + ":1: nested deeper than " + std::to_string(TOML_MAX_DEPTH) +
+				      " levels (dotted keys, table headers or inline arrays and tables; a sweep file needs two)";
+			} else {
+				toml::table doc = toml::parse(std::string_view(text, len), std::string_view(path));
+				*out = convert_table(doc, 0, why).release();
+			}
 		} catch (const toml::parse_error &e) {
 			why = at(e.source()) + printable(e.description());
 		}

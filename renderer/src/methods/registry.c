@@ -225,9 +225,12 @@ int method_config_parse_variant(method_config *c, const char *variant, char *err
 		char *next = strchr(f + 1, '-');
 		if (next)
 			*next = 0;
-		const method_option *o = find_option(m, f + 1, NULL);
+		size_t oi = 0;
+		const method_option *o = find_option(m, f + 1, &oi);
 		if (!o || o->variant != '-')
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s has no '-%s' form", variant, m->name, f + 1);
+		if (c->given & (1u << oi)) /* "tasa-oracle-oracle": one spelling per variant (issue 31.9) */
+			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': '-%s' is given twice", variant, f + 1);
 		if ((rc = method_config_set(c, o->name, NULL, err, err_size)))
 			return rc;
 		if (!next)

@@ -178,6 +178,12 @@ typedef struct scene_camera_state {
 } scene_camera_state;
 
 
+/* A content hash of a loaded scene: its file's bytes and everything loaded from it and its assets (meshes, texels,
+ * materials, placement), as 16 hex digits (FNV-1a 64). Sweeps and run manifests record it, so a run made before the
+ * scene or one of its assets changed is told apart (issue 31.4). */
+#define SCENE_DIGEST_HEX 17
+void scene_digest(const scene *s, char out[SCENE_DIGEST_HEX]);
+
 /* Loads a scene file. `err` receives "FILE: $.json.path: what is wrong" on failure. */
 int scene_load(const char *path, scene **out, char *err, size_t err_size);
 

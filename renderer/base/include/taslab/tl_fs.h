@@ -31,8 +31,8 @@ extern "C" {
 #define TL_PATH_MAX 4096
 
 /* Creates a folder and its parents (mkdir -p) for outputs, and removes the temporary files that killed
- * writers left in it (tl_fs_clean_temps). TL_ERR_OUTPUT when a part exists as a file or cannot be
- * created. */
+ * writers left in it (tl_fs_clean_temps). TL_ERR_ARG when a part exists and is not a folder (a file,
+ * /dev/null), TL_ERR_OUTPUT when one cannot be created. */
 int tl_mkdirs(const char *path, char *err, size_t err_size);
 
 typedef struct tl_atomic {

@@ -60,6 +60,10 @@ const colour_lut *colour_lut_get(const colour *c, size_t i);
 int colour_glsl_rewritten(const colour *c);
 /* Applies the transform in place to `n` RGB(A) float pixels (channels 3 or 4, alpha untouched). */
 void colour_apply(const colour *c, float *pixels, size_t n, int channels);
+/* A content hash of the transform (16 hex digits, FNV-1a 64 over its GLSL and every LUT's values): the same config
+ * path with an edited config or LUT file gives another one (sweeps and run manifests record it; issue 31.4). */
+#define COLOUR_DIGEST_HEX 17
+void colour_digest(const colour *c, char out[COLOUR_DIGEST_HEX]);
 
 #ifdef __cplusplus
 }

@@ -63,6 +63,9 @@ typedef struct run_info {
 	bool write_decisions; /* RUN/decisions/NNNNNN.png from frame_image.decisions */
 	const char *command_line;
 	const char *display_transform; /* colour_name() of the view transform used for the PNGs */
+	/* Content hashes of the inputs (scene_digest: the scene file and its assets; colour_digest: the config and its
+	 * LUTs), recorded so a run made from other inputs than a sweep's is told apart (NULL: not recorded). */
+	const char *scene_digest, *colour_digest;
 } run_info;
 
 typedef struct run_writer run_writer;
@@ -82,6 +85,7 @@ void run_writer_destroy(run_writer **w);
 typedef struct run_manifest {
 	char scene[64], camera[64], camera_motion[16], method[32], variant[64];
 	char scene_path[1024], device[256], display_transform[256];
+	char scene_digest[24], colour_digest[24]; /* "" when the manifest has none (made before they were recorded) */
 	double threshold;          /* NAN when absent */
 	uint32_t period;           /* 0 when absent */
 	uint32_t first_frame, last_frame, width, height;
@@ -96,8 +100,12 @@ typedef struct run_manifest {
 int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_size);
 
 /* Checks that DIR/frames holds exactly the manifest's frames in format `ext` ("png" or "exr"): every
- * frame first..last present, no frame outside that range. TL_ERR_INPUT naming the first problem. */
+ * frame first..last present, no frame outside that range, each of the manifest's size (its header says).
+ * TL_ERR_INPUT naming the first problem. */
 int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size);
+/* Reads the manifest and checks the frames of every format it records (run_check_frames): what each command
+ * that reads a run (clip, tonemap, metrics, sweeps) asks before trusting it. TL_ERR_INPUT naming the first problem. */
+int run_check(const char *dir, run_manifest *m, char *err, size_t err_size);
 
 /* stats.csv as a table of numbers: values[row * cols + col], NAN for empty cells. */
 typedef struct run_stats {

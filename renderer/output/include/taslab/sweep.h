@@ -115,6 +115,7 @@ typedef struct sweep_scene {
 	double fps;
 	sweep_camera cameras[SWEEP_MAX_CAMERAS];
 	size_t camera_count;
+	char digest[24];           /* scene_digest: the file and its assets, when the sweep was resolved (issue 31.4) */
 } sweep_scene;
 
 typedef struct sweep_variant {
@@ -139,11 +140,15 @@ typedef struct sweep_spec {
 	bool truth;                     /* variants whose method has --truth are rendered with it */
 	char ocio_config[SWEEP_PATH_MAX], display[128], view[128]; /* as given ("" = default) */
 	char display_transform[256];    /* the resolved transform's name (colour_name) */
+	char colour_digest[24];         /* colour_digest: the config and its LUTs, when resolved (issue 31.4) */
 } sweep_spec;
 
 int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size);
 /* TL_ERR_INPUT naming the file and what is wrong (strict: unknown keys, types, ranges, duplicate ids). */
 int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size);
+/* Whether `path` holds a JSON object with a "taslab_sweep" key: a resolved sweep.json (valid or not), so a failure of
+ * sweep_spec_read is the reason to report, not what the request reader says of it (issue 31.5). */
+bool sweep_file_is_spec(const char *path);
 /* 0 when a and b describe the same sweep (same runs, same rendering and metric settings); otherwise 1 with the
  * first difference in `what` ("variants: tfr@8 vs tfr@16"). */
 int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t what_size);
@@ -173,12 +178,20 @@ typedef enum sweep_path_kind {
 void sweep_run_path(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_path_kind kind, char *out,
 		    size_t out_size);
 
-/* What exists of a run: the run is complete (manifest.json), its clip, its metrics (summary.json). */
+/* What exists of a run: the run is complete (manifest.json), its clip, its metrics (summary.json); `damaged` only
+ * from sweep_run_status_checked. */
 typedef struct sweep_status {
 	bool run, clip, metrics;
+	bool damaged; /* a manifest, but the run does not match it or the spec (then `run` is false) */
 } sweep_status;
+/* Cheap (file existence only): for the job runner's polling. */
 void sweep_run_status(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st);
-/* Run `index` of the plan has everything: run, clip and metrics. */
+/* The same, and a run with a manifest is checked against it (run_check: missing, extra, mixed-size frames) and
+ * against the spec (variant, frames, size): one that fails is damaged — not run, its reason in `why` (issue 31.8).
+ * Reads every frame's header: once per run and step, not in a polling loop. */
+void sweep_run_status_checked(const sweep_spec *s, const char *dir, const sweep_run *r, sweep_status *st, char *why,
+			      size_t why_size);
+/* Run `index` of the plan has everything: run (checked), clip and metrics. */
 bool sweep_run_complete(const sweep_spec *s, const char *dir, size_t index);
 
 #ifdef __cplusplus
