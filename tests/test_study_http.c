@@ -3,9 +3,8 @@
  *  - slow clients (31.3): 300 connections from 10 loopback addresses (under the per-address cap), each trickling
  *    one header byte a second and reconnecting when closed, while a participant's requests must each be answered
  *    within a second; a trickled head or body is closed at its deadline (test_slow_clients);
- *  - framing (31.9): `Content-Length: -1` gets one 400 (its status line once), a transfer coding other than
- *    "chunked" alone is refused, a chunk size of 2^64-1 or any chunked body past the limit gets 413 at once
- *    (test_hostile_framing).
+ *  - framing (31.9): request bodies with a Transfer-Encoding (another coding, chunked not last, chunked with a chunk
+ *    size of 2^64-1) are refused at their head with one status line, at once (test_hostile_framing).
  * Every client here binds an address of 127.0.0.0/8; counts and times are bounded, and the test stops by itself. */
 #define _DEFAULT_SOURCE /* usleep */
 #include <arpa/inet.h>
@@ -294,10 +293,65 @@ static void test_slow_clients(void **state)
 	sty_close(&s);
 }
 
+/* Occurrences of `needle` in `s`. */
+static int count_of(const char *s, const char *needle)
+{
+	int n = 0;
+	for (const char *p = s; (p = strstr(p, needle)); p += strlen(needle))
+		n++;
+	return n;
+}
+
+/* Issue 31.9: request bodies with a Transfer-Encoding are refused at their head, at once and with one status line:
+ * a coding other than chunked (libmicrohttpd read such a body until the connection closed: no answer), chunked not
+ * last, and chunked itself, whatever chunk size follows (2^64-1 was read for ever). Nothing is stored. */
+static void test_hostile_framing(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_hostile_framing");
+	char code[64], req[1024], resp[8192], err[1024];
+	sty *s = study_of_one(dir, code, sizeof code);
+	sty_server *sv = NULL;
+	sty_server_desc d = {.threads = 2, .log = log_quiet};
+	if (sty_server_start(s, &d, &sv, err, sizeof err))
+		fail_msg("%s", err);
+	int port = sty_server_port(sv);
+	static const struct {
+		const char *head, *body;
+		int status;
+	} cases[] = {
+		{"Transfer-Encoding: gzip, chunked\r\n", "5\r\nhello\r\n0\r\n\r\n", 501},
+		{"Transfer-Encoding: gzip\r\nTransfer-Encoding: chunked\r\n", "5\r\nhello\r\n0\r\n\r\n", 501},
+		{"Transfer-Encoding: chunked, gzip\r\n", "5\r\nhello\r\n0\r\n\r\n", 400},
+		{"Transfer-Encoding: identity\r\n", "{}", 400},
+		{"Transfer-Encoding: chunked\r\n", "ffffffffffffffff\r\nabc", 411},
+		{"Transfer-Encoding: chunked\r\n", "10000000000000000\r\nabc", 411},
+		{"Transfer-Encoding: CHUNKED\r\n", "21\r\n{\"trial\":0,\"answer\":1,\"rt_ms\":5}\r\n0\r\n\r\n", 411},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+		int len = snprintf(req, sizeof req, "POST /api/%s/answer HTTP/1.1\r\nHost: 127.0.0.1\r\n%s\r\n%s", code,
+				   cases[i].head, cases[i].body);
+		double t0 = now_s();
+		int st = request_within(port, req, (size_t)len, 2.0, resp, sizeof resp);
+		double took = now_s() - t0;
+		if (st != cases[i].status || count_of(resp, "HTTP/1.1 ") != 1 || took > 1.0)
+			fail_msg("case %zu (%s): status %d in %.2f s, expected %d at once with one status line:\n%s", i,
+				 cases[i].head, st, took, cases[i].status, resp);
+		assert_non_null(strstr(resp, "{\"error\":"));
+	}
+	/* nothing was stored: the participant is still at trial 0 with no answers */
+	int len = snprintf(req, sizeof req, "GET /api/%s/trial HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n", code);
+	assert_int_equal(request_within(port, req, (size_t)len, 2.0, resp, sizeof resp), 200);
+	assert_non_null(strstr(resp, "\"answered\":0"));
+	sty_server_stop(&sv);
+	sty_close(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_slow_clients),
+		cmocka_unit_test(test_hostile_framing),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -245,6 +245,43 @@ static int framing_ok(const sty_request *rq, uint64_t *length)
 	return !(seen && te);
 }
 
+/* Transfer-Encoding of a request (issue 31.9). libmicrohttpd 0.9.75 decodes "chunked" alone and reads the body of
+ * any other coding until the connection closes, and it checks no chunk size against anything: "gzip, chunked" or a
+ * chunk of 2^64-1 bytes kept a connection reading for ever. Our requests are small JSON bodies that every browser
+ * sends with a Content-Length, so a request with Transfer-Encoding is refused at its head, before any of its body is
+ * read: 400 when chunked is not the final coding (RFC 9112 section 6.3: the length cannot be determined), 501 for a
+ * coding we do not implement (section 6.1), 411 for chunked alone (RFC 9110 section 15.5.12: the server refuses a
+ * request without a defined Content-Length). 0: no Transfer-Encoding. */
+static unsigned transfer_coding_status(const sty_request *rq, const char **why)
+{
+	size_t n;
+	const char *v = header(rq, "Transfer-Encoding", &n);
+	if (!n)
+		return 0;
+	/* the last coding of the last field (RFC 9110 section 5.3: repeated fields are one list, in order) */
+	for (size_t i = 0; i < rq->header_count; i++)
+		if (rq->headers[i].name && !strcasecmp(rq->headers[i].name, "Transfer-Encoding"))
+			v = rq->headers[i].value ? rq->headers[i].value : "";
+	const char *last = strrchr(v, ',');
+	last = last ? last + 1 : v;
+	while (is_ows(*last))
+		last++;
+	size_t len = strlen(last);
+	while (len && is_ows(last[len - 1]))
+		len--;
+	int chunked_last = len == 7 && !strncasecmp(last, "chunked", 7);
+	if (!chunked_last) {
+		*why = "Transfer-Encoding must end with chunked (RFC 9112 section 6.3); send the body with a Content-Length";
+		return 400;
+	}
+	if (n > 1 || last != v + strspn(v, " \t")) {
+		*why = "only the chunked transfer coding is implemented (RFC 9112 section 6.1); send the body with a Content-Length";
+		return 501;
+	}
+	*why = "request bodies need a Content-Length (at most 4096 bytes), not chunked transfer coding";
+	return 411;
+}
+
 /* A 32-hex-digit code (anything else is rejected before touching the database). */
 static int valid_hex32(const char *s, size_t len)
 {
@@ -513,6 +550,13 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 	uint64_t length;
 	if (!framing_ok(rq, &length)) {
 		set_error(r, 400, "conflicting or invalid Content-Length (RFC 7230 section 3.3.3)");
+		r->close = true;
+		return;
+	}
+	const char *why;
+	unsigned te = transfer_coding_status(rq, &why);
+	if (te) {
+		set_error(r, te, why);
 		r->close = true;
 		return;
 	}

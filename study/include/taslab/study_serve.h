@@ -16,7 +16,8 @@
  *   GET  /admin/export.csv, /admin/export-pwcmp.csv   with "Authorization: Bearer <admin token>" (RFC 6750;
  *                                compared in constant time); 401 otherwise. The token is never read from the URL.
  * Framing: conflicting duplicate Content-Length, or Content-Length with Transfer-Encoding -> 400 (RFC 7230
- * section 3.3.3). Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
+ * section 3.3.3); any Transfer-Encoding -> 400 (chunked not last), 501 (another coding) or 411 (chunked: bodies
+ * need a Content-Length), at the head. Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
  * name server paths, go to the log). Each client address may hold at most max_per_client connections, an
  * idle connection is closed after timeout_s, a request must arrive within deadlines however slowly it trickles,
  * and the connections still reading a request are capped, so slow clients cannot lock the others out. */
