@@ -1,7 +1,8 @@
 /* test_clip.c — clips are bit-exact: a rendered run is encoded (lossless VP9, gbrp, WebM) and decoded with
  * libavcodec, and every decoded frame equals its PNG exactly; `taslab tonemap` reproduces the renderer's
  * PNGs within 1 code value (GPU vs CPU OCIO); bad runs fail with one line (nothing from the decoder library) and
- * leave no clip behind; careless inputs and outputs of tonemap and clip (test_careless_outputs). */
+ * leave no clip behind; careless inputs and outputs of tonemap and clip (test_careless_outputs); frames that are
+ * devices, FIFOs, folders or another format (test_not_regular_frames). */
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -275,6 +276,66 @@ static void test_pair(void **state)
 	assert_false(tu_file_exists(p));
 }
 
+/* Runs `cmd` (bounded: `timeout 60`, so a hang fails the test instead of stopping it) and expects exit 2 and one line
+ * containing `needle`. */
+static void expect_one_line(const char *cmd, const char *needle)
+{
+	char c[8400];
+	snprintf(c, sizeof c, "timeout 60 %s", cmd);
+	int st = tu_run(c, out, sizeof out);
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, needle))
+		fail_msg("'%s' gave %d:\n%s(expected exit 2 and one line with '%s')", c, st, out, needle);
+}
+
+/* Issue 31.6: a run frame that is a symlink to /dev/zero made clip and metrics diff spin for ever in OpenImageIO's
+ * format probing. Image files are read only when regular (a device, FIFO or folder is refused at once, never opened
+ * for a decoder), whole and bounded, into memory, with the format the run's manifest gives its frames: a .png frame
+ * that is an EXR is "not a PNG file", not decoded by whichever reader claims it. Also a scene that is /dev/zero and
+ * `report --study /dev/null` say what they are. */
+static void test_not_regular_frames(void **state)
+{
+	(void)state;
+	char cmd[8192], p[4096];
+	const char *dir = tu_tmpdir("clip_not_regular");
+	static const struct {
+		const char *name, *make, *needle;
+	} cases[] = {
+		{"zero", "ln -sf /dev/zero %s/frames/000012.%s", "000012.%s: not a regular file (a device)"},
+		{"fifo", "rm %s/frames/000012.%s && mkfifo %s/frames/000012.%s", "000012.%s: not a regular file (a pipe)"},
+		{"folder", "rm %s/frames/000012.%s && mkdir %s/frames/000012.%s", "000012.%s: not a regular file (a folder)"},
+	};
+	const char *exts[2] = {"png", "exr"};
+	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
+		for (int e = 0; e < 2; e++) {
+			char bad[4200], make[8192], needle[256];
+			snprintf(bad, sizeof bad, "%s/%s_%s", dir, cases[i].name, exts[e]);
+			snprintf(cmd, sizeof cmd, "cp -r %s %s", run, bad);
+			assert_int_equal(system(cmd), 0);
+			snprintf(make, sizeof make, cases[i].make, bad, exts[e], bad, exts[e]);
+			assert_int_equal(system(make), 0);
+			snprintf(needle, sizeof needle, cases[i].needle, exts[e]);
+			if (e == 0) { /* clip reads the PNG frames */
+				snprintf(cmd, sizeof cmd, "%s clip %s --out %s.webm", TASLAB_BINARY, bad, bad);
+				expect_one_line(cmd, needle);
+				snprintf(p, sizeof p, "%s.webm", bad);
+				assert_false(tu_file_exists(p));
+			}
+			snprintf(cmd, sizeof cmd, "%s metrics diff --ref %s --test %s --format %s --out %s.diff", TASLAB_BINARY, run,
+				 bad, exts[e], bad);
+			expect_one_line(cmd, needle);
+		}
+	/* an EXR under a PNG frame's name: the manifest says PNG, so no other decoder is tried */
+	snprintf(cmd, sizeof cmd, "cp -r %s %s/fmt && cp %s/frames/000012.exr %s/fmt/frames/000012.png", run, dir, run, dir);
+	assert_int_equal(system(cmd), 0);
+	snprintf(cmd, sizeof cmd, "%s clip %s/fmt --out %s/fmt.webm", TASLAB_BINARY, dir, dir);
+	expect_one_line(cmd, "000012.png: not a PNG file");
+	/* other inputs that are devices */
+	snprintf(cmd, sizeof cmd, "%s render --scene /dev/zero --size 32x18 --frames 0:1 --out %s/r", TASLAB_BINARY, dir);
+	expect_one_line(cmd, "/dev/zero: not a regular file (a device)");
+	snprintf(cmd, sizeof cmd, "%s report %s --study /dev/null", TASLAB_BINARY, dir);
+	expect_one_line(cmd, "--study /dev/null: not a regular file");
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -283,6 +344,7 @@ int main(void)
 		cmocka_unit_test(test_bad_runs),
 		cmocka_unit_test(test_pair),
 		cmocka_unit_test(test_careless_outputs),
+		cmocka_unit_test(test_not_regular_frames),
 	};
 	return cmocka_run_group_tests(tests, setup, NULL);
 }

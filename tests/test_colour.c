@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "taslab/colour_gpu.h"
 #include "taslab/imageio.h"
@@ -276,12 +277,118 @@ static void test_lut_config(void **state)
 	}
 }
 
+/* Writes `src` (a file of tests/data/ocio_lut) into `dir`, with its line `line` (1-based) replaced by `repl` when
+ * repl is not NULL. */
+static void copy_lut_file(const char *dir, const char *name, int line, const char *repl)
+{
+	char src[4096], dst[4096];
+	snprintf(src, sizeof src, "%s/tests/data/ocio_lut/%s", TASLAB_SOURCE_DIR, name);
+	snprintf(dst, sizeof dst, "%s/%s", dir, name);
+	char *text = tu_read_file(src, NULL);
+	assert_non_null(text);
+	FILE *f = fopen(dst, "w");
+	assert_non_null(f);
+	int n = 1;
+	for (char *p = text; *p;) {
+		char *nl = strchr(p, '\n');
+		size_t len = nl ? (size_t)(nl - p) + 1 : strlen(p);
+		if (n++ == line && repl)
+			fprintf(f, "%s\n", repl);
+		else
+			fwrite(p, 1, len, f);
+		p += len;
+	}
+	fclose(f);
+	free(text);
+}
+
+/* Issue 31.7: a LUT with a NaN or Inf entry is refused with one line naming the entry (OCIO's readers accept them,
+ * and its GPU and CPU paths then differed by up to 148 code values on 41 % of the pixels); `taslab render` with such
+ * a config exits 2 without a run. The message names the file. The same config with finite values passes the GPU = CPU check that render_create
+ * runs on every user config (colour_check_gpu; the LUT views are within 0.01 code values, test_lut_config). */
+static void test_lut_nonfinite(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("colour_nonfinite");
+	char cfg[4096], err[1024], cmd[8192], out[8192], run[4200];
+	snprintf(cfg, sizeof cfg, "%s/config.ocio", dir);
+	/* line 6 of shaper.spi1d is its first value (after 5 lines of header); line 12 of grade.cube is its entry 7 (after
+	 * 4 lines of header; red varies fastest in a .cube) */
+	static const struct {
+		const char *file;
+		int line;
+		const char *value, *want;
+	} cases[] = {
+		{"shaper.spi1d", 6, "nan", "shaper.spi1d: a value of this LUT"},
+		{"shaper.spi1d", 300, "inf", "shaper.spi1d: a value of this LUT"},
+		{"grade.cube", 12, "0.5 nan 0.5", "grade.cube: a value of this LUT"},
+		{"grade.cube", 12, "0.5 0.5 -inf", "grade.cube: a value of this LUT"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+		/* a folder per case: OpenColorIO caches LUT files by path for the life of the process */
+		char sub[4200];
+		snprintf(sub, sizeof sub, "%s/%zu", dir, i);
+		assert_int_equal(mkdir(sub, 0755), 0);
+		snprintf(cfg, sizeof cfg, "%s/config.ocio", sub);
+		copy_lut_file(sub, "config.ocio", 0, NULL);
+		copy_lut_file(sub, "shaper.spi1d", cases[i].line, !strcmp(cases[i].file, "shaper.spi1d") ? cases[i].value : NULL);
+		copy_lut_file(sub, "grade.cube", cases[i].line, !strcmp(cases[i].file, "grade.cube") ? cases[i].value : NULL);
+		colour *c = NULL;
+		colour_desc cd = {.config_path = cfg, .display = "sRGB", .view = "Graded", .ignore_env = 1};
+		if (!colour_create(&cd, &c, err, sizeof err))
+			fail_msg("%s line %d = '%s' was accepted", cases[i].file, cases[i].line, cases[i].value);
+		if (!strstr(err, "not a finite number") || !strstr(err, cases[i].want) || strchr(err, '\n'))
+			fail_msg("%s line %d = '%s': message '%s'", cases[i].file, cases[i].line, cases[i].value, err);
+		assert_null(c);
+	}
+	/* the command line: exit 2, one line, no run folder (the last case's config) */
+	snprintf(run, sizeof run, "%s/run", dir);
+	snprintf(cmd, sizeof cmd,
+		 "%s render --scene calm --camera walk --size 32x18 --frames 0:1 --method ref --ocio-config %s --view Graded "
+		 "--quiet --out %s",
+		 TASLAB_BINARY, cfg, run);
+	int st = tu_run(cmd, out, sizeof out);
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "not a finite number"))
+		fail_msg("%s: exit %d:\n%s", cmd, st, out);
+	assert_false(tu_file_exists(run));
+	/* finite values (a new folder, for the cache): the check passes, and the render runs */
+	char good[4200];
+	snprintf(good, sizeof good, "%s/good", dir);
+	assert_int_equal(mkdir(good, 0755), 0);
+	copy_lut_file(good, "config.ocio", 0, NULL);
+	copy_lut_file(good, "shaper.spi1d", 0, NULL);
+	copy_lut_file(good, "grade.cube", 0, NULL);
+	snprintf(cfg, sizeof cfg, "%s/config.ocio", good);
+	snprintf(cmd, sizeof cmd,
+		 "%s render --scene calm --camera walk --size 32x18 --frames 0:1 --method ref --ocio-config %s --view Graded "
+		 "--quiet --out %s",
+		 TASLAB_BINARY, cfg, run);
+	colour *c = NULL;
+	colour_desc cd = {.config_path = cfg, .display = "sRGB", .view = "Graded", .ignore_env = 1};
+	if (colour_create(&cd, &c, err, sizeof err))
+		fail_msg("%s", err);
+	vkdev *dev = NULL;
+	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	if (vkdev_create(&vd, &dev, err, sizeof err))
+		fail_msg("%s", err);
+	double worst = -1;
+	if (colour_check_gpu(dev, c, &worst, err, sizeof err))
+		fail_msg("%s", err);
+	assert_true(worst >= 0 && worst <= 0.01);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	colour_destroy(&c);
+	if ((st = tu_run(cmd, out, sizeof out)))
+		fail_msg("%s: exit %d:\n%s", cmd, st, out);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_default_gpu_matches_cpu), cmocka_unit_test(test_glsl_rewrite_bit_identical),
 		cmocka_unit_test(test_default_reference_points),
 		cmocka_unit_test(test_user_config),       cmocka_unit_test(test_lut_config),
+		cmocka_unit_test(test_lut_nonfinite),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -235,6 +235,22 @@ static void test_ssim_frame(void **state)
 		if (fabs(got - expect) > 1e-5)
 			fail_msg("%d threads: SSIM %.9f, double precision %.9f (diff %.1e)", threads, got, expect, got - expect);
 	}
+	/* Issue 31.9: an image against itself is exactly 1 (eq. 13 is x/x there; it was 1 +- 1e-9 from rounding), for
+	 * code values and for the non-integer values of tone-mapped EXRs (a fixed pseudo-random image 0..255). */
+	float *n = malloc((size_t)w * h * 3 * sizeof *n);
+	uint32_t seed = 12345;
+	for (size_t i = 0; i < (size_t)w * h * 3; i++) {
+		seed = seed * 1664525u + 1013904223u;
+		n[i] = (float)(seed >> 8) / (float)(1u << 24) * 255.0f;
+	}
+	mtr_image N = {w, h, n};
+	for (int threads = 1; threads <= 3; threads++) {
+		double aa = mtr_ssim(&A, &A, threads), bb = mtr_ssim(&B, &B, threads), nn = mtr_ssim(&N, &N, threads);
+		if (aa != 1.0 || bb != 1.0 || nn != 1.0)
+			fail_msg("%d threads: SSIM of an image with itself 1%+.3e, 1%+.3e, 1%+.3e (noise); expected exactly 1", threads,
+				 aa - 1, bb - 1, nn - 1);
+	}
+	free(n);
 	free(a);
 	free(b);
 }

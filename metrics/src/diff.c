@@ -118,7 +118,7 @@ static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, si
 	*rgb = NULL;
 	if (d->format == MTR_FORMAT_PNG) {
 		uint8_t *px = NULL;
-		if (imageio_read_rgb8(path, w, h, &px, err, err_size)) {
+		if (imageio_read_rgb8_as(path, IMAGEIO_FORMAT_PNG, w, h, &px, err, err_size)) {
 			free(reuse);
 			return -1;
 		}
@@ -134,7 +134,7 @@ static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, si
 	} else {
 		float *px = NULL;
 		free(reuse);
-		if (imageio_read_rgba_float(path, w, h, &px, 1, err, err_size))
+		if (imageio_read_rgba_float_as(path, IMAGEIO_FORMAT_EXR, w, h, &px, 1, err, err_size))
 			return -1;
 		size_t n = (size_t)*w * *h;
 		colour_apply(d->colour, px, n, 4);

@@ -104,6 +104,20 @@ typedef float v8f_u __attribute__((vector_size(32), aligned(4), may_alias));
  * arguments are fine in every clone; flip.c is built with -Wno-psabi, whose note concerns exported ones.) */
 #define SELECT8(c, a, b) ((v8f)(((c) & (v8i)(a)) | (~(c) & (v8i)(b))))
 
+/* tab[idx[i] & 7] in each lane: GCC's __builtin_shuffle (one permute); clang, which builds the libFuzzer harnesses,
+ * has no shuffle with a run-time mask, so lane by lane there (the same values). */
+static inline v8f table8(v8f tab, v8i idx)
+{
+#if defined(__clang__)
+	v8f r;
+	for (int i = 0; i < 8; i++)
+		r[i] = tab[idx[i] & 7];
+	return r;
+#else
+	return __builtin_shuffle(tab, idx);
+#endif
+}
+
 static inline v8f clamp01_8(v8f v)
 {
 	const v8f zero = {0}, one = zero + 1.0f;
@@ -128,7 +142,7 @@ static inline v8f cbrt8(v8f t)
 	p = p * x - 0.014132625423371792f;
 	p = p * x + 0.1271917223930359f;
 	p = p * x + 1.1447142362594604f;
-	return p * __builtin_shuffle(tab, ((u >> 23) - 120) & 7);
+	return p * table8(tab, ((u >> 23) - 120) & 7);
 }
 
 /* CIELAB companding f(t) (colour pipeline, CIELAB): cube root above (6/29)^3, else t / (3 (6/29)^2) + 4/29. */
@@ -157,7 +171,7 @@ static inline void srgb_eotf8(const float *in, float scale, float *out)
 	p = p * t + EOTF_C2;
 	p = p * t + EOTF_C1;
 	p = p * t + EOTF_C0;
-	const v8f hi = p * __builtin_shuffle(tab, ((u >> 23) - 120) & 7);
+	const v8f hi = p * table8(tab, ((u >> 23) - 120) & 7);
 	ST8(out, SELECT8(v <= lin_hi, v * (1.0f / 12.92f), hi));
 }
 

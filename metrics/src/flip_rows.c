@@ -53,9 +53,16 @@ FLIP_TARGET_CLONES void flip_convert_row(const mtr_flip *f, const float *restric
 	uint32_t p = 0;
 	for (; p + 8 <= n; p += 8) {
 		const v8f A = LD8(lin + 3 * p), B = LD8(lin + 3 * p + 8), C = LD8(lin + 3 * p + 16);
+#if defined(__clang__) /* the libFuzzer build: the same permutations with clang's constant-index builtin */
+		(void)mr, (void)mr2, (void)mg, (void)mg2, (void)mb, (void)mb2;
+		const v8f r = __builtin_shufflevector(__builtin_shufflevector(A, B, 0, 3, 6, 9, 12, 15, 0, 0), C, 0, 1, 2, 3, 4, 5, 10, 13);
+		const v8f g = __builtin_shufflevector(__builtin_shufflevector(A, B, 1, 4, 7, 10, 13, 0, 0, 0), C, 0, 1, 2, 3, 4, 8, 11, 14);
+		const v8f b = __builtin_shufflevector(__builtin_shufflevector(A, B, 2, 5, 8, 11, 14, 0, 0, 0), C, 0, 1, 2, 3, 4, 9, 12, 15);
+#else
 		const v8f r = __builtin_shuffle(__builtin_shuffle(A, B, mr), C, mr2);
 		const v8f g = __builtin_shuffle(__builtin_shuffle(A, B, mg), C, mg2);
 		const v8f b = __builtin_shuffle(__builtin_shuffle(A, B, mb), C, mb2);
+#endif
 		ST8(py + p, m0 * r + m1 * g + m2 * b);
 		ST8(pcx + p, m3 * r + m4 * g + m5 * b);
 		ST8(pcz + p, m6 * r + m7 * g + m8 * b);

@@ -69,10 +69,16 @@ static inline double ssim_row(const float *v, size_t owp, uint32_t ow, float *re
 	const float C1 = (0.01f * 255) * (0.01f * 255), C2 = (0.03f * 255) * (0.03f * 255);
 	const float *ma = v, *mb = v + owp, *ess = v + 2 * owp, *eab = v + 3 * owp;
 	for (uint32_t x = 0; x < ow; x++) {
-		/* sigma_a^2 + sigma_b^2 = E[a^2 + b^2] - mu_a^2 - mu_b^2 (centred values) */
-		const float vsum = ess[x] - ma[x] * ma[x] - mb[x] * mb[x], cov = eab[x] - ma[x] * mb[x];
+		/* sigma_a^2 + sigma_b^2 = E[a^2 + b^2] - mu_a^2 - mu_b^2 (centred values), written as
+		 * E[a^2 + b^2] - 2 mu_a mu_b - (mu_a - mu_b)^2, and mu_a^2 + mu_b^2 as 2 mu_a mu_b + (mu_a - mu_b)^2: the same
+		 * values, but for identical images (mu_a = mu_b, E[a^2 + b^2] = 2 E[ab] exactly: doubling commutes with
+		 * rounding) each denominator is then its numerator bit for bit and eq. 13 is exactly 1 (issue 31.9: it was
+		 * 1 +- 2e-10). Eq. 13 is at most 1 (sec. III-B); a rounding above it is clamped. */
+		const float dm = ma[x] - mb[x], dmu = (ma[x] + 128.0f) - (mb[x] + 128.0f);
+		const float vsum = (ess[x] - 2 * (ma[x] * mb[x])) - dm * dm, cov = eab[x] - ma[x] * mb[x];
 		const float ua = ma[x] + 128.0f, ub = mb[x] + 128.0f;
-		srow[x] = ((2 * ua * ub + C1) * (2 * cov + C2)) / ((ua * ua + ub * ub + C1) * (vsum + C2));
+		const float s = ((2 * (ua * ub) + C1) * (2 * cov + C2)) / ((2 * (ua * ub) + dmu * dmu + C1) * (vsum + C2));
+		srow[x] = s < 1.0f ? s : 1.0f;
 	}
 	return mtr_lane_sum(srow, ow);
 }

@@ -441,8 +441,13 @@ static int report_validate(void *opts, cli_ctx *ctx)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 				"--jnd-against: '%s' is not a numeric summary.csv column (e.g. flip_mean, maxrgb_p99, exceed_T)",
 				o->jnd_metric);
-	if (o->study && !tl_is_file(o->study))
-		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--study %s: no such file", o->study);
+	struct stat sb;
+	if (o->study && stat(o->study, &sb))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--study %s: %s", o->study, strerror(errno));
+	if (o->study && !S_ISREG(sb.st_mode))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+				"--study %s: not a regular file (%s); give the study's database (the --db of 'taslab study')",
+				o->study, S_ISDIR(sb.st_mode) ? "a folder" : "a device or pipe");
 	return TL_OK;
 }
 

@@ -106,6 +106,10 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 	}
 	if ((rc = colour_device_create(r->dev, r->colour, &r->colour_dev, err, err_size)))
 		goto fail;
+	/* A user's view transform is checked GPU against CPU before anything is rendered with it (issue 31.7); the
+	 * built-in one is checked by test_colour. */
+	if (colour_config_path(r->colour) && (rc = colour_check_gpu(r->dev, r->colour, NULL, err, err_size)))
+		goto fail;
 	if ((rc = render_upload_scene(r, err, err_size)) || (rc = render_targets_create(r, err, err_size)) ||
 	    (rc = render_descriptors_create(r, err, err_size)) || (rc = render_shadow_init(r, err, err_size)))
 		goto fail;

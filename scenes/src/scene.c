@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "taslab/tl_fs.h"
 
@@ -38,7 +39,8 @@ int scene_load_with(const char *path, const scene_load_desc *desc, scene **out, 
 	char *buf = NULL;
 	size_t len = 0;
 	int rc = tl_read_file(path, 64u << 20, &buf, &len, err, err_size);
-	if (rc == TL_ERR_INPUT && !tl_is_file(path))
+	struct stat sb;
+	if (rc == TL_ERR_INPUT && stat(path, &sb)) /* missing; a device or folder keeps tl_read_file's "not a regular file" */
 		snprintf(err, err_size, "%s: cannot open scene file: %s (built-in scenes are in scenes/; see 'taslab scenes')", path,
 			 strerror(errno ? errno : ENOENT));
 	if (rc) {

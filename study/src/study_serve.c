@@ -1,17 +1,15 @@
-/* study_serve.c — the study web server (study_serve.h). sty_server_handle answers one parsed request (routing,
- * the answer API, clips by opaque name with RFC 7233 ranges, the token-protected exports); the libmicrohttpd
- * callback only collects the request (headers, a body of at most STY_MAX_BODY_B) and sends the response. Keeping
- * the sockets out of the request logic lets tests and the fuzzer (tests/fuzz/fuzz_serve.c) drive all of it. */
+/* study_serve.c — the study web server (study_serve.h), its request logic: sty_server_handle answers one parsed
+ * request (routing, the answer API, clips by opaque name with RFC 7233 ranges, the token-protected exports); the
+ * libmicrohttpd adapter (study_serve_mhd.c) only collects the request (headers, a body of at most STY_MAX_BODY_B)
+ * and sends the response. Keeping the sockets out of the request logic lets tests and the fuzzer
+ * (tests/fuzz/fuzz_serve.c) drive all of it. */
 #define _DEFAULT_SOURCE /* realpath, mkdtemp, strncasecmp */
 #include "taslab/study_serve.h"
 
-#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <jansson.h>
 #include <limits.h>
-#include <microhttpd.h>
-#include <netinet/in.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -23,24 +21,11 @@
 #include <unistd.h>
 
 #include "study_internal.h"
+#include "study_serve_internal.h"
 #include "taslab/tl_fs.h"
 #include "web/study_html.h"
 
-#define MAX_HEADERS 64
 #define LOG_LINES_PER_S 10 /* more log lines than this in one second are counted, not printed */
-
-struct sty_server {
-	sty *study;
-	struct MHD_Daemon *mhd;
-	char root[PATH_MAX]; /* realpath of the stimulus folder */
-	uint16_t port;
-	sty_server_desc desc;
-	pthread_mutex_t log_lock;
-	int starting;        /* while MHD_start_daemon runs, its messages explain a failure: keep the last */
-	char start_msg[256];
-	time_t log_second;
-	unsigned log_count, log_dropped;
-};
 
 /* ------------------------------------------------------------------ log */
 
@@ -52,7 +37,7 @@ static void default_log(void *cls, const char *line)
 
 /* One line to the configured log, at most LOG_LINES_PER_S per second (a flood of bad requests must not become a
  * flood on the terminal). */
-static void sv_log(struct sty_server *sv, const char *fmt, ...)
+void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
 {
 	char line[512];
 	va_list ap;
@@ -92,14 +77,6 @@ static void sv_log(struct sty_server *sv, const char *fmt, ...)
 	if (print)
 		log(sv->desc.log_cls, line);
 	pthread_mutex_unlock(&sv->log_lock);
-}
-
-/* libmicrohttpd's error log (MHD_OPTION_EXTERNAL_LOGGER): through sv_log, one line each. */
-static void mhd_log(void *cls, const char *fmt, va_list ap)
-{
-	char msg[400];
-	vsnprintf(msg, sizeof msg, fmt, ap);
-	sv_log(cls, "%s", msg);
 }
 
 /* ------------------------------------------------------------------ responses */
@@ -147,10 +124,16 @@ static void set_error(sty_response *r, unsigned status, const char *msg)
 	json_decref(j);
 }
 
+void sty_response_error(sty_response *r, unsigned status, const char *msg)
+{
+	resp_init(r);
+	set_error(r, status, msg);
+}
+
 /* A 500: the client learns nothing about the server (paths, SQLite messages); the details go to the log. */
 static void set_internal(struct sty_server *sv, sty_response *r, const sty_request *rq, const char *detail)
 {
-	sv_log(sv, "%s %.40s...: %s", rq->method, rq->path, detail);
+	sty_serve_log(sv, "%s %.40s...: %s", rq->method, rq->path, detail);
 	set_error(r, 500, "internal error");
 }
 
@@ -233,6 +216,43 @@ static int framing_ok(const sty_request *rq, uint64_t *length)
 	size_t te;
 	header(rq, "Transfer-Encoding", &te);
 	return !(seen && te);
+}
+
+/* Transfer-Encoding of a request (issue 31.9). libmicrohttpd 0.9.75 decodes "chunked" alone and reads the body of
+ * any other coding until the connection closes, and it checks no chunk size against anything: "gzip, chunked" or a
+ * chunk of 2^64-1 bytes kept a connection reading for ever. Our requests are small JSON bodies that every browser
+ * sends with a Content-Length, so a request with Transfer-Encoding is refused at its head, before any of its body is
+ * read: 400 when chunked is not the final coding (RFC 9112 section 6.3: the length cannot be determined), 501 for a
+ * coding we do not implement (section 6.1), 411 for chunked alone (RFC 9110 section 15.5.12: the server refuses a
+ * request without a defined Content-Length). 0: no Transfer-Encoding. */
+static unsigned transfer_coding_status(const sty_request *rq, const char **why)
+{
+	size_t n;
+	const char *v = header(rq, "Transfer-Encoding", &n);
+	if (!n)
+		return 0;
+	/* the last coding of the last field (RFC 9110 section 5.3: repeated fields are one list, in order) */
+	for (size_t i = 0; i < rq->header_count; i++)
+		if (rq->headers[i].name && !strcasecmp(rq->headers[i].name, "Transfer-Encoding"))
+			v = rq->headers[i].value ? rq->headers[i].value : "";
+	const char *last = strrchr(v, ',');
+	last = last ? last + 1 : v;
+	while (is_ows(*last))
+		last++;
+	size_t len = strlen(last);
+	while (len && is_ows(last[len - 1]))
+		len--;
+	int chunked_last = len == 7 && !strncasecmp(last, "chunked", 7);
+	if (!chunked_last) {
+		*why = "Transfer-Encoding must end with chunked (RFC 9112 section 6.3); send the body with a Content-Length";
+		return 400;
+	}
+	if (n > 1 || last != v + strspn(v, " \t")) {
+		*why = "only the chunked transfer coding is implemented (RFC 9112 section 6.1); send the body with a Content-Length";
+		return 501;
+	}
+	*why = "request bodies need a Content-Length (at most 4096 bytes), not chunked transfer coding";
+	return 411;
 }
 
 /* A 32-hex-digit code (anything else is rejected before touching the database). */
@@ -506,6 +526,13 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 		r->close = true;
 		return;
 	}
+	const char *why;
+	unsigned te = transfer_coding_status(rq, &why);
+	if (te) {
+		set_error(r, te, why);
+		r->close = true;
+		return;
+	}
 	if (!rq->body) { /* head only: refuse what can be refused before reading a body */
 		if (length != UINT64_MAX && length > STY_MAX_BODY_B) {
 			set_error(r, 413, "request body larger than 4096 bytes");
@@ -583,205 +610,4 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 		return;
 	}
 	set_error(r, 404, "not found");
-}
-
-/* ------------------------------------------------------------------ libmicrohttpd adapter */
-
-typedef struct conn_state {
-	char body[STY_MAX_BODY_B + 1];
-	size_t len;
-	bool too_large;
-} conn_state;
-
-typedef struct header_list {
-	sty_http_field f[MAX_HEADERS];
-	size_t n;
-	bool overflow;
-} header_list;
-
-static enum MHD_Result collect_header(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
-{
-	(void)kind;
-	header_list *h = cls;
-	if (h->n == MAX_HEADERS) {
-		h->overflow = true;
-		return MHD_NO;
-	}
-	h->f[h->n++] = (sty_http_field){key, value};
-	return MHD_YES;
-}
-
-static enum MHD_Result queue(struct MHD_Connection *c, sty_response *r)
-{
-	struct MHD_Response *m;
-	if (r->fd >= 0) {
-		m = MHD_create_response_from_fd_at_offset64(r->file_size, r->fd, r->file_offset);
-		if (m)
-			r->fd = -1; /* MHD closes it */
-	} else {
-		m = MHD_create_response_from_buffer(r->body_size, r->body ? r->body : (char *)"", MHD_RESPMEM_MUST_COPY);
-	}
-	if (!m) {
-		sty_response_release(r);
-		return MHD_NO;
-	}
-	MHD_add_response_header(m, "Content-Type", r->content_type);
-	MHD_add_response_header(m, "X-Content-Type-Options", "nosniff");
-	if (!r->cacheable)
-		MHD_add_response_header(m, "Cache-Control", "no-store");
-	if (r->accept_ranges)
-		MHD_add_response_header(m, "Accept-Ranges", "bytes");
-	if (r->content_range[0])
-		MHD_add_response_header(m, "Content-Range", r->content_range);
-	if (r->authenticate)
-		MHD_add_response_header(m, "WWW-Authenticate", "Bearer realm=\"taslab study\"");
-	if (r->close)
-		MHD_add_response_header(m, "Connection", "close");
-	enum MHD_Result ret = MHD_queue_response(c, r->status, m);
-	MHD_destroy_response(m);
-	sty_response_release(r);
-	return ret;
-}
-
-static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
-				  const char *version, const char *upload_data, size_t *upload_size, void **con_cls)
-{
-	(void)version;
-	struct sty_server *sv = cls;
-	conn_state *cs = *con_cls;
-	if (cs && *upload_size) { /* a piece of the body: keep up to STY_MAX_BODY_B */
-		if (cs->len + *upload_size > STY_MAX_BODY_B)
-			cs->too_large = true;
-		else {
-			memcpy(cs->body + cs->len, upload_data, *upload_size);
-			cs->len += *upload_size;
-		}
-		*upload_size = 0;
-		return MHD_YES;
-	}
-	header_list h = {.n = 0};
-	MHD_get_connection_values(c, MHD_HEADER_KIND, collect_header, &h);
-	sty_response r;
-	if (h.overflow) {
-		resp_init(&r);
-		set_error(&r, 431, "too many header fields");
-		r.close = true;
-		return queue(c, &r);
-	}
-	sty_request rq = {.method = method, .path = url, .headers = h.f, .header_count = h.n};
-	if (!cs) { /* first call: the head has arrived */
-		if (!(cs = calloc(1, sizeof *cs)))
-			return MHD_NO;
-		*con_cls = cs;
-		sty_server_handle(sv, &rq, &r);
-		if (r.status == 0)
-			return MHD_YES;
-		return queue(c, &r);
-	}
-	rq.body = cs->body;
-	rq.body_size = cs->len;
-	rq.body_too_large = cs->too_large;
-	sty_server_handle(sv, &rq, &r);
-	if (r.status == 0) { /* cannot happen with a body; be safe */
-		resp_init(&r);
-		set_error(&r, 500, "internal error");
-	}
-	return queue(c, &r);
-}
-
-static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
-{
-	(void)cls, (void)c, (void)toe;
-	free(*con_cls);
-	*con_cls = NULL;
-}
-
-/* ------------------------------------------------------------------ lifecycle */
-
-int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
-{
-	*out = NULL;
-	if (!sty_stimuli(s)[0])
-		return tl_error(err, err_size, TL_ERR_ARG, "this study has no stimulus folder (an imported study cannot be served)");
-	sty_server *sv = calloc(1, sizeof *sv);
-	if (!sv)
-		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
-	sv->study = s;
-	if (desc)
-		sv->desc = *desc;
-	pthread_mutex_init(&sv->log_lock, NULL);
-	if (!realpath(sty_stimuli(s), sv->root)) {
-		int rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: stimulus folder missing: %s", sty_stimuli(s), strerror(errno));
-		sty_server_stop(&sv);
-		return rc;
-	}
-	*out = sv;
-	return TL_OK;
-}
-
-int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
-{
-	sty_server *sv;
-	int rc = sty_server_create(s, desc, &sv, err, err_size);
-	if (rc)
-		return rc;
-	const sty_server_desc *d = &sv->desc;
-	const char *bind = d->bind ? d->bind : "127.0.0.1";
-	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(d->port)};
-	if (inet_pton(AF_INET, bind, &sa.sin_addr) != 1) {
-		sty_server_stop(&sv);
-		return tl_error(err, err_size, TL_ERR_ARG, "--bind '%s' is not an IPv4 address", bind);
-	}
-	sv->starting = 1;
-	/* Limits against one client locking the others out: connections per client address and in all, and an
-	 * idle timeout (slow or silent connections are closed). */
-	/* The logger comes first, or MHD prints the messages of the options before it itself. */
-	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG, 0, NULL, NULL,
-				   on_request, sv, MHD_OPTION_EXTERNAL_LOGGER, mhd_log, sv, MHD_OPTION_SOCK_ADDR,
-				   (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE, d->threads ? d->threads : 4u,
-				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_CONNECTION_TIMEOUT,
-				   d->timeout_s ? d->timeout_s : 15u, MHD_OPTION_CONNECTION_LIMIT,
-				   d->max_connections ? d->max_connections : 256u, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
-				   d->max_per_client ? d->max_per_client : 32u, MHD_OPTION_END);
-	pthread_mutex_lock(&sv->log_lock);
-	sv->starting = 0;
-	pthread_mutex_unlock(&sv->log_lock);
-	if (!sv->mhd) {
-		/* MHD's own words ("Failed to bind to port 0: Address already in use" — it names the port it was given
-		 * apart from the address, 0): keep the system's reason and say what to do. */
-		const char *why = strrchr(sv->start_msg, ':') ? strrchr(sv->start_msg, ':') + 1 : sv->start_msg;
-		while (*why == ' ')
-			why++;
-		const char *hint = strstr(why, "in use") ? "choose another --port, or --port 0 for any free one"
-				   : strstr(why, "assign") ? "--bind must be an address of this machine"
-				   : "see the message";
-		if (!*why)
-			why = "libmicrohttpd could not start";
-		rc = tl_error(err, err_size, TL_ERR_ARG, "cannot listen on %s:%u: %s (%s)", bind, (unsigned)d->port, why, hint);
-		sty_server_stop(&sv);
-		return rc;
-	}
-	const union MHD_DaemonInfo *info = MHD_get_daemon_info(sv->mhd, MHD_DAEMON_INFO_BIND_PORT);
-	sv->port = info ? info->port : d->port;
-	char url[128];
-	snprintf(url, sizeof url, "http://%s:%u", bind, (unsigned)sv->port);
-	if ((rc = sty_set_served_url(s, url, err, err_size))) {
-		sty_server_stop(&sv);
-		return rc;
-	}
-	*out = sv;
-	return TL_OK;
-}
-
-uint16_t sty_server_port(const sty_server *sv) { return sv->port; }
-
-void sty_server_stop(sty_server **psv)
-{
-	if (!psv || !*psv)
-		return;
-	if ((*psv)->mhd)
-		MHD_stop_daemon((*psv)->mhd);
-	pthread_mutex_destroy(&(*psv)->log_lock);
-	free(*psv);
-	*psv = NULL;
 }

@@ -253,41 +253,69 @@ int tl_write_file(const char *path, const void *data, size_t size, char *err, si
 	return tl_atomic_commit(&a, err, err_size);
 }
 
+int tl_open_regular(const char *path, uint64_t max_size, int *fd, uint64_t *size, char *err, size_t err_size)
+{
+	*fd = -1;
+	*size = 0;
+	/* O_NONBLOCK: opening a FIFO must not wait for a writer (it is refused just below) */
+	int f = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	if (f < 0)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot read: %s", path, strerror(errno));
+	struct stat sb;
+	if (fstat(f, &sb)) {
+		int e = errno;
+		close(f);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot read: %s", path, strerror(e));
+	}
+	if (!S_ISREG(sb.st_mode)) {
+		close(f);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: not a regular file (%s); give a file", path,
+				S_ISDIR(sb.st_mode) ? "a folder" : S_ISFIFO(sb.st_mode) ? "a pipe" : S_ISSOCK(sb.st_mode) ? "a socket" : "a device");
+	}
+	if ((uint64_t)sb.st_size > max_size) {
+		close(f);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: larger than %llu bytes", path, (unsigned long long)max_size);
+	}
+	int fl = fcntl(f, F_GETFL);
+	if (fl >= 0)
+		fcntl(f, F_SETFL, fl & ~O_NONBLOCK);
+	*fd = f;
+	*size = (uint64_t)sb.st_size;
+	return TL_OK;
+}
+
 int tl_read_file(const char *path, size_t max_size, char **data, size_t *size, char *err, size_t err_size)
 {
 	*data = NULL;
 	if (size)
 		*size = 0;
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot read: %s", path, strerror(errno));
-	char *buf = NULL;
-	size_t len = 0, cap = 0;
-	int rc = TL_OK;
-	for (;;) {
-		if (len + 65536 + 1 > cap) {
-			size_t c = cap ? cap * 2 : 65536 + 1;
-			char *b = realloc(buf, c);
-			if (!b) {
-				rc = tl_error(err, err_size, TL_ERR_NOMEM, "%s: out of memory", path);
-				break;
-			}
-			buf = b;
-			cap = c;
-		}
-		size_t n = fread(buf + len, 1, 65536, f);
-		len += n;
-		if (len > max_size) {
-			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: larger than %zu bytes", path, max_size);
-			break;
-		}
-		if (n < 65536) {
-			if (ferror(f))
-				rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: read error", path);
-			break;
-		}
+	int fd;
+	uint64_t len;
+	int rc = tl_open_regular(path, max_size, &fd, &len, err, err_size);
+	if (rc)
+		return rc;
+	/* exactly the size fstat gave, and not a byte more (a file growing while read is an error, not a longer read) */
+	char *buf = malloc((size_t)len + 1);
+	if (!buf) {
+		close(fd);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "%s: out of memory", path);
 	}
-	fclose(f);
+	size_t got = 0;
+	while (got < len) {
+		ssize_t n = read(fd, buf + got, (size_t)len - got);
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0) {
+			rc = n < 0 ? tl_error(err, err_size, TL_ERR_INPUT, "%s: read error: %s", path, strerror(errno))
+				   : tl_error(err, err_size, TL_ERR_INPUT, "%s: changed while being read (shorter); try again", path);
+			break;
+		}
+		got += (size_t)n;
+	}
+	char extra;
+	if (!rc && read(fd, &extra, 1) > 0)
+		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: changed while being read (longer); try again", path);
+	close(fd);
 	if (rc) {
 		free(buf);
 		return rc;
@@ -295,7 +323,7 @@ int tl_read_file(const char *path, size_t max_size, char **data, size_t *size, c
 	buf[len] = 0;
 	*data = buf;
 	if (size)
-		*size = len;
+		*size = (size_t)len;
 	return TL_OK;
 }
 

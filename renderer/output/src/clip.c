@@ -316,7 +316,7 @@ int clip_encode_run(const char *run_dir, const char *out, uint32_t *frames_writt
 		snprintf(path, sizeof path, "%s/frames/%06u.png", run_dir, f);
 		free(rgb);
 		rgb = NULL;
-		if ((rc = imageio_read_rgb8(path, &fw, &fh, &rgb, err, err_size)))
+		if ((rc = imageio_read_rgb8_as(path, IMAGEIO_FORMAT_PNG, &fw, &fh, &rgb, err, err_size)))
 			goto done;
 		if (fw != m.width || fh != m.height) {
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: size %ux%u differs from the run's %ux%u; render the run again",

@@ -3,6 +3,7 @@
 
 #include <OpenColorIO/OpenColorIO.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -21,6 +22,7 @@ struct colour {
 	OCIO::ConstCPUProcessorRcPtr cpu;
 	std::string glsl;
 	std::string name;
+	std::string config; /* the config file's path; empty for the built-in default */
 	int rewritten; /* B-spline curve functions restructured (restructure_glsl) */
 	std::vector<lut_store> luts;
 };
@@ -173,6 +175,78 @@ static int restructure_glsl(std::string &glsl)
 	return n;
 }
 
+/* Issue 31.7: a LUT entry that is NaN or Inf is refused. OCIO's file readers accept "nan" and "inf" (strtod), and
+ * its CPU and GPU paths then treat them differently (the CPU's lookups and the GPU's filtering propagate or clamp
+ * them in different places: up to 148 code values apart on 41 % of the pixels of a test view), so no result made
+ * with such a LUT could be trusted. The processor's ops as transforms (OCIO 2 Processor::createGroupTransform) are
+ * the LUTs as OCIO's optimiser left them (combined and resampled, so a bad entry shows up elsewhere), before any GPU
+ * baking; *what says which entry. The GPU textures are checked as well
+ * (collect_luts), for values that only baking makes non-finite. */
+static bool lut_values_finite(const OCIO::ConstProcessorRcPtr &proc, std::string &what)
+{
+	auto g = proc->createGroupTransform();
+	char msg[160];
+	for (int i = 0; i < g->getNumTransforms(); i++) {
+		auto t = g->getTransform(i);
+		if (auto l1 = OCIO::DynamicPtrCast<const OCIO::Lut1DTransform>(t)) {
+			for (unsigned long k = 0; k < l1->getLength(); k++) {
+				float r, gr, b;
+				l1->getValue(k, r, gr, b);
+				if (!std::isfinite(r) || !std::isfinite(gr) || !std::isfinite(b)) {
+					std::snprintf(msg, sizeof msg, "entry %lu of a 1D LUT of %lu entries is (%g, %g, %g)", k,
+						      l1->getLength(), (double)r, (double)gr, (double)b);
+					what = msg;
+					return false;
+				}
+			}
+		} else if (auto l3 = OCIO::DynamicPtrCast<const OCIO::Lut3DTransform>(t)) {
+			const unsigned long n = l3->getGridSize();
+			for (unsigned long x = 0; x < n; x++)
+				for (unsigned long y = 0; y < n; y++)
+					for (unsigned long z = 0; z < n; z++) {
+						float r, gr, b;
+						l3->getValue(x, y, z, r, gr, b);
+						if (!std::isfinite(r) || !std::isfinite(gr) || !std::isfinite(b)) {
+							std::snprintf(msg, sizeof msg,
+								      "entry (%lu, %lu, %lu) of a %lu^3 3D LUT is (%g, %g, %g)", x, y, z,
+								      n, (double)r, (double)gr, (double)b);
+							what = msg;
+							return false;
+						}
+					}
+		}
+	}
+	return true;
+}
+
+/* The LUT files of a transform (FileTransforms, inside groups too), each checked alone so that the message names the
+ * file: the processor of a whole view has its LUTs combined by OCIO's optimiser (a NaN in a 3D LUT showed up in the
+ * 1D shaper before it). *file gets the resolved path of the first file with a non-finite value. */
+static bool lut_files_finite(const OCIO::ConstConfigRcPtr &cfg, const OCIO::ConstTransformRcPtr &t, std::string &file,
+			     std::string &what)
+{
+	if (!t)
+		return true;
+	if (auto g = OCIO::DynamicPtrCast<const OCIO::GroupTransform>(t)) {
+		for (int i = 0; i < g->getNumTransforms(); i++)
+			if (!lut_files_finite(cfg, g->getTransform(i), file, what))
+				return false;
+		return true;
+	}
+	auto f = OCIO::DynamicPtrCast<const OCIO::FileTransform>(t);
+	if (!f || !f->getSrc())
+		return true;
+	auto one = OCIO::FileTransform::Create();
+	one->setSrc(f->getSrc());
+	one->setInterpolation(f->getInterpolation());
+	one->setCCCId(f->getCCCId());
+	if (lut_values_finite(cfg->getProcessor(one), what))
+		return true;
+	const char *resolved = cfg->getCurrentContext()->resolveFileLocation(f->getSrc());
+	file = resolved ? resolved : f->getSrc();
+	return false;
+}
+
 static OCIO::ConstProcessorRcPtr default_processor(OCIO::ConstConfigRcPtr &cfg)
 {
 	cfg = OCIO::Config::CreateRaw();
@@ -254,6 +328,33 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 			}
 			proc = cfg->getProcessor(OCIO::ROLE_SCENE_LINEAR, display, view, OCIO::TRANSFORM_DIR_FORWARD);
 			c->name = std::string(path) + ": scene_linear -> " + display + " / " + view;
+			c->config = path;
+		}
+		std::string bad, file;
+		if (path) { /* the view's colour space and scene_linear's: their LUT files by name */
+			const char *display = desc->display ? desc->display : cfg->getDefaultDisplay();
+			const char *view = desc->view ? desc->view : cfg->getDefaultView(display);
+			for (const char *cs : {cfg->getDisplayViewColorSpaceName(display, view), (const char *)OCIO::ROLE_SCENE_LINEAR}) {
+				auto space = cs ? cfg->getColorSpace(cs) : nullptr;
+				if (!space || !file.empty())
+					continue;
+				if (!lut_files_finite(cfg, space->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE), file, bad))
+					continue;
+				lut_files_finite(cfg, space->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE), file, bad);
+			}
+			if (!file.empty()) {
+				/* (no entry index: OCIO's optimiser resamples even a LUT alone, so its entries are not the file's) */
+				std::snprintf(err, err_size, "%s: a value of this LUT is not a finite number (NaN or Inf); fix the LUT file",
+					      file.c_str());
+				delete c;
+				return -1;
+			}
+		}
+		if (!lut_values_finite(proc, bad)) {
+			std::snprintf(err, err_size, "%s: %s: a LUT value is not a finite number (NaN or Inf); fix the LUT file",
+				      c->name.c_str(), bad.c_str());
+			delete c;
+			return -1;
 		}
 		c->cpu = proc->getOptimizedCPUProcessor(OCIO::BIT_DEPTH_F32, OCIO::BIT_DEPTH_F32, OCIO::OPTIMIZATION_LOSSLESS);
 		auto gpu = proc->getOptimizedGPUProcessor(OCIO::OPTIMIZATION_LOSSLESS);
@@ -271,6 +372,15 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 		}
 		c->glsl = sd->getShaderText();
 		collect_luts(sd, c->glsl, c->luts);
+		for (const lut_store &l : c->luts)
+			for (size_t i = 0; i < l.values.size(); i++)
+				if (!std::isfinite(l.values[i])) {
+					std::snprintf(err, err_size, "%s: value %zu of the GPU LUT %s is not a finite number (NaN or "
+								 "Inf); fix the LUT files of the view",
+						      c->name.c_str(), i, l.sampler.c_str());
+					delete c;
+					return -1;
+				}
 		c->rewritten = desc->keep_ocio_glsl ? 0 : restructure_glsl(c->glsl);
 	} catch (OCIO::Exception &e) {
 		std::string msg = e.what();
@@ -298,6 +408,7 @@ extern "C" void colour_destroy(colour **c)
 }
 
 extern "C" const char *colour_name(const colour *c) { return c->name.c_str(); }
+extern "C" const char *colour_config_path(const colour *c) { return c->config.empty() ? nullptr : c->config.c_str(); }
 extern "C" const char *colour_library_version(void) { return OCIO::GetVersion(); }
 extern "C" size_t colour_lut_count(const colour *c) { return c->luts.size(); }
 extern "C" const colour_lut *colour_lut_get(const colour *c, size_t i)

@@ -122,28 +122,72 @@ int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t hei
 	return imageio_png_write_rgb8(path, width, height, rgb, 3, err, err_size);
 }
 
-int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size)
+/* The whole file in memory: a regular file of at most IMAGEIO_MAX_FILE_B bytes (tl_read_file: a device such as
+ * /dev/zero, which OpenImageIO's format probing read for ever, or a FIFO is refused at once). Decoders read these
+ * bytes, never the path again (nothing to swap in between). */
+static int load(const char *path, imageio_format format, uint8_t **data, size_t *size, char *err, size_t err_size)
 {
-	*rgb = NULL;
-	if (imageio_is_png(path))
-		return imageio_png_read_rgb8(path, width, height, rgb, err, err_size);
-	const imageio_oiio_api *api = oiio(path, err, err_size);
-	return api ? api->read_rgb8(path, width, height, rgb, err, err_size) : TL_ERR_UNSUPPORTED;
+	*data = NULL;
+	if ((unsigned)format >= IMAGEIO_FORMAT_COUNT)
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: unknown image format %d", path, (int)format);
+	char *d = NULL;
+	int rc = tl_read_file(path, (size_t)IMAGEIO_MAX_FILE_B, &d, size, err, err_size);
+	if (rc)
+		return rc;
+	*data = (uint8_t *)d;
+	if (format == IMAGEIO_FORMAT_PNG && !imageio_is_png(*data, *size)) {
+		free(d);
+		*data = NULL;
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: not a PNG file (no PNG signature); write the frame again", path);
+	}
+	return TL_OK;
 }
 
-int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
-			    char *err, size_t err_size)
+int imageio_read_rgb8_as(const char *path, imageio_format format, uint32_t *width, uint32_t *height, uint8_t **rgb,
+			 char *err, size_t err_size)
+{
+	*rgb = NULL;
+	uint8_t *data;
+	size_t size;
+	int rc = load(path, format, &data, &size, err, err_size);
+	if (rc)
+		return rc;
+	if (format == IMAGEIO_FORMAT_PNG || (format == IMAGEIO_FORMAT_ANY && imageio_is_png(data, size))) {
+		rc = imageio_png_read_rgb8(path, data, size, width, height, rgb, err, err_size);
+	} else {
+		const imageio_oiio_api *api = oiio(path, err, err_size);
+		rc = api ? api->read_rgb8(path, data, size, (int)format, width, height, rgb, err, err_size) : TL_ERR_UNSUPPORTED;
+	}
+	free(data);
+	return rc;
+}
+
+int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size)
+{
+	return imageio_read_rgb8_as(path, IMAGEIO_FORMAT_ANY, width, height, rgb, err, err_size);
+}
+
+int imageio_read_rgba_float_as(const char *path, imageio_format format, uint32_t *width, uint32_t *height, float **rgba,
+			       int reject_nonfinite, char *err, size_t err_size)
 {
 	*rgba = NULL;
-	if (!imageio_is_png(path)) {
+	uint8_t *data;
+	size_t size;
+	int rc = load(path, format, &data, &size, err, err_size);
+	if (rc)
+		return rc;
+	if (format != IMAGEIO_FORMAT_PNG && !(format == IMAGEIO_FORMAT_ANY && imageio_is_png(data, size))) {
 		const imageio_oiio_api *api = oiio(path, err, err_size);
-		return api ? api->read_rgba_float(path, width, height, rgba, reject_nonfinite, err, err_size)
-			   : TL_ERR_UNSUPPORTED;
+		rc = api ? api->read_rgba_float(path, data, size, (int)format, width, height, rgba, reject_nonfinite, err, err_size)
+			 : TL_ERR_UNSUPPORTED;
+		free(data);
+		return rc;
 	}
 	/* A PNG: code values / 255, alpha 1. */
 	uint8_t *px = NULL;
 	uint32_t w, h;
-	int rc = imageio_png_read_rgb8(path, &w, &h, &px, err, err_size);
+	rc = imageio_png_read_rgb8(path, data, size, &w, &h, &px, err, err_size);
+	free(data);
 	if (rc)
 		return rc;
 	size_t n = (size_t)w * h;
@@ -164,8 +208,21 @@ int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height,
 	return 0;
 }
 
+int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
+			    char *err, size_t err_size)
+{
+	return imageio_read_rgba_float_as(path, IMAGEIO_FORMAT_ANY, width, height, rgba, reject_nonfinite, err, err_size);
+}
+
 int imageio_read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size)
 {
+	uint8_t *data;
+	size_t size;
+	int rc = load(path, IMAGEIO_FORMAT_ANY, &data, &size, err, err_size);
+	if (rc)
+		return rc;
 	const imageio_oiio_api *api = oiio(path, err, err_size);
-	return api ? api->read_attr(path, name, value, value_size, err, err_size) : TL_ERR_UNSUPPORTED;
+	rc = api ? api->read_attr(path, data, size, name, value, value_size, err, err_size) : TL_ERR_UNSUPPORTED;
+	free(data);
+	return rc;
 }

@@ -10,10 +10,12 @@
 extern "C" {
 #endif
 
-/* True when the file starts with the PNG signature. */
-bool imageio_is_png(const char *path);
-/* 8-bit RGB as stored (16-bit rounded, palette and grey expanded, alpha dropped, never multiplied in). */
-int imageio_png_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size);
+/* True when the bytes start with the PNG signature. */
+bool imageio_is_png(const uint8_t *data, size_t size);
+/* 8-bit RGB as stored (16-bit rounded, palette and grey expanded, alpha dropped, never multiplied in), decoded from
+ * the file's bytes in memory; `path` names it in messages. */
+int imageio_png_read_rgb8(const char *path, const uint8_t *data, size_t size, uint32_t *width, uint32_t *height,
+			  uint8_t **rgb, char *err, size_t err_size);
 /* 8-bit RGB PNG from pixels `stride` bytes apart (3: RGB, 4: RGBA with alpha dropped), atomically (tl_fs.h). */
 int imageio_png_write_rgb8(const char *path, uint32_t width, uint32_t height, const uint8_t *pixels, size_t stride,
 			   char *err, size_t err_size);

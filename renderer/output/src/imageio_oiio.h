@@ -20,7 +20,7 @@ extern "C" {
 #endif
 
 #define IMAGEIO_OIIO_SYMBOL "taslab_oiio_api"
-#define IMAGEIO_OIIO_VERSION 1
+#define IMAGEIO_OIIO_VERSION 2
 #define IMAGEIO_OIIO_FILE "taslab_oiio.so"
 
 typedef struct imageio_oiio_api {
@@ -28,11 +28,14 @@ typedef struct imageio_oiio_api {
 	int (*write_exr_half)(const char *tmp, const char *path, uint32_t width, uint32_t height,
 			      const uint16_t *rgba_half, const imageio_attr *attrs, size_t attr_count, char *err,
 			      size_t err_size);
-	int (*read_rgb8)(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size);
-	int (*read_rgba_float)(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
-			       char *err, size_t err_size);
-	int (*read_attr)(const char *path, const char *name, char *value, size_t value_size, char *err,
-			 size_t err_size);
+	/* Readers decode the file's bytes (data, size: read by imageio.c from a regular file) with the decoder of
+	 * `format` (IMAGEIO_FORMAT_ANY: by the extension of `path`, which otherwise only names the file in messages). */
+	int (*read_rgb8)(const char *path, const void *data, size_t size, int format, uint32_t *width, uint32_t *height,
+			 uint8_t **rgb, char *err, size_t err_size);
+	int (*read_rgba_float)(const char *path, const void *data, size_t size, int format, uint32_t *width,
+			       uint32_t *height, float **rgba, int reject_nonfinite, char *err, size_t err_size);
+	int (*read_attr)(const char *path, const void *data, size_t size, const char *name, char *value, size_t value_size,
+			 char *err, size_t err_size);
 } imageio_oiio_api;
 
 #ifdef __cplusplus

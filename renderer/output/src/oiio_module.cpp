@@ -2,6 +2,7 @@
 // why): EXR writing and reading of every format but PNG (png.c), as a thin shim over the C++ API.
 #include "imageio_oiio.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include "taslab/tl_error.h"
@@ -57,20 +58,43 @@ static int write_exr_half(const char *tmp, const char *path, uint32_t width, uin
 	return 0;
 }
 
+// An input reading the file's bytes in memory (imageio.c read them from a regular file, bounded): `proxy` must
+// outlive it. IMAGEIO_FORMAT_EXR: OpenImageIO's OpenEXR reader only; IMAGEIO_FORMAT_ANY: the reader the extension of
+// `path` names, and OpenImageIO's search of the other readers when that one cannot open it (on these bytes only).
 // OpenImageIO associates (premultiplies) alpha on reading unless asked not to: colours are read as stored.
-static std::unique_ptr<ImageInput> open_input(const char *path)
+static std::unique_ptr<ImageInput> open_input(const char *path, int format, Filesystem::IOMemReader &proxy,
+					      std::string &why)
 {
 	ImageSpec config;
 	config.attribute("oiio:UnassociatedAlpha", 1);
-	return ImageInput::open(path, &config);
+	if (format == IMAGEIO_FORMAT_EXR) {
+		auto in = ImageInput::create("openexr", false, &config, &proxy);
+		ImageSpec spec;
+		if (!in) {
+			why = first_line(OIIO::geterror());
+			return nullptr;
+		}
+		if (!in->supports("ioproxy") || !in->set_ioproxy(&proxy) || !in->open(path, spec, config)) {
+			why = in->supports("ioproxy") ? first_line(in->geterror()) : std::string("the EXR reader cannot read from memory");
+			return nullptr;
+		}
+		return in;
+	}
+	auto in = ImageInput::open(path, &config, &proxy);
+	if (!in)
+		why = first_line(OIIO::geterror());
+	return in;
 }
 
-static int read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size)
+static int read_rgb8(const char *path, const void *data, size_t size, int format, uint32_t *width, uint32_t *height,
+		     uint8_t **rgb, char *err, size_t err_size)
 {
 	*rgb = nullptr;
-	auto in = open_input(path);
+	Filesystem::IOMemReader proxy(data, size);
+	std::string why;
+	auto in = open_input(path, format, proxy, why);
 	if (!in) {
-		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		snprintf(err, err_size, "%s: cannot read image: %s", path, why.c_str());
 		return TL_ERR_INPUT;
 	}
 	const ImageSpec &spec = in->spec();
@@ -99,13 +123,15 @@ static int read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_
 	return 0;
 }
 
-static int read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
-			   char *err, size_t err_size)
+static int read_rgba_float(const char *path, const void *data, size_t size, int format, uint32_t *width,
+			   uint32_t *height, float **rgba, int reject_nonfinite, char *err, size_t err_size)
 {
 	*rgba = nullptr;
-	auto in = open_input(path);
+	Filesystem::IOMemReader proxy(data, size);
+	std::string why;
+	auto in = open_input(path, format, proxy, why);
 	if (!in) {
-		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		snprintf(err, err_size, "%s: cannot read image: %s", path, why.c_str());
 		return TL_ERR_INPUT;
 	}
 	const ImageSpec &spec = in->spec();
@@ -145,11 +171,14 @@ static int read_rgba_float(const char *path, uint32_t *width, uint32_t *height, 
 	return 0;
 }
 
-static int read_attr(const char *path, const char *name, char *value, size_t value_size, char *err, size_t err_size)
+static int read_attr(const char *path, const void *data, size_t size, const char *name, char *value, size_t value_size,
+		     char *err, size_t err_size)
 {
-	auto in = ImageInput::open(path);
+	Filesystem::IOMemReader proxy(data, size);
+	std::string why;
+	auto in = open_input(path, IMAGEIO_FORMAT_ANY, proxy, why);
 	if (!in) {
-		snprintf(err, err_size, "%s: cannot read image: %s", path, first_line(OIIO::geterror()).c_str());
+		snprintf(err, err_size, "%s: cannot read image: %s", path, why.c_str());
 		return TL_ERR_INPUT;
 	}
 	std::string v = in->spec().get_string_attribute(name);

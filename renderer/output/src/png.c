@@ -45,29 +45,39 @@ static void on_warning(png_structp png, png_const_charp msg)
 	(void)msg;
 }
 
-bool imageio_is_png(const char *path)
+bool imageio_is_png(const uint8_t *data, size_t size)
 {
-	unsigned char sig[8];
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return false;
-	size_t n = fread(sig, 1, sizeof sig, f);
-	fclose(f);
-	return n == sizeof sig && png_sig_cmp(sig, 0, sizeof sig) == 0;
+	return size >= 8 && png_sig_cmp(data, 0, 8) == 0;
 }
 
-int imageio_png_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8_t **rgb, char *err, size_t err_size)
+/* The file's bytes, already read into memory by imageio.c (a regular file, bounded): libpng reads from here. */
+typedef struct png_src {
+	const uint8_t *data;
+	size_t size, pos;
+	bool truncated;
+} png_src;
+
+static void read_mem(png_structp png, png_bytep out, size_t n)
+{
+	png_src *src = png_get_io_ptr(png);
+	if (n > src->size - src->pos) {
+		src->truncated = true;
+		png_error(png, "truncated");
+	}
+	memcpy(out, src->data + src->pos, n);
+	src->pos += n;
+}
+
+int imageio_png_read_rgb8(const char *path, const uint8_t *data, size_t size, uint32_t *width, uint32_t *height,
+			  uint8_t **rgb, char *err, size_t err_size)
 {
 	*rgb = NULL;
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot read image: %s", path, strerror(errno));
+	png_src src = {data, size, 0, false};
 	png_msg msg = {"unknown error"};
 	png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &msg, on_error, on_warning);
 	png_infop info = png ? png_create_info_struct(png) : NULL;
 	if (!info) {
 		png_destroy_read_struct(&png, NULL, NULL);
-		fclose(f);
 		return tl_error(err, err_size, TL_ERR_NOMEM, "%s: out of memory", path);
 	}
 	uint8_t *volatile out = NULL;
@@ -76,15 +86,13 @@ int imageio_png_read_rgb8(const char *path, uint32_t *width, uint32_t *height, u
 		free(out);
 		free(rows);
 		png_destroy_read_struct(&png, &info, NULL);
-		int truncated = feof(f);
-		fclose(f);
-		if (truncated)
+		if (src.truncated)
 			return tl_error(err, err_size, TL_ERR_INPUT, "%s: the file ends before its image does (truncated PNG); write it "
 					"again", path);
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot decode image: %s (corrupt PNG?)", path, msg.text);
 	}
 	png_set_user_limits(png, PNG_MAX_SIDE, PNG_MAX_SIDE);
-	png_init_io(png, f);
+	png_set_read_fn(png, &src, read_mem);
 	errno = 0;
 	png_read_info(png, info);
 	png_uint_32 w, h;
@@ -116,7 +124,6 @@ int imageio_png_read_rgb8(const char *path, uint32_t *width, uint32_t *height, u
 	png_read_end(png, NULL);
 	free(rows);
 	png_destroy_read_struct(&png, &info, NULL);
-	fclose(f);
 	*width = w;
 	*height = h;
 	*rgb = out;

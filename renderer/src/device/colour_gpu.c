@@ -10,6 +10,7 @@
  * nearest — and returns what texture() returns for the format ((v, 0, 0, 1) for one channel, (r, g, b, 1) for three).
  * Indices are clamped after the float-to-int conversion, so no input (NaN included) reads outside the buffer. */
 #include <inttypes.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -317,5 +318,51 @@ done:
 	colour_device_destroy(dev, &cd);
 	free(spv);
 	free(src);
+	return rc;
+}
+
+int colour_check_gpu(vkdev *dev, const colour *c, double *worst, char *err, size_t err_size)
+{
+	enum { L = COLOUR_CHECK_LEVELS };
+	const size_t n = (size_t)L * L * L;
+	float lv[L], *in = malloc(n * 16), *cpu = malloc(n * 16), *gpu = malloc(n * 16);
+	if (worst)
+		*worst = 0;
+	if (!in || !cpu || !gpu) {
+		free(in), free(cpu), free(gpu);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+	lv[0] = 0.0f;
+	for (int i = 1; i < L; i++)
+		lv[i] = 1e-4f * powf(64.0f / 1e-4f, (float)(i - 1) / (L - 2));
+	for (size_t k = 0; k < n; k++) {
+		in[k * 4 + 0] = lv[k / (L * L)], in[k * 4 + 1] = lv[k / L % L], in[k * 4 + 2] = lv[k % L], in[k * 4 + 3] = 1.0f;
+	}
+	memcpy(cpu, in, n * 16);
+	memcpy(gpu, in, n * 16);
+	colour_apply(c, cpu, n, 4);
+	int rc = colour_apply_gpu(dev, c, gpu, n, err, err_size) ? TL_ERR_VULKAN : TL_OK;
+	double most = 0;
+	size_t at = 0;
+	for (size_t i = 0; !rc && i < n * 4; i++) {
+		if (i % 4 == 3)
+			continue;
+		/* what reaches the display; a NaN on one side only counts as the whole range */
+		double a = isnan(cpu[i]) ? -1 : fmin(fmax(cpu[i], 0.0), 1.0) * 255.0;
+		double b = isnan(gpu[i]) ? -1 : fmin(fmax(gpu[i], 0.0), 1.0) * 255.0;
+		double d = (a < 0) != (b < 0) ? 255.0 : fabs(a - b);
+		if (d > most)
+			most = d, at = i / 4;
+	}
+	if (worst)
+		*worst = most;
+	if (!rc && most > COLOUR_CHECK_TOLERANCE)
+		rc = tl_error(err, err_size, TL_ERR_INPUT,
+			      "%s: the GPU and CPU versions of this view transform differ by %.1f code values (linear input %g %g "
+			      "%g; at most %.1f allowed), so rendered frames and CPU metrics would disagree; check the config's "
+			      "transforms and LUTs",
+			      colour_name(c), most, (double)in[at * 4], (double)in[at * 4 + 1], (double)in[at * 4 + 2],
+			      COLOUR_CHECK_TOLERANCE);
+	free(in), free(cpu), free(gpu);
 	return rc;
 }

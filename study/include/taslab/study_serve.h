@@ -16,9 +16,11 @@
  *   GET  /admin/export.csv, /admin/export-pwcmp.csv   with "Authorization: Bearer <admin token>" (RFC 6750;
  *                                compared in constant time); 401 otherwise. The token is never read from the URL.
  * Framing: conflicting duplicate Content-Length, or Content-Length with Transfer-Encoding -> 400 (RFC 7230
- * section 3.3.3). Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
- * name server paths, go to the log). Each client address may hold at most max_per_client connections and an
- * idle connection is closed after timeout_s, so one client cannot lock the others out. */
+ * section 3.3.3); any Transfer-Encoding -> 400 (chunked not last), 501 (another coding) or 411 (chunked: bodies
+ * need a Content-Length), at the head. Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
+ * name server paths, go to the log). Each client address may hold at most max_per_client connections, an
+ * idle connection is closed after timeout_s, a request must arrive within deadlines however slowly it trickles,
+ * and the connections still reading a request are capped, so slow clients cannot lock the others out. */
 #ifndef TASLAB_STUDY_SERVE_H
 #define TASLAB_STUDY_SERVE_H
 
@@ -44,6 +46,12 @@ typedef struct sty_server_desc {
 	unsigned max_connections; /* connections in all [256] */
 	unsigned max_per_client;  /* connections per client address [32; a browser opens at most 6 per host] */
 	unsigned timeout_s;       /* an idle connection is closed after this many seconds [15] */
+	/* Deadlines that a trickle of bytes does not reset (the idle timeout does not fire on one byte a second): a
+	 * request head must be complete head_timeout_s after the connection opened or its previous reply was sent
+	 * [10], a body body_timeout_s after its head [10]; else the connection is closed. At most max_reading
+	 * connections may be reading a request at once: a new connection beyond that closes the one that has been
+	 * reading longest [max_connections / 2], so slow clients cannot hold every slot (issue 31.3). */
+	unsigned head_timeout_s, body_timeout_s, max_reading;
 	/* One line per event worth a look (500 details, libmicrohttpd's messages), without a newline;
 	 * NULL: "taslab study serve: LINE" on stderr. */
 	void (*log)(void *cls, const char *line);
@@ -56,6 +64,13 @@ int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char
 /* A server that handles requests given to sty_server_handle but does not listen (tests, fuzzing). */
 int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size);
 uint16_t sty_server_port(const sty_server *sv);
+/* What the server did against slow clients, counted where it closes their connections. */
+typedef struct sty_server_stats {
+	uint64_t head_timeouts; /* closed: no complete request head within head_timeout_s */
+	uint64_t body_timeouts; /* closed: no complete body within body_timeout_s of its head */
+	uint64_t evicted;       /* closed: the longest-reading connection, to make room under max_reading */
+} sty_server_stats;
+sty_server_stats sty_server_get_stats(sty_server *sv);
 /* Stops listening, waits for the threads, frees. Accepts NULL, nulls the pointer. */
 void sty_server_stop(sty_server **sv);
 

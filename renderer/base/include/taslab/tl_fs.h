@@ -22,6 +22,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #ifdef __cplusplus
@@ -65,8 +66,12 @@ void tl_atomic_abort_set(tl_atomic *a, size_t n);
 
 /* Writes `size` bytes to `path` atomically. */
 int tl_write_file(const char *path, const void *data, size_t size, char *err, size_t err_size);
-/* Reads a whole file (NUL-terminated; *data malloc'ed, caller frees). TL_ERR_INPUT when missing or larger
- * than `max_size` bytes. */
+/* Opens `path` for reading only when it is a regular file of at most `max_size` bytes (issue 31.6: a device such
+ * as /dev/zero, a FIFO or a folder is refused at once, never read or waited on): *fd (the caller closes it) and
+ * *size from fstat. TL_ERR_INPUT with one line saying what the path is otherwise. */
+int tl_open_regular(const char *path, uint64_t max_size, int *fd, uint64_t *size, char *err, size_t err_size);
+/* Reads a whole regular file (tl_open_regular; NUL-terminated; *data malloc'ed, caller frees). TL_ERR_INPUT when
+ * missing, not a regular file or larger than `max_size` bytes. */
 int tl_read_file(const char *path, size_t max_size, char **data, size_t *size, char *err, size_t err_size);
 
 /* Removes the temporary files ".*.tmp.XXXXXX" of tl_atomic that a killed process left in `dir`;

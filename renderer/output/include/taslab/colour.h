@@ -36,6 +36,8 @@ int colour_create(const colour_desc *desc, colour **out, char *err, size_t err_s
 void colour_destroy(colour **c);
 /* One line naming the transform, e.g. "ACES 1.0 SDR-video -> sRGB (OCIO 2.1.2 builtins)". */
 const char *colour_name(const colour *c);
+/* The config file the transform was read from; NULL for the built-in default. */
+const char *colour_config_path(const colour *c);
 /* The version of the OpenColorIO library taslab runs with ("2.1.2"), for manifests. */
 const char *colour_library_version(void);
 /* GLSL (Vulkan GLSL 4.60 compatible) defining `vec4 ocio_display(vec4 linear_rgba)`. No uniforms (creation fails

@@ -20,6 +20,18 @@
 extern "C" {
 #endif
 
+/* Which decoder may read a file (issue 31.6). Readers read only regular files of at most IMAGEIO_MAX_FILE_B bytes,
+ * into memory first (a device such as /dev/zero, a FIFO or a folder is refused with one line, never probed), and
+ * decode from there; a run's frames are read with the format its manifest names (PNG frames/NNNNNN.png, EXR
+ * frames/NNNNNN.exr), so no other decoder is tried on them. */
+typedef enum imageio_format {
+	IMAGEIO_FORMAT_ANY = 0, /* PNG by its signature, else OpenImageIO by the file name's extension */
+	IMAGEIO_FORMAT_PNG,     /* libpng only; anything else is "not a PNG file" */
+	IMAGEIO_FORMAT_EXR,     /* OpenImageIO's OpenEXR reader only */
+	IMAGEIO_FORMAT_COUNT
+} imageio_format;
+#define IMAGEIO_MAX_FILE_B (4ull << 30)
+
 typedef struct imageio_attr {
 	const char *name;  /* e.g. "taslab:scene" */
 	const char *value;
@@ -38,6 +50,11 @@ int imageio_read_rgb8(const char *path, uint32_t *width, uint32_t *height, uint8
  * Fails with a message naming the first non-finite pixel when `reject_nonfinite` is set. */
 int imageio_read_rgba_float(const char *path, uint32_t *width, uint32_t *height, float **rgba, int reject_nonfinite,
 			    char *err, size_t err_size);
+/* The same two readers for a file whose format the caller knows (a run's frames: the format from its manifest). */
+int imageio_read_rgb8_as(const char *path, imageio_format format, uint32_t *width, uint32_t *height, uint8_t **rgb,
+			 char *err, size_t err_size);
+int imageio_read_rgba_float_as(const char *path, imageio_format format, uint32_t *width, uint32_t *height, float **rgba,
+			       int reject_nonfinite, char *err, size_t err_size);
 /* 8-bit RGB PNG from RGB8 pixels. */
 int imageio_write_png_rgb8_packed(const char *path, uint32_t width, uint32_t height, const uint8_t *rgb, char *err,
 				  size_t err_size);

@@ -1,0 +1,43 @@
+/* study_serve_internal.h (private) — the server handle shared by the request logic (study_serve.c) and the
+ * libmicrohttpd adapter with its connection tracking and lifecycle (study_serve_mhd.c). */
+#ifndef TASLAB_STUDY_SERVE_INTERNAL_H
+#define TASLAB_STUDY_SERVE_INTERNAL_H
+
+#include <limits.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <time.h>
+
+#include "taslab/study_serve.h"
+
+struct MHD_Daemon;
+struct conn_track;
+
+struct sty_server {
+	sty *study;
+	struct MHD_Daemon *mhd;
+	char root[PATH_MAX]; /* realpath of the stimulus folder */
+	uint16_t port;
+	sty_server_desc desc;
+	pthread_mutex_t log_lock;
+	int starting;        /* while MHD_start_daemon runs, its messages explain a failure: keep the last */
+	char start_msg[256];
+	time_t log_second;
+	unsigned log_count, log_dropped;
+	/* Connections still reading a request (issue 31.3), for the head/body deadlines and the cap on them. */
+	pthread_mutex_t conn_lock;
+	pthread_cond_t conn_wake;
+	struct conn_track *conns; /* every open connection, newest first */
+	unsigned reading;         /* of them, in CONN_HEAD or CONN_BODY */
+	bool watching;            /* the watchdog thread runs */
+	bool stopping;
+	pthread_t watchdog;
+	sty_server_stats stats;
+};
+
+/* One line to the server's log (desc.log, else stderr), at most 10 a second; newlines become spaces. */
+void sty_serve_log(struct sty_server *sv, const char *fmt, ...);
+/* `r` initialised to a JSON error {"error": msg} with `status`. */
+void sty_response_error(sty_response *r, unsigned status, const char *msg);
+
+#endif

@@ -1,0 +1,416 @@
+/* study_serve_mhd.c — the study server on libmicrohttpd (study_serve.h): the adapter that collects a request and
+ * sends sty_server_handle's response, the tracking of connections against slow clients, and the server's lifecycle.
+ * The request logic is study_serve.c's. */
+#define _DEFAULT_SOURCE /* realpath */
+#include <arpa/inet.h>
+#include <errno.h>
+#include <limits.h>
+#include <microhttpd.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "study_internal.h"
+#include "study_serve_internal.h"
+
+#define MAX_HEADERS 64
+
+/* libmicrohttpd's error log (MHD_OPTION_EXTERNAL_LOGGER): through sty_serve_log, one line each. */
+static void mhd_log(void *cls, const char *fmt, va_list ap)
+{
+	char msg[400];
+	vsnprintf(msg, sizeof msg, fmt, ap);
+	sty_serve_log(cls, "%s", msg);
+}
+
+/* ------------------------------------------------------------------ libmicrohttpd adapter */
+
+typedef struct conn_state {
+	char body[STY_MAX_BODY_B + 1];
+	size_t len;
+	bool too_large;
+} conn_state;
+
+typedef struct header_list {
+	sty_http_field f[MAX_HEADERS];
+	size_t n;
+	bool overflow;
+} header_list;
+
+static enum MHD_Result collect_header(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
+{
+	(void)kind;
+	header_list *h = cls;
+	if (h->n == MAX_HEADERS) {
+		h->overflow = true;
+		return MHD_NO;
+	}
+	h->f[h->n++] = (sty_http_field){key, value};
+	return MHD_YES;
+}
+
+static enum MHD_Result queue(struct MHD_Connection *c, sty_response *r)
+{
+	struct MHD_Response *m;
+	if (r->fd >= 0) {
+		m = MHD_create_response_from_fd_at_offset64(r->file_size, r->fd, r->file_offset);
+		if (m)
+			r->fd = -1; /* MHD closes it */
+	} else {
+		m = MHD_create_response_from_buffer(r->body_size, r->body ? r->body : (char *)"", MHD_RESPMEM_MUST_COPY);
+	}
+	if (!m) {
+		sty_response_release(r);
+		return MHD_NO;
+	}
+	MHD_add_response_header(m, "Content-Type", r->content_type);
+	MHD_add_response_header(m, "X-Content-Type-Options", "nosniff");
+	if (!r->cacheable)
+		MHD_add_response_header(m, "Cache-Control", "no-store");
+	if (r->accept_ranges)
+		MHD_add_response_header(m, "Accept-Ranges", "bytes");
+	if (r->content_range[0])
+		MHD_add_response_header(m, "Content-Range", r->content_range);
+	if (r->authenticate)
+		MHD_add_response_header(m, "WWW-Authenticate", "Bearer realm=\"taslab study\"");
+	if (r->close)
+		MHD_add_response_header(m, "Connection", "close");
+	enum MHD_Result ret = MHD_queue_response(c, r->status, m);
+	MHD_destroy_response(m);
+	sty_response_release(r);
+	return ret;
+}
+
+/* ------------------------------------------------------------------ slow clients (issue 31.3)
+ * libmicrohttpd's timeout (MHD_OPTION_CONNECTION_TIMEOUT) is an idle timeout: every byte resets it, so a client
+ * sending a header byte a second keeps its connection for ever, and a few hundred such connections (under the
+ * per-address cap, from a few addresses) filled every slot while real participants waited. Version 0.9.75 has no
+ * deadline of its own, so each connection is tracked here (MHD_OPTION_NOTIFY_CONNECTION) through its phases:
+ * reading a head, reading a body, answering. A watchdog thread closes those whose head or body is overdue, and a
+ * new connection beyond max_reading closes the one that has been reading longest (a participant's browser sends its
+ * head at once, so it is never the oldest for long). Closing is shutdown(2) on the socket, which libmicrohttpd's
+ * own loop then sees as the client going away; the entry leaves the list in the CLOSED notification, which
+ * libmicrohttpd sends before it closes the descriptor, and both happen under conn_lock, so a shutdown never hits a
+ * reused descriptor. */
+enum { CONN_HEAD, CONN_BODY, CONN_ANSWER, CONN_CLOSING };
+
+typedef struct conn_track {
+	struct conn_track *prev, *next;
+	int fd;
+	int phase;
+	struct timespec since; /* when the phase began */
+} conn_track;
+
+static double elapsed_s(const struct timespec *since, const struct timespec *now)
+{
+	return (double)(now->tv_sec - since->tv_sec) + (double)(now->tv_nsec - since->tv_nsec) * 1e-9;
+}
+
+static unsigned head_timeout_s(const struct sty_server *sv) { return sv->desc.head_timeout_s ? sv->desc.head_timeout_s : 10u; }
+static unsigned body_timeout_s(const struct sty_server *sv) { return sv->desc.body_timeout_s ? sv->desc.body_timeout_s : 10u; }
+static unsigned max_reading(const struct sty_server *sv)
+{
+	unsigned all = sv->desc.max_connections ? sv->desc.max_connections : 256u;
+	return sv->desc.max_reading ? sv->desc.max_reading : (all / 2 ? all / 2 : 1);
+}
+
+/* Moves a connection to `phase` (conn_lock held), keeping the count of those reading. */
+static void conn_phase(struct sty_server *sv, conn_track *t, int phase)
+{
+	int was = t->phase <= CONN_BODY, is = phase <= CONN_BODY;
+	sv->reading += (unsigned)is - (unsigned)was;
+	t->phase = phase;
+	clock_gettime(CLOCK_MONOTONIC, &t->since);
+}
+
+/* Closes a reading connection (conn_lock held): libmicrohttpd sees the end of its stream and cleans it up. */
+static void conn_close(struct sty_server *sv, conn_track *t)
+{
+	shutdown(t->fd, SHUT_RDWR);
+	conn_phase(sv, t, CONN_CLOSING);
+}
+
+static void on_connection(void *cls, struct MHD_Connection *c, void **socket_context, enum MHD_ConnectionNotificationCode toe)
+{
+	struct sty_server *sv = cls;
+	conn_track *t = *socket_context;
+	if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+		const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+		if (!ci || !(t = calloc(1, sizeof *t)))
+			return; /* untracked: only the idle timeout applies to it */
+		t->fd = ci->connect_fd;
+		t->phase = CONN_ANSWER;
+		pthread_mutex_lock(&sv->conn_lock);
+		if (sv->reading >= max_reading(sv)) {
+			conn_track *oldest = NULL; /* the longest in its reading phase (phases restart on keep-alive) */
+			for (conn_track *o = sv->conns; o; o = o->next)
+				if (o->phase <= CONN_BODY && (!oldest || elapsed_s(&o->since, &oldest->since) > 0))
+					oldest = o;
+			if (oldest) {
+				conn_close(sv, oldest);
+				sv->stats.evicted++;
+			}
+		}
+		conn_phase(sv, t, CONN_HEAD);
+		t->next = sv->conns;
+		if (sv->conns)
+			sv->conns->prev = t;
+		sv->conns = t;
+		pthread_mutex_unlock(&sv->conn_lock);
+		*socket_context = t;
+		return;
+	}
+	if (!t)
+		return;
+	pthread_mutex_lock(&sv->conn_lock);
+	conn_phase(sv, t, CONN_CLOSING);
+	if (t->prev)
+		t->prev->next = t->next;
+	else
+		sv->conns = t->next;
+	if (t->next)
+		t->next->prev = t->prev;
+	pthread_mutex_unlock(&sv->conn_lock);
+	free(t);
+	*socket_context = NULL;
+}
+
+/* The tracked connection of a request (NULL when untracked). */
+static conn_track *tracked(struct MHD_Connection *c)
+{
+	const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+	return ci ? ci->socket_context : NULL;
+}
+
+static void track_phase(struct sty_server *sv, struct MHD_Connection *c, int phase)
+{
+	conn_track *t = tracked(c);
+	if (!t)
+		return;
+	pthread_mutex_lock(&sv->conn_lock);
+	if (t->phase != CONN_CLOSING && t->phase != phase)
+		conn_phase(sv, t, phase);
+	pthread_mutex_unlock(&sv->conn_lock);
+}
+
+/* Closes the connections whose head or body is overdue, four times a second, until the server stops. */
+static void *watchdog_main(void *arg)
+{
+	struct sty_server *sv = arg;
+	uint64_t evicted_logged = 0;
+	pthread_mutex_lock(&sv->conn_lock);
+	while (!sv->stopping) {
+		struct timespec now, wake;
+		clock_gettime(CLOCK_MONOTONIC, &now);
+		unsigned heads = 0, bodies = 0;
+		for (conn_track *t = sv->conns; t; t = t->next) {
+			double age = elapsed_s(&t->since, &now);
+			if (t->phase == CONN_HEAD && age > head_timeout_s(sv))
+				conn_close(sv, t), heads++;
+			else if (t->phase == CONN_BODY && age > body_timeout_s(sv))
+				conn_close(sv, t), bodies++;
+		}
+		sv->stats.head_timeouts += heads;
+		sv->stats.body_timeouts += bodies;
+		uint64_t evicted = sv->stats.evicted - evicted_logged;
+		evicted_logged = sv->stats.evicted;
+		if (heads || bodies || evicted) {
+			pthread_mutex_unlock(&sv->conn_lock);
+			sty_serve_log(sv, "slow clients: closed %u connection(s) without a complete request head within %u s, %u without "
+				   "a complete body within %u s, %llu reading longest when more than %u were reading",
+			       heads, head_timeout_s(sv), bodies, body_timeout_s(sv), (unsigned long long)evicted, max_reading(sv));
+			pthread_mutex_lock(&sv->conn_lock);
+		}
+		clock_gettime(CLOCK_MONOTONIC, &wake);
+		wake.tv_nsec += 250 * 1000 * 1000;
+		if (wake.tv_nsec >= 1000000000)
+			wake.tv_sec++, wake.tv_nsec -= 1000000000;
+		pthread_cond_timedwait(&sv->conn_wake, &sv->conn_lock, &wake);
+	}
+	pthread_mutex_unlock(&sv->conn_lock);
+	return NULL;
+}
+
+sty_server_stats sty_server_get_stats(sty_server *sv)
+{
+	pthread_mutex_lock(&sv->conn_lock);
+	sty_server_stats st = sv->stats;
+	pthread_mutex_unlock(&sv->conn_lock);
+	return st;
+}
+
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
+				  const char *version, const char *upload_data, size_t *upload_size, void **con_cls)
+{
+	(void)version;
+	struct sty_server *sv = cls;
+	conn_state *cs = *con_cls;
+	if (cs && *upload_size) { /* a piece of the body: keep up to STY_MAX_BODY_B */
+		if (cs->len + *upload_size > STY_MAX_BODY_B)
+			cs->too_large = true;
+		else {
+			memcpy(cs->body + cs->len, upload_data, *upload_size);
+			cs->len += *upload_size;
+		}
+		*upload_size = 0;
+		return MHD_YES;
+	}
+	header_list h = {.n = 0};
+	MHD_get_connection_values(c, MHD_HEADER_KIND, collect_header, &h);
+	sty_response r;
+	if (h.overflow) {
+		track_phase(sv, c, CONN_ANSWER);
+		sty_response_error(&r, 431, "too many header fields");
+		r.close = true;
+		return queue(c, &r);
+	}
+	sty_request rq = {.method = method, .path = url, .headers = h.f, .header_count = h.n};
+	if (!cs) { /* first call: the head has arrived */
+		if (!(cs = calloc(1, sizeof *cs)))
+			return MHD_NO;
+		*con_cls = cs;
+		sty_server_handle(sv, &rq, &r);
+		if (r.status == 0) {
+			track_phase(sv, c, CONN_BODY);
+			return MHD_YES;
+		}
+		track_phase(sv, c, CONN_ANSWER);
+		return queue(c, &r);
+	}
+	track_phase(sv, c, CONN_ANSWER);
+	rq.body = cs->body;
+	rq.body_size = cs->len;
+	rq.body_too_large = cs->too_large;
+	sty_server_handle(sv, &rq, &r);
+	if (r.status == 0) { /* cannot happen with a body; be safe */
+		sty_response_error(&r, 500, "internal error");
+	}
+	return queue(c, &r);
+}
+
+static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
+{
+	(void)toe;
+	free(*con_cls);
+	*con_cls = NULL;
+	track_phase(cls, c, CONN_HEAD); /* kept alive: the next request's head is due from now */
+}
+
+/* ------------------------------------------------------------------ lifecycle */
+
+int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	if (!sty_stimuli(s)[0])
+		return tl_error(err, err_size, TL_ERR_ARG, "this study has no stimulus folder (an imported study cannot be served)");
+	sty_server *sv = calloc(1, sizeof *sv);
+	if (!sv)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	sv->study = s;
+	if (desc)
+		sv->desc = *desc;
+	pthread_mutex_init(&sv->log_lock, NULL);
+	pthread_mutex_init(&sv->conn_lock, NULL);
+	pthread_condattr_t ca;
+	pthread_condattr_init(&ca);
+	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+	pthread_cond_init(&sv->conn_wake, &ca);
+	pthread_condattr_destroy(&ca);
+	if (!realpath(sty_stimuli(s), sv->root)) {
+		int rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: stimulus folder missing: %s", sty_stimuli(s), strerror(errno));
+		sty_server_stop(&sv);
+		return rc;
+	}
+	*out = sv;
+	return TL_OK;
+}
+
+int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char *err, size_t err_size)
+{
+	sty_server *sv;
+	int rc = sty_server_create(s, desc, &sv, err, err_size);
+	if (rc)
+		return rc;
+	const sty_server_desc *d = &sv->desc;
+	const char *bind = d->bind ? d->bind : "127.0.0.1";
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(d->port)};
+	if (inet_pton(AF_INET, bind, &sa.sin_addr) != 1) {
+		sty_server_stop(&sv);
+		return tl_error(err, err_size, TL_ERR_ARG, "--bind '%s' is not an IPv4 address", bind);
+	}
+	sv->starting = 1;
+	/* Limits against one client locking the others out: connections per client address and in all, an idle
+	 * timeout (silent connections are closed), and the head/body deadlines and the cap on reading connections of
+	 * on_connection and the watchdog (trickling connections are closed). */
+	/* The logger comes first, or MHD prints the messages of the options before it itself. */
+	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG, 0, NULL, NULL,
+				   on_request, sv, MHD_OPTION_EXTERNAL_LOGGER, mhd_log, sv, MHD_OPTION_SOCK_ADDR,
+				   (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE, d->threads ? d->threads : 4u,
+				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_NOTIFY_CONNECTION, on_connection, sv,
+				   MHD_OPTION_CONNECTION_TIMEOUT,
+				   d->timeout_s ? d->timeout_s : 15u, MHD_OPTION_CONNECTION_LIMIT,
+				   d->max_connections ? d->max_connections : 256u, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+				   d->max_per_client ? d->max_per_client : 32u, MHD_OPTION_END);
+	pthread_mutex_lock(&sv->log_lock);
+	sv->starting = 0;
+	pthread_mutex_unlock(&sv->log_lock);
+	if (!sv->mhd) {
+		/* MHD's own words ("Failed to bind to port 0: Address already in use" — it names the port it was given
+		 * apart from the address, 0): keep the system's reason and say what to do. */
+		const char *why = strrchr(sv->start_msg, ':') ? strrchr(sv->start_msg, ':') + 1 : sv->start_msg;
+		while (*why == ' ')
+			why++;
+		const char *hint = strstr(why, "in use") ? "choose another --port, or --port 0 for any free one"
+				   : strstr(why, "assign") ? "--bind must be an address of this machine"
+				   : "see the message";
+		if (!*why)
+			why = "libmicrohttpd could not start";
+		rc = tl_error(err, err_size, TL_ERR_ARG, "cannot listen on %s:%u: %s (%s)", bind, (unsigned)d->port, why, hint);
+		sty_server_stop(&sv);
+		return rc;
+	}
+	if (pthread_create(&sv->watchdog, NULL, watchdog_main, sv)) {
+		sty_server_stop(&sv);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "cannot start the server's watchdog thread");
+	}
+	sv->watching = true;
+	const union MHD_DaemonInfo *info = MHD_get_daemon_info(sv->mhd, MHD_DAEMON_INFO_BIND_PORT);
+	sv->port = info ? info->port : d->port;
+	char url[128];
+	snprintf(url, sizeof url, "http://%s:%u", bind, (unsigned)sv->port);
+	if ((rc = sty_set_served_url(s, url, err, err_size))) {
+		sty_server_stop(&sv);
+		return rc;
+	}
+	*out = sv;
+	return TL_OK;
+}
+
+uint16_t sty_server_port(const sty_server *sv) { return sv->port; }
+
+void sty_server_stop(sty_server **psv)
+{
+	if (!psv || !*psv)
+		return;
+	struct sty_server *sv = *psv;
+	if (sv->watching) { /* first, so that no shutdown(2) meets a descriptor the daemon closes while stopping */
+		pthread_mutex_lock(&sv->conn_lock);
+		sv->stopping = true;
+		pthread_cond_signal(&sv->conn_wake);
+		pthread_mutex_unlock(&sv->conn_lock);
+		pthread_join(sv->watchdog, NULL);
+	}
+	if (sv->mhd)
+		MHD_stop_daemon(sv->mhd);
+	pthread_cond_destroy(&sv->conn_wake);
+	pthread_mutex_destroy(&sv->conn_lock);
+	pthread_mutex_destroy(&(*psv)->log_lock);
+	free(*psv);
+	*psv = NULL;
+}
