@@ -619,6 +619,13 @@ static void test_hostile_content(void **state)
 #define CAM(p) "{\"nodes\": [{\"camera\": 0}], \"cameras\": [{\"type\": \"perspective\", \"perspective\": " p "}]}"
 	expect_refused("yfov_zero.gltf", CAM("{\"yfov\": 0, \"znear\": 0.1}"), "camera 0");
 	expect_refused("yfov_pi.gltf", CAM("{\"yfov\": 3.15, \"znear\": 0.1}"), "camera 0");
+	/* issue 24.2: inside the schema's (0, pi) but no meaningful image; the limits are those of scene files */
+	expect_refused("yfov_near_pi.gltf", CAM("{\"yfov\": 3.14159, \"znear\": 0.1}"), "meaningful image");
+	expect_refused("yfov_tiny.gltf", CAM("{\"yfov\": 0.001, \"znear\": 0.1}"), "meaningful image");
+	expect_refused("depth_range.gltf", CAM("{\"yfov\": 1, \"znear\": 1e-9, \"zfar\": 100}"), "depth precision");
+	expect_refused("depth_range_inf.gltf", CAM("{\"yfov\": 1, \"znear\": 1e-6}"), "depth precision");
+	scene *s179 = expect_loads("yfov_179.gltf", CAM("{\"yfov\": 3.1241, \"znear\": 0.1}"));
+	scene_destroy(&s179);
 	expect_refused("znear_zfar.gltf", CAM("{\"yfov\": 1, \"znear\": 10, \"zfar\": 1}"), "zfar");
 	expect_refused("znear_zero.gltf", CAM("{\"yfov\": 1, \"znear\": 0}"), "znear");
 	scene *s = expect_loads("camera.gltf", CAM("{\"yfov\": 1, \"znear\": 0.1}")); /* infinite: far plane 1000 */

@@ -1035,11 +1035,22 @@ int add_cameras(loader &L, const std::vector<int> &node_object)
 			continue;
 		const tinygltf::PerspectiveCamera &pc = L.m.cameras[(size_t)cam].perspective;
 		// §3.10.2 / camera.perspective schema: yfov > 0 (and below pi for a projection to exist), znear > 0,
-		// zfar > znear or absent (tinygltf: 0; an infinite projection, rendered with a far plane at 1000).
+		// zfar > znear or absent (tinygltf: 0; an infinite projection, rendered with a far plane at 1000). The schema's
+		// limits still allow projections that make no meaningful image (yfov -> pi: everything squeezed into the
+		// centre; zfar / znear ~ 1e30: no depth precision), so the bounds of a scene file's camera hold here too:
+		// 1 to 179 degrees (scene_parse.c, fov_deg) and at most 1e7 between the far and the near plane (float depth).
+		double zfar = pc.zfar > pc.znear ? pc.zfar : 1000.0;
 		if (!(pc.yfov > 0 && pc.yfov < TLM_PI) || !(pc.znear > 0 && pc.znear < 1e30) ||
 		    !(pc.zfar == 0 || (pc.zfar > pc.znear && pc.zfar < 1e30)))
 			return L.fail("camera %d: yfov %g must be in (0, pi), znear %g > 0 and zfar %g > znear (glTF 2.0 §3.10)",
 				      cam, pc.yfov, pc.znear, pc.zfar);
+		if (!(pc.yfov >= SCENE_FOV_MIN_DEG * TLM_PI / 180.0 && pc.yfov <= SCENE_FOV_MAX_DEG * TLM_PI / 180.0))
+			return L.fail("camera %d: yfov %g rad (%.2f degrees) makes no meaningful image: use %g to %g degrees",
+				      cam, pc.yfov, pc.yfov * 180.0 / TLM_PI, SCENE_FOV_MIN_DEG, SCENE_FOV_MAX_DEG);
+		if (!(zfar / pc.znear <= SCENE_DEPTH_RANGE_MAX))
+			return L.fail("camera %d: zfar / znear = %g (znear %g, zfar %g) leaves no depth precision: keep it at "
+				      "most %g",
+				      cam, zfar / pc.znear, pc.znear, zfar, SCENE_DEPTH_RANGE_MAX);
 		const tlm_mat4 &w = world[(size_t)node_object[ni]];
 		tlm_vec3 pos = tlm_mat4_mul_point(w, tlm_v3(0, 0, 0)), target = tlm_mat4_mul_point(w, tlm_v3(0, 0, -1));
 		tlm_vec3 d = tlm_v3_sub(target, pos);

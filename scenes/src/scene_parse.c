@@ -633,7 +633,7 @@ static int parse_cameras(jp *c, scene *s, json_t *root)
 		scene_camera *cam = &s->cameras[i];
 		const char *name, *motion;
 		if (jkeys(c, d, p, k) || jstr(c, d, "name", p, NULL, &name) || jname(c, name, p, cam->name) ||
-		    jstr(c, d, "motion", p, NULL, &motion) || jnum(c, d, "fov_deg", p, 60, 1, 179, &cam->fov_deg) ||
+		    jstr(c, d, "motion", p, NULL, &motion) || jnum(c, d, "fov_deg", p, 60, SCENE_FOV_MIN_DEG, SCENE_FOV_MAX_DEG, &cam->fov_deg) ||
 		    jnum(c, d, "znear", p, 0.05f, 1e-4f, 1e4f, &cam->znear) ||
 		    jnum(c, d, "zfar", p, 200, 1e-3f, 1e7f, &cam->zfar))
 			return TL_ERR_INPUT;

@@ -26,6 +26,11 @@ extern "C" {
 #endif
 
 #define SCENE_NAME_MAX 64
+/* Cameras that make a meaningful image (scene files' fov_deg and glTF cameras alike): vertical field of view in
+ * degrees, and the largest zfar / znear (float depth precision). */
+#define SCENE_FOV_MIN_DEG 1.0
+#define SCENE_FOV_MAX_DEG 179.0
+#define SCENE_DEPTH_RANGE_MAX 1e7
 #define SCENE_MAX_LIGHTS 16       /* shading loop bound (shaders/common.glsl: MAX_LIGHTS) */
 #define SCENE_MAX_SHADOW_LAYERS 48 /* directional/spot: 1 layer, point: 6 (cube faces) */
 #define SCENE_TEX_NONE (-1)
