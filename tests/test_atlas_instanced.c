@@ -11,7 +11,8 @@
  *    reuses exactly everything from its third frame (A1), sau/4 shades only at t mod 4 = 0 (U2);
  *  - moving (frames 0..): the camera stands, the cubes slide: every block stays visible at the size it asked for, so
  *    none is new again after the first frame (TAS-METHODS section 4: "a patch visible in consecutive frames at the
- *    same level keeps its address"); allocation is the same for sa, sau and tasa ((d) of section 9). */
+ *    same level keeps its address"); allocation is the same for sa, sau and tasa ((d) of section 9);
+ *  - every frame: the texels shaded, counted by the shading pass (shade_invocations), equal the CPU's work list. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,6 +74,13 @@ static void test_instanced(void **state)
 						 "size it asked for)",
 						 variants[v], what, f, (long long)x->new_units);
 				assert_int_equal(x->shaded_samples + x->reused_samples, x->allocated_samples);
+				/* issue 24.3: shaded texels are counted by the shading pass itself and must equal the work
+				 * list the CPU launched (a lost chunk or a double-shaded texel shows here) */
+				if (tu_extra(x, "shade_invocations") != tu_extra(x, "listed_samples") ||
+				    (double)x->shaded_samples != tu_extra(x, "shade_invocations"))
+					fail_msg("%s %s frame %u: %lld shaded, %.0f shading invocations, %.0f texels listed",
+						 variants[v], what, f, (long long)x->shaded_samples,
+						 tu_extra(x, "shade_invocations"), tu_extra(x, "listed_samples"));
 			}
 	for (uint32_t f = 0; f < F; f++) {
 		const frame_stats *tasa = &st[0][2][f], *sau = &st[0][1][f];

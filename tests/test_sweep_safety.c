@@ -47,9 +47,9 @@ static int sh(const char *fmt, ...)
 	char cmd[16384];
 	va_list ap;
 	va_start(ap, fmt);
-	/* for every taslab of the line, the batch scripts' too (tu_run sets it for the first command only) */
-	int n = snprintf(cmd, sizeof cmd, "export ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=8; ");
-	vsnprintf(cmd + n, sizeof cmd - (size_t)n, fmt, ap);
+	/* tu_run exports the child environment (leak detection on) for every command of the line, the batch scripts'
+	 * taslab processes too */
+	vsnprintf(cmd, sizeof cmd, fmt, ap);
 	va_end(ap);
 	return tu_run(cmd, out, sizeof out);
 }

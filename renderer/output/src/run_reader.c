@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
@@ -95,11 +96,18 @@ static int32_t le32(const unsigned char *p) { return (int32_t)((uint32_t)p[0] | 
 static int frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h)
 {
 	unsigned char b[4096];
-	FILE *f = fopen(path, "rb");
-	if (!f)
+	int fd;
+	uint64_t fsize;
+	char e[256];
+	/* regular files only: opening a FIFO would wait for a writer (issue 31.6); anything else is left to the image
+	 * reader, whose message says what the path is */
+	if (tl_open_regular(path, UINT64_MAX, &fd, &fsize, e, sizeof e))
 		return -1;
-	size_t n = fread(b, 1, sizeof b, f);
-	fclose(f);
+	ssize_t got = read(fd, b, sizeof b);
+	close(fd);
+	if (got < 0)
+		return -1;
+	size_t n = (size_t)got;
 	if (!exr) {
 		static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 		if (n < 24 || memcmp(b, sig, 8) || memcmp(b + 12, "IHDR", 4))

@@ -23,7 +23,7 @@ layout(std430, set = 1, binding = 5) buffer Visible { uint visible[]; };        
 layout(std430, set = 1, binding = 6) readonly buffer Grad { float G[]; };           // tasa: per pid, last frame
 layout(std430, set = 1, binding = 7) buffer Filtered { uint F[]; };                 // tasa: 2x2 image max (float bits)
 layout(std430, set = 1, binding = 8) buffer GradNew { uint Gnew[]; };               // tasa: max g of the shading (bits)
-layout(std430, set = 1, binding = 9) buffer Counters { uint count[8]; };            // 0 committed blocks, 1 their texels, 2 late texels
+layout(std430, set = 1, binding = 9) buffer Counters { uint count[8]; };            // 0 committed blocks, 1 their texels, 2 late texels, 3 texels shaded by shade.comp
 layout(std430, set = 1, binding = 11) buffer DMax { uint dmax[]; };                 // oracle: per pid max d (bits)
 layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D ids;             // object + 1, triangle, barycentrics
 layout(set = 1, binding = 13, rgba16f) uniform image2D atlas;

@@ -67,6 +67,7 @@ typedef struct atlas_state {
 	int64_t last_frame;
 	/* this frame's numbers */
 	uint64_t allocated_blocks, allocated_texels, new_blocks, shaded_blocks, shaded_texels;
+	uint64_t listed_texels;     /* texels on the shading work list (the oracle: every allocated one) */
 	uint32_t overflow, clamped;
 	double cpu_ms;
 } atlas_state;
@@ -543,6 +544,7 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 	const uint32_t *vis = s->buf[B_VISIBLE].mapped;
 	const float *F = s->buf[B_F].mapped;
 	s->allocated_blocks = s->allocated_texels = s->new_blocks = s->shaded_blocks = s->shaded_texels = 0;
+	s->listed_texels = 0;
 	s->overflow = s->clamped = 0;
 	/* 1-2: free the blocks of patches no longer visible, resized or turned around. "Resized" compares with the size
 	 * the patch asked for: a block made smaller by an overflow (step 3) stays while that request stays the same —
@@ -629,6 +631,8 @@ int atlas_cpu_step(render *r, uint32_t frame, char *err, size_t err_size)
 				work[nw][0] = p;
 				work[nw++][1] = first;
 			}
+			if (pass == 0)
+				s->listed_texels += texels;
 			if (pass == 0 && !s->v.oracle) {
 				s->shaded_blocks++;
 				s->shaded_texels += texels;
@@ -717,13 +721,19 @@ void atlas_collect(render *r, frame_stats *st)
 	st->allocated_samples = (int64_t)s->allocated_texels;
 	st->visible_units = (int64_t)s->allocated_blocks;
 	st->new_units = (int64_t)s->new_blocks;
+	/* shaded texels as counted by the shading itself (shade.comp.in, count[3]); the oracle's are the committed ones
+	 * (commit.comp.in). listed_samples: the texels the CPU put on the shading work list — equal to the shading's own
+	 * count (count[3]; the oracle shades every listed texel into its scratch atlas) unless work was lost on the way
+	 * (tests assert it). */
+	if (!s->v.oracle)
+		s->shaded_texels = c[3];
 	st->shaded_units = (int64_t)s->shaded_blocks;
 	st->shaded_samples = (int64_t)s->shaded_texels;
-	st->reused_samples = (int64_t)(s->allocated_texels - s->shaded_texels);
+	st->reused_samples = (int64_t)s->allocated_texels - (int64_t)s->shaded_texels;
 	st->late_samples = s->v.truth ? (int64_t)c[2] : -1;
-	const char *names[3] = {"cpu_ms_alloc", "atlas_overflow", "clamped_units"};
-	double vals[3] = {s->cpu_ms, s->overflow, s->clamped};
-	for (int i = 0; i < 3 && st->extra_count < FRAME_MAX_EXTRA; i++) {
+	const char *names[5] = {"cpu_ms_alloc", "atlas_overflow", "clamped_units", "listed_samples", "shade_invocations"};
+	double vals[5] = {s->cpu_ms, s->overflow, s->clamped, (double)s->listed_texels, (double)c[3]};
+	for (int i = 0; i < 5 && st->extra_count < FRAME_MAX_EXTRA; i++) {
 		st->extra_names[st->extra_count] = names[i];
 		st->extra[st->extra_count++] = vals[i];
 	}
