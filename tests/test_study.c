@@ -37,28 +37,9 @@
 #include "taslab/pairs.h"
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
-#include "test_util.h"
-
-#define REF_DIR TASLAB_SOURCE_DIR "/tests/reference"
+#include "test_study_util.h"
 
 static char out[1 << 16];
-
-/* A new study at `db` (must not exist). */
-static sty *created(const char *db)
-{
-	char err[1024];
-	sty *s = NULL;
-	if (sty_create(db, &s, err, sizeof err))
-		fail_msg("%s", err);
-	return s;
-}
-
-static void commit(sty *s)
-{
-	char err[1024];
-	if (sty_commit(s, err, sizeof err))
-		fail_msg("%s", err);
-}
 
 /* Sends `req` (len bytes) as is to 127.0.0.1:port from source address `from` (NULL: 127.0.0.1); returns the
  * status code or -1; the whole response (head and body) in resp. */

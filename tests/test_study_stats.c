@@ -15,9 +15,7 @@
 #include <string.h>
 
 #include "taslab/study.h"
-#include "test_util.h"
-
-#define REF_DIR TASLAB_SOURCE_DIR "/tests/reference"
+#include "test_study_util.h"
 
 /* JOD bootstrap intervals: taslab (GSL's MT19937, seed 3) and R (set.seed(1)) each draw 20000 resamples of the
  * participants; their 2.5/97.5% percentiles differ by Monte Carlo error only. The JOD of a resample takes few values
@@ -26,22 +24,6 @@
  * most 0.166 (seed 3), 0.155 (seeds 1, 2), 0.166 (seed 7); tolerance 0.25. With 200 resamples instead, 5 of 6 seeds
  * exceed it (up to 0.34): the check tells a converged bootstrap from a short one. */
 #define JOD_BOOT_TOL 0.25
-
-static sty *created(const char *db)
-{
-	char err[1024];
-	sty *s = NULL;
-	if (sty_create(db, &s, err, sizeof err))
-		fail_msg("%s", err);
-	return s;
-}
-
-static void commit(sty *s)
-{
-	char err[1024];
-	if (sty_commit(s, err, sizeof err))
-		fail_msg("%s", err);
-}
 
 /* R's value of `kind` for T and key in the reference CSV (NaN when absent: the caller fails). */
 static double r_value(const char *kind, const char *T, const char *key)
