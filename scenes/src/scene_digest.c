@@ -6,42 +6,32 @@
 
 #include "taslab/scene.h"
 #include "taslab/tl_fs.h"
+#include "taslab/tl_hash.h"
 
-/* FNV-1a, 64 bits (Fowler, Noll, Vo; the IETF draft "The FNV Non-Cryptographic Hash Algorithm", section 2): a change
- * detector, not a defence against someone forging inputs. */
-static void fnv(uint64_t *h, const void *data, size_t n)
-{
-	const unsigned char *p = data;
-	for (size_t i = 0; i < n; i++) {
-		*h ^= p[i];
-		*h *= 0x100000001b3ull;
-	}
-}
-
-#define PUT(h, v) fnv(h, &(v), sizeof(v))
+#define PUT(h, v) tl_fnv1a64(h, &(v), sizeof(v))
 
 /* The scene file's bytes, then everything loaded from it and its assets (glTF meshes, buffers, images): vertices,
  * indices, texture texels, materials, object, light and camera placement. Fields are hashed one by one (no struct
  * padding, no pointers), so the digest depends on the content only. */
 void scene_digest(const scene *s, char out[SCENE_DIGEST_HEX])
 {
-	uint64_t h = 0xcbf29ce484222325ull;
+	uint64_t h = TL_FNV1A64_INIT;
 	char *text = NULL, err[256];
 	size_t len = 0;
 	if (s->path && !tl_read_file(s->path, 64u << 20, &text, &len, err, sizeof err))
-		fnv(&h, text, len);
+		tl_fnv1a64(&h, text, len);
 	free(text);
 	PUT(&h, s->duration_s), PUT(&h, s->fps), PUT(&h, s->exposure), PUT(&h, s->ambient), PUT(&h, s->sky);
 	PUT(&h, s->texture_size), PUT(&h, s->shadow_map_size);
 	for (size_t i = 0; i < s->mesh_count; i++) {
 		const scene_mesh *m = &s->meshes[i];
 		PUT(&h, m->vertex_count), PUT(&h, m->index_count);
-		fnv(&h, m->vertices, (size_t)m->vertex_count * sizeof *m->vertices); /* 12 floats each: no padding */
-		fnv(&h, m->indices, (size_t)m->index_count * sizeof *m->indices);
+		tl_fnv1a64(&h, m->vertices, (size_t)m->vertex_count * sizeof *m->vertices); /* 12 floats each: no padding */
+		tl_fnv1a64(&h, m->indices, (size_t)m->index_count * sizeof *m->indices);
 	}
 	for (size_t i = 0; i < s->texture_count; i++) {
 		PUT(&h, s->textures[i].srgb);
-		fnv(&h, s->textures[i].rgba, (size_t)s->texture_size * s->texture_size * 4);
+		tl_fnv1a64(&h, s->textures[i].rgba, (size_t)s->texture_size * s->texture_size * 4);
 	}
 	for (size_t i = 0; i < s->material_count; i++) {
 		const scene_material *m = &s->materials[i];
@@ -62,9 +52,9 @@ void scene_digest(const scene *s, char out[SCENE_DIGEST_HEX])
 	}
 	for (size_t i = 0; i < s->camera_count; i++) {
 		const scene_camera *c = &s->cameras[i];
-		fnv(&h, c->name, strlen(c->name));
+		tl_fnv1a64(&h, c->name, strlen(c->name));
 		PUT(&h, c->motion), PUT(&h, c->fov_deg), PUT(&h, c->znear), PUT(&h, c->zfar);
-		fnv(&h, c->keys, c->key_count * sizeof *c->keys); /* t + two vec3: floats only */
+		tl_fnv1a64(&h, c->keys, c->key_count * sizeof *c->keys); /* t + two vec3: floats only */
 	}
 	snprintf(out, SCENE_DIGEST_HEX, "%016llx", (unsigned long long)h);
 }
