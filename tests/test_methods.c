@@ -120,7 +120,7 @@ static void test_options(void **state)
 	assert_int_equal(n, 3);
 	assert_string_equal(o[0].key, "threshold");
 	assert_true(o[2].type == RUN_VALUE_BOOL && !o[2].boolean); /* truth */
-	assert_true(o[1].type == RUN_VALUE_NUMBER && o[1].number == 3);
+	assert_true(o[1].type == RUN_VALUE_INTEGER && o[1].number == 3); /* a uint option: a JSON integer (24.8) */
 	assert_int_equal(method_config_init(&c, "ref", err, sizeof err), TL_OK);
 	assert_int_equal(method_config_run_options(&c, o, 8), 0);
 	assert_int_equal(method_config_set(&c, "threshold", "8", err, sizeof err), TL_ERR_ARG);

@@ -30,12 +30,13 @@ static bool with_decisions; /* write_run: also decision maps */
 static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, bool exr)
 {
 	char err[1024];
-	run_option opts[2] = {{.key = "threshold", .type = RUN_VALUE_NUMBER, .number = 8},
-			      {.key = "oracle", .type = RUN_VALUE_BOOL, .boolean = true}};
-	run_option derived[1] = {{.key = "atlas_width", .type = RUN_VALUE_NUMBER, .number = 256}};
+	run_option opts[3] = {{.key = "threshold", .type = RUN_VALUE_NUMBER, .number = 8},
+			      {.key = "oracle", .type = RUN_VALUE_BOOL, .boolean = true},
+			      {.key = "max-age", .type = RUN_VALUE_INTEGER, .number = 7}};
+	run_option derived[1] = {{.key = "atlas_width", .type = RUN_VALUE_INTEGER, .number = 256}};
 	run_info info = {.scene_name = "s", .scene_path = "s.json", .camera = "c", .camera_motion = "moving",
 			 .device = "dev", .driver = "drv", .method = "tarc-oracle", .variant = "tarc-oracle@8",
-			 .threshold = 8, .options = opts, .option_count = 2, .derived = derived, .derived_count = 1,
+			 .threshold = 8, .options = opts, .option_count = 3, .derived = derived, .derived_count = 1,
 			 .ocio_version = "2.1.2", .vulkan_api = "1.3.230", .first_frame = first,
 			 .last_frame = first + n - 1, .width = W, .height = H, .fps = 30, .write_exr = exr, .write_png = png,
 			 .write_decisions = with_decisions};
@@ -93,8 +94,11 @@ static void test_run_round_trip(void **state)
 	char *text = tu_read_file(p, NULL);
 	assert_non_null(strstr(text, "\"method_options\""));
 	assert_non_null(strstr(text, "\"oracle\": true"));
+	/* integer options and sizes are JSON integers, real-valued ones stay reals (issue 24.8) */
+	assert_non_null(strstr(text, "\"max-age\": 7,\n")); /* keys sorted: max-age, oracle, threshold */
+	assert_non_null(strstr(text, "\"threshold\": 8.0"));
 	/* what the method derived, and the versions (DESIGN section 5) */
-	assert_non_null(strstr(text, "\"method_derived\": {\n      \"atlas_width\": 256"));
+	assert_non_null(strstr(text, "\"method_derived\": {\n      \"atlas_width\": 256\n"));
 	assert_non_null(strstr(text, "\"opencolorio\": \"2.1.2\""));
 	assert_non_null(strstr(text, "\"vulkan_api\": \"1.3.230\""));
 	assert_non_null(strstr(text, "\"vulkan_driver\": \"drv\""));

@@ -104,6 +104,10 @@ static json_t *option_json(const run_option *o)
 	switch (o->type) {
 	case RUN_VALUE_BOOL: return json_boolean(o->boolean);
 	case RUN_VALUE_STRING: return json_string(o->string ? o->string : "");
+	case RUN_VALUE_INTEGER: /* a whole number in json_int_t's range; anything else stays a real */
+		if (o->number == floor(o->number) && fabs(o->number) < 9007199254740992.0)
+			return json_integer((json_int_t)o->number);
+		return isfinite(o->number) ? json_real(o->number) : json_null();
 	default: return isfinite(o->number) ? json_real(o->number) : json_null();
 	}
 }

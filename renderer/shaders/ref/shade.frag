@@ -4,6 +4,7 @@
 // Writes scene-linear radiance (times exposure) with coverage in alpha. Specialised per alpha mode:
 // ALPHA_BLEND outputs the material alpha for "over" blending (glTF alphaMode BLEND).
 #include "common/shading.glsl"
+#include "ref/count.glsl"
 
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
@@ -19,4 +20,6 @@ void main()
 	Surface s = surface_at(pc.slot, pc.object, v_position, v_normal, v_tangent, v_uv, gl_FrontFacing);
 	vec3 c = shade_lights(pc.slot, s) * states[pc.slot].ambient_exposure.w;
 	o_hdr = vec4(c, ALPHA_BLEND ? s.alpha : 1.0);
+	if (!ALPHA_BLEND)
+		count_shading();
 }

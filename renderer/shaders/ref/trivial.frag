@@ -3,6 +3,7 @@
 // trivial.frag - benchmark stand-in for shade.frag: same inputs and outputs, base colour only.
 // scripts/bench-render swaps it in to measure the share of frame time spent in shading.
 #include "common/common.glsl"
+#include "ref/count.glsl"
 
 layout(location = 0) in vec3 v_position;
 layout(location = 1) in vec3 v_normal;
@@ -15,4 +16,5 @@ void main()
 {
 	GpuMaterial m = materials[object_at(pc.slot, pc.object).material.x];
 	o_hdr = vec4(m.base_color.rgb * states[pc.slot].ambient_exposure.w, 1.0);
+	count_shading(); // as shade.frag, so that the benchmark's stand-in does the same counting work
 }

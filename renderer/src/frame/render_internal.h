@@ -108,6 +108,7 @@ struct render {
 	uint32_t *mesh_first_index, *mesh_vertex_offset;
 	vkdev_buffer materials;
 	vkdev_buffer states;      /* FrameState x state_ring, host visible */
+	vkdev_buffer shade_count; /* uint: fragments the reference shading ran for (scene set binding 6), host visible */
 	vkdev_buffer objects;     /* GpuObject x object_count x state_ring, host visible */
 	vkdev_image color_tex, data_tex;
 	VkSampler tex_sampler, shadow_sampler;

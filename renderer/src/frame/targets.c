@@ -10,16 +10,18 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 	int rc = 0;
 	VkDevice d = r->dev->device;
 	VkShaderStageFlags gs = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	VkDescriptorSetLayoutBinding sb[6] = {
+	VkDescriptorSetLayoutBinding sb[7] = {
 		{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, gs, NULL},
 		{1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, gs, NULL},
 		{2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, gs, NULL},
 		{3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, gs, NULL},
 		{4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, gs, NULL},
 		{5, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, GPU_SHADOW_CHUNKS, gs, NULL},
+		/* the shading counter of the reference shading (ref/count.glsl), fragment stage only */
+		{6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, NULL},
 	};
 	VkDescriptorSetLayoutCreateInfo sl = {
-		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 6, .pBindings = sb};
+		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 7, .pBindings = sb};
 	CHECK_VK(vkCreateDescriptorSetLayout(d, &sl, NULL, &r->scene_set_layout));
 	VkDescriptorSetLayoutBinding db[2] = {
 		{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
@@ -45,10 +47,11 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 	CHECK_VK(vkAllocateDescriptorSets(d, &ai, &r->scene_set));
 	ai.pSetLayouts = &r->display_set_layout;
 	CHECK_VK(vkAllocateDescriptorSets(d, &ai, &r->display_set));
-	VkDescriptorBufferInfo bi[3] = {
+	VkDescriptorBufferInfo bi[4] = {
 		{r->states.buffer, 0, VK_WHOLE_SIZE},
 		{r->objects.buffer, 0, VK_WHOLE_SIZE},
 		{r->materials.buffer, 0, VK_WHOLE_SIZE},
+		{r->shade_count.buffer, 0, VK_WHOLE_SIZE},
 	};
 	VkDescriptorImageInfo ii[2] = {
 		{r->tex_sampler, r->color_tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
@@ -58,7 +61,7 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 		{VK_NULL_HANDLE, r->hdr.view, VK_IMAGE_LAYOUT_GENERAL},
 		{VK_NULL_HANDLE, r->display.view, VK_IMAGE_LAYOUT_GENERAL},
 	};
-	VkWriteDescriptorSet w[7];
+	VkWriteDescriptorSet w[8];
 	for (uint32_t i = 0; i < 3; i++)
 		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
 					      .dstBinding = i, .descriptorCount = 1,
@@ -72,7 +75,10 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 		w[5 + i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->display_set,
 						  .dstBinding = i, .descriptorCount = 1,
 						  .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &si[i]};
-	vkUpdateDescriptorSets(d, 7, w, 0, NULL);
+	w[7] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
+				      .dstBinding = 6, .descriptorCount = 1,
+				      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi[3]};
+	vkUpdateDescriptorSets(d, 8, w, 0, NULL);
 fail:
 	return rc;
 }

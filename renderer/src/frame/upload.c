@@ -152,6 +152,8 @@ int render_upload_scene(render *r, char *err, size_t err_size)
 				     true, "frame states", &r->states));
 	CHECK_VK(vkdev_buffer_create(r->dev, r->state_ring * s->object_count * sizeof(gpu_object),
 				     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "objects", &r->objects));
+	CHECK_VK(vkdev_buffer_create(r->dev, 4 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+				     VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "shade count", &r->shade_count));
 fail:
 	free(verts);
 	free(idx);
@@ -165,7 +167,7 @@ void render_upload_destroy(render *r)
 {
 	vkdev_image_destroy(r->dev, &r->color_tex);
 	vkdev_image_destroy(r->dev, &r->data_tex);
-	vkdev_buffer *bufs[] = {&r->vertices, &r->indices, &r->materials, &r->states, &r->objects};
+	vkdev_buffer *bufs[] = {&r->vertices, &r->indices, &r->materials, &r->states, &r->objects, &r->shade_count};
 	for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
 		vkdev_buffer_destroy(r->dev, bufs[i]);
 	free(r->mesh_first_index);

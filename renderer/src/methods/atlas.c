@@ -314,8 +314,8 @@ size_t atlas_derived(const render *r, run_option *out, size_t max)
 {
 	const atlas_state *s = r->method_state;
 	const run_option v[] = {
-		{.key = "atlas_width", .type = RUN_VALUE_NUMBER, .number = s->atlas_w},
-		{.key = "atlas_height", .type = RUN_VALUE_NUMBER, .number = s->atlas_h},
+		{.key = "atlas_width", .type = RUN_VALUE_INTEGER, .number = s->atlas_w},
+		{.key = "atlas_height", .type = RUN_VALUE_INTEGER, .number = s->atlas_h},
 		{.key = "atlas_density", .type = RUN_VALUE_NUMBER, .number = s->rho},
 		{.key = "hysteresis_below", .type = RUN_VALUE_NUMBER, .number = ATLAS_HYSTERESIS_BELOW},
 		{.key = "hysteresis_above", .type = RUN_VALUE_NUMBER, .number = ATLAS_HYSTERESIS_ABOVE},

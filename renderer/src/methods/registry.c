@@ -380,7 +380,7 @@ size_t method_config_run_options(const method_config *c, run_option *out, size_t
 			r->type = RUN_VALUE_STRING;
 			r->string = o->choices[(size_t)get_number(c, o)];
 		} else {
-			r->type = RUN_VALUE_NUMBER;
+			r->type = o->type == METHOD_OPT_UINT ? RUN_VALUE_INTEGER : RUN_VALUE_NUMBER;
 			r->number = get_number(c, o);
 		}
 	}

@@ -30,8 +30,9 @@
 extern "C" {
 #endif
 
-/* One method option as recorded in manifest.json's "method_options" (key → number, bool or string). */
-typedef enum run_value_type { RUN_VALUE_NUMBER = 0, RUN_VALUE_BOOL, RUN_VALUE_STRING } run_value_type;
+/* One method option as recorded in manifest.json's "method_options" (key → number, bool or string). INTEGER is a
+ * number written as a JSON integer ("max-age": 7, not 7.0; issue 24.8): the integer options and derived sizes. */
+typedef enum run_value_type { RUN_VALUE_NUMBER = 0, RUN_VALUE_BOOL, RUN_VALUE_STRING, RUN_VALUE_INTEGER } run_value_type;
 typedef struct run_option {
 	const char *key;
 	run_value_type type;
