@@ -12,12 +12,11 @@ const uint SINGLE = 0xFFFFFFFFu;
 
 layout(std430, set = 1, binding = 0) readonly buffer Patches { uvec4 corners[]; };  // a0 a1 a2 b0: vertex indices
 layout(std430, set = 1, binding = 1) readonly buffer TriInfo { uint tri_info[]; };  // pid << 3 | side << 2 | rot
-// per object, two entries: [2o] pid base, mesh pid base, mesh triangle base, 1 if it has patches;
-// [2o + 1] first index, vertex offset (the object's mesh in the scene's index and vertex buffers)
+// per object, two entries: [2o] pid base, mesh pid base, mesh triangle base, 1 if it has patches; [2o + 1] unused
+// (it held the mesh's first index and vertex offset for the ids pass, which takes them as push constants now)
 layout(std430, set = 1, binding = 2) readonly buffer ObjInfo { uvec4 obj_info[]; };
 // per pid: corner x | y << 16; lw | lh << 8 | age << 16 (frames since its last shading, 0 = new); mesh pid; object
 layout(std430, set = 1, binding = 3) readonly buffer Blocks { uvec4 blocks[]; };
-#ifndef ATLAS_GEOMETRY_ONLY // the visibility pass reads only geometry (no stores in its vertex stage)
 layout(std430, set = 1, binding = 4) readonly buffer Work { uvec2 work[]; };        // chunks of 8 texels: pid, first texel
 layout(std430, set = 1, binding = 5) buffer Visible { uint visible[]; };            // per pid
 layout(std430, set = 1, binding = 6) readonly buffer Grad { float G[]; };           // tasa: per pid, last frame
@@ -25,43 +24,17 @@ layout(std430, set = 1, binding = 7) buffer Filtered { uint F[]; };             
 layout(std430, set = 1, binding = 8) buffer GradNew { uint Gnew[]; };               // tasa: max g of the shading (bits)
 layout(std430, set = 1, binding = 9) buffer Counters { uint count[8]; };            // 0 committed blocks, 1 their texels, 2 late texels, 3 texels shaded by shade.comp
 layout(std430, set = 1, binding = 11) buffer DMax { uint dmax[]; };                 // oracle: per pid max d (bits)
-layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D ids;             // object + 1, triangle, barycentrics
+layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D ids;             // the ids pass (passes/ids.h)
 layout(set = 1, binding = 13, rgba16f) uniform image2D atlas;
 layout(set = 1, binding = 14, rgba16f) uniform image2D scratch;                    // oracle
 layout(set = 1, binding = 15, rgba16f) uniform image2D hdr;
 layout(set = 1, binding = 17, rgba32f) uniform image2D shown;                      // tasa: display code values of the atlas
-#endif
-layout(std430, set = 1, binding = 10) readonly buffer Vertices { float vtx[]; };    // scene_vertex: 12 floats
-layout(std430, set = 1, binding = 16) readonly buffer Indices { uint indices[]; };
+layout(std430, set = 1, binding = 10) readonly buffer Vertices { float vtx[]; };    // common/vertex_pull.glsl
+layout(std430, set = 1, binding = 16) readonly buffer Indices { uint indices[]; }; // unused since the ids pass moved (issue 30.4)
 
 // Push constants (pc.aux): [0] work chunks offset, [1] chunk count, [2] frame number, [3] T (float bits).
 
-struct Vertex {
-	vec3 p, n;
-	vec2 uv;
-	vec4 t;
-};
-
-Vertex vertex_at(uint i)
-{
-	uint b = i * 12u;
-	Vertex v;
-	v.p = vec3(vtx[b], vtx[b + 1u], vtx[b + 2u]);
-	v.n = vec3(vtx[b + 3u], vtx[b + 4u], vtx[b + 5u]);
-	v.uv = vec2(vtx[b + 6u], vtx[b + 7u]);
-	v.t = vec4(vtx[b + 8u], vtx[b + 9u], vtx[b + 10u], vtx[b + 11u]);
-	return v;
-}
-
-Vertex vertex_mix(Vertex a, Vertex b, Vertex c, vec3 w)
-{
-	Vertex v;
-	v.p = a.p * w.x + b.p * w.y + c.p * w.z;
-	v.n = a.n * w.x + b.n * w.y + c.n * w.z;
-	v.uv = a.uv * w.x + b.uv * w.y + c.uv * w.z;
-	v.t = a.t * w.x + b.t * w.y + c.t * w.z;
-	return v;
-}
+#include "common/vertex_pull.glsl"
 
 // The block of a pid: corner and size in texels.
 void block_of(uint pid, out uvec2 origin, out uvec2 size)
@@ -71,7 +44,6 @@ void block_of(uint pid, out uvec2 origin, out uvec2 size)
 	size = uvec2(1u << (b.y & 0xFFu), 1u << ((b.y >> 8) & 0xFFu));
 }
 
-#ifndef ATLAS_GEOMETRY_ONLY
 const uint NO_PATCH = 0xFFFFFFFFu;
 
 // The pid of the surface visible at pixel p (the id pass), or NO_PATCH for the background; also the
@@ -103,5 +75,4 @@ void patch_point(uvec4 c, vec2 uv, out uvec3 tri, out vec3 w)
 	}
 }
 
-#endif
 #endif

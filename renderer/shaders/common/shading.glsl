@@ -121,7 +121,7 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 	GpuLight L = states[slot].lights[i];
 	uint kind = uint(L.direction_type.w);
 	atten = 1.0;
-	if (kind == LIGHT_DIRECTIONAL) {
+	if (kind == GPU_LIGHT_DIRECTIONAL) {
 		l = -L.direction_type.xyz;
 	} else {
 		vec3 d = L.position_range.xyz - s.position;
@@ -135,7 +135,7 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 			win *= win;
 		}
 		atten = win / dist2;
-		if (kind == LIGHT_SPOT) {
+		if (kind == GPU_LIGHT_SPOT) {
 			float cd = dot(L.direction_type.xyz, -l);
 			float t = clamp((cd - L.cone_shadow.x) * L.cone_shadow.y, 0.0, 1.0);
 			atten *= t * t;
@@ -157,7 +157,7 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 			float vis_ = 1.0;                                                                       \
 			if ((SH) >= 0) {                                                                        \
 				int layer_ = int(L_.cone_shadow.z);                                             \
-				int face_ = uint(L_.direction_type.w) == LIGHT_POINT ? cube_face(p_ - L_.position_range.xyz) : 0; \
+				int face_ = uint(L_.direction_type.w) == GPU_LIGHT_POINT ? cube_face(p_ - L_.position_range.xyz) : 0; \
 				vec2 uv_;                                                                       \
 				float d_, r_, pl_, lit_ = 0.0;                                                  \
 				bool in_ = shadow_coords(slot, layer_ + face_, p_, uv_, d_, r_, pl_);            \

@@ -1,7 +1,8 @@
 /* shader_library.h (private) — the GLSL sources of renderer/shaders/, embedded by the build.
  *
- * Every *.glsl include file and *.in run-time template under renderer/shaders/<family>/ is listed in a
- * table the build generates (shader_sources.c), keyed by its path below shaders/ ("common/shading.glsl").
+ * Every *.glsl include file, *.h header shared with C (common/gpu_layout.h) and *.in run-time template under
+ * renderer/shaders/<family>/ is listed in a table the build generates (shader_sources.c), keyed by its path below
+ * shaders/ ("common/shading.glsl").
  * Shaders complete at build time (*.vert, *.frag, *.comp) are compiled by glslangValidator into SPIR-V
  * headers "shaders/<family>/<name>_<stage>.h"; templates are completed at run time: their #include lines
  * are resolved from the table and the marker line `// @OCIO_DISPLAY@` is replaced by the OpenColorIO

@@ -1,61 +1,38 @@
-/* gpu_types.h (private) — C mirror of the std430 structures in shaders/common.glsl. */
+/* gpu_types.h (private) — the C names of the GPU data layout. The structures and constants themselves are written
+ * once, in the common subset of C and GLSL, in renderer/shaders/common/gpu_layout.h, which the shaders include
+ * too (common.glsl); this header adds the C type names and checks what C cannot share with GLSL: the scene
+ * library's limits and the std430 sizes (issue 30.4). */
 #ifndef TASLAB_GPU_TYPES_H
 #define TASLAB_GPU_TYPES_H
 
 #include <stdint.h>
 
+#include "../../shaders/common/gpu_layout.h"
 #include "taslab/scene.h"
 
-#define GPU_LIGHT_DIRECTIONAL 1
-#define GPU_LIGHT_POINT 2
-#define GPU_LIGHT_SPOT 3
+typedef GpuLight gpu_light;
+typedef FrameState gpu_frame_state;
+typedef GpuObject gpu_object;
+typedef GpuMaterial gpu_material;
+typedef GpuPush gpu_push;
 
-typedef struct gpu_light {
-	float position_range[4];
-	float direction_type[4];
-	float color[4];
-	float cone_shadow[4];
-} gpu_light;
+/* The scene library (no GPU) has its own limits; the shader loops and arrays are sized by these. */
+_Static_assert(SCENE_MAX_LIGHTS == GPU_MAX_LIGHTS, "scene.h and gpu_layout.h disagree on the light count");
+_Static_assert(SCENE_MAX_SHADOW_LAYERS == GPU_MAX_SHADOW_LAYERS, "scene.h and gpu_layout.h disagree on shadow layers");
+_Static_assert(GPU_MAX_SHADOW_LAYERS % 4 == 0, "FrameState.shadow_phys packs 4 layers per uvec4");
+_Static_assert(SCENE_ALPHA_OPAQUE == GPU_ALPHA_OPAQUE && SCENE_ALPHA_MASK == GPU_ALPHA_MASK &&
+		       SCENE_ALPHA_BLEND == GPU_ALPHA_BLEND,
+	       "scene_alpha_mode and GpuMaterial.tex1.y");
+_Static_assert(sizeof(scene_vertex) == GPU_VERTEX_FLOATS * sizeof(float), "scene_vertex and vertex pulling");
 
-typedef struct gpu_frame_state {
-	float view[16];
-	float proj[16];
-	float view_proj[16];
-	float camera_time[4];
-	float ambient_exposure[4];
-	float sky_lights[4];
-	float shadow_params[4];
-	gpu_light lights[SCENE_MAX_LIGHTS];
-	float shadow_matrix[SCENE_MAX_SHADOW_LAYERS][16];
-	uint32_t shadow_phys[SCENE_MAX_SHADOW_LAYERS]; /* chunk << 16 | layer in chunk */
-} gpu_frame_state;
-
-#define GPU_SHADOW_CHUNKS 16
-
-typedef struct gpu_object {
-	float world[16];
-	float normal_matrix[16];
-	uint32_t material[4];
-} gpu_object;
-
-typedef struct gpu_material {
-	float base_color[4];
-	float emissive_normal_scale[4];
-	float mr_occ_cutoff[4];
-	int32_t tex0[4];
-	int32_t tex1[4];
-} gpu_material;
-
-typedef struct gpu_push {
-	uint32_t slot, object, object_count, layer;
-	uint32_t aux[4];
-} gpu_push;
-
+/* std430 sizes of what the C compiler laid out (gpu_layout.h's rules keep them equal; a vec3 or a lone scalar in a
+ * struct would not be) */
 _Static_assert(sizeof(gpu_light) == 64, "std430 GpuLight");
-_Static_assert(sizeof(gpu_frame_state) == 3 * 64 + 4 * 16 + SCENE_MAX_LIGHTS * 64 + SCENE_MAX_SHADOW_LAYERS * 64 +
-		       SCENE_MAX_SHADOW_LAYERS * 4,
+_Static_assert(sizeof(gpu_frame_state) == 3 * 64 + 4 * 16 + GPU_MAX_LIGHTS * 64 + GPU_MAX_SHADOW_LAYERS * 64 +
+		       GPU_MAX_SHADOW_LAYERS * 4,
 	       "std430 FrameState");
 _Static_assert(sizeof(gpu_object) == 144, "std430 GpuObject");
 _Static_assert(sizeof(gpu_material) == 80, "std430 GpuMaterial");
+_Static_assert(sizeof(gpu_push) == 32, "push constants GpuPush");
 
 #endif

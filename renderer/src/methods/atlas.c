@@ -2,7 +2,7 @@
  *
  * Frame t (state slot 0; frames in order, a jump starts over):
  *   shadow maps                                            (shared pass)
- *   ids      visibility pass: vertex pulling, depth LESS_OR_EQUAL with write; per pixel (object + 1, triangle,
+ *   ids      visibility pass (passes/ids.c, shared with the sample path): per pixel (object + 1, triangle,
  *            barycentrics) — the exact visible set of step 1
  *   visible  compute over pixels: visible[patch]; tasa: the 2x2 image-space max of last frame's gradients (step 2)
  *   alloc    CPU (between two submits): free the blocks of patches no longer visible or resized, allocate the new
@@ -55,14 +55,14 @@ typedef struct atlas_state {
 	uint32_t atlas_w, atlas_h;
 	float rho;
 	vkdev_buffer buf[B_COUNT];
-	vkdev_image ids, atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
+	ids_pass ids;              /* the visibility pass and its image */
+	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
 	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
 	uint32_t shade_chunks, truth_chunks;
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set;
 	VkPipelineLayout comp_layout;
-	render_pipeline ids_pipe;
 	VkPipeline visible_pipe, shade_pipe, commit_pipe, truth_pipe, resolve_pipe;
 	int64_t last_frame;
 	/* this frame's numbers */
@@ -164,17 +164,11 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 			continue;
 		bool has = sc->materials[ob->material].alpha_mode != SCENE_ALPHA_BLEND;
 		e[0] = base, e[1] = s->patches.mesh_patch_base[ob->mesh], e[2] = s->patches.mesh_tri_base[ob->mesh], e[3] = has;
-		e[4] = r->mesh_first_index[ob->mesh], e[5] = r->mesh_vertex_offset[ob->mesh];
 		if (has)
 			base += s->patches.mesh_patch_base[ob->mesh + 1] - s->patches.mesh_patch_base[ob->mesh];
 	}
 	VkResult res;
-	uint32_t w = r->desc.width, h = r->desc.height;
-	if ((res = vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R32G32B32A32_UINT,
-				      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-					      VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas ids", &s->ids)) ||
-	    (res = vkdev_image_create(r->dev, s->atlas_w, s->atlas_h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
+	if ((res = vkdev_image_create(r->dev, s->atlas_w, s->atlas_h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 				      VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
 				      false, "atlas", &s->atlas)) ||
 	    (res = vkdev_image_create(r->dev, s->v.oracle ? s->atlas_w : 1, s->v.oracle ? s->atlas_h : 1, 1, 1,
@@ -214,7 +208,7 @@ static int make_set(render *r, atlas_state *s, char *err, size_t err_size)
 					&s->buf[B_WORK],    &s->buf[B_VISIBLE], &s->buf[B_G],       &s->buf[B_F],
 					&s->buf[B_GNEW],    &s->buf[B_COUNTERS], &r->vertices,      &s->buf[B_DMAX],
 					NULL, NULL, NULL, NULL, &r->indices, NULL};
-	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
+	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids.image, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
 						   [17] = &s->shown};
 	VkDescriptorBufferInfo bi[ATLAS_BINDINGS];
 	VkDescriptorImageInfo ii[ATLAS_BINDINGS];
@@ -258,22 +252,7 @@ static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)
 	VkResult res = vkCreatePipelineLayout(r->dev->device, &li, NULL, &s->comp_layout);
 	if (res)
 		return render_vk_error(err, err_size, "atlas: pipeline layout", res);
-	uint32_t *vs = NULL, *fs = NULL;
-	size_t vn = 0, fn = 0;
-	int rc = render_compile_defs(r, "atlas/ids.vert.in", "", SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
-	if (!rc)
-		rc = render_compile_defs(r, "atlas/ids.frag.in", "", SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
-	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
-				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
-				       .method_set = s->set_layout};
-		if ((res = render_make_graphics(r, &pd, &s->ids_pipe)))
-			rc = render_vk_error(err, err_size, "atlas: visibility pipeline", res);
-	}
-	free(vs);
-	free(fs);
-	if (rc)
-		return rc;
+	int rc;
 	char defs[256];
 	/* TASLAB_ATLAS_DEBUG=positions (diagnostic, README "Shading atlas"): texels hold their object-space position */
 	const char *dbg = getenv("TASLAB_ATLAS_DEBUG");
@@ -354,6 +333,8 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 		rc = atlas_alloc_create(s->atlas_w, s->atlas_h, &s->alloc, err, err_size);
 	if (!rc)
 		rc = make_buffers(r, s, err, err_size);
+	if (!rc)
+		rc = ids_pass_init(r, &s->ids, err, err_size);
 	if (!rc)
 		rc = make_set(r, s, err, err_size);
 	if (!rc)
@@ -480,47 +461,7 @@ void atlas_record_pre(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	render_pass_shadows(r, cmd, 0);
 	render_ts(r, cmd);
-	/* the visibility pass: ids cleared to 0 (background), depth to 1 */
-	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-	vkdev_barrier_image(cmd, &r->depth, VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
-			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = s->ids.view,
-					.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
-	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
-					.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-					.clearValue = {.depthStencil = {1.0f, 0}}};
-	VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO, .renderArea = {{0, 0}, {w, h}}, .layerCount = 1,
-			      .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da};
-	vkCmdBeginRendering(cmd, &ri);
-	render_set_viewport(cmd, w, h);
-	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, s->ids_pipe.pipeline);
-	VkDescriptorSet sets[2] = {r->scene_set, s->set};
-	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, s->ids_pipe.layout, 0, 2, sets, 0, NULL);
-	const scene *sc = r->scene;
-	for (size_t i = 0; i < sc->object_count; i++) {
-		const scene_object *o = &sc->objects[i];
-		if (o->mesh < 0 || sc->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND)
-			continue;
-		gpu_push pc = {0, (uint32_t)i, (uint32_t)sc->object_count, 0, {0, 0, 0, 0}};
-		vkCmdPushConstants(cmd, s->ids_pipe.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-				   sizeof pc, &pc);
-		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
-		vkCmdDraw(cmd, sc->meshes[o->mesh].index_count, 1, 0, 0);
-	}
-	vkCmdEndRendering(cmd);
-	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+	ids_pass_record(r, &s->ids, cmd, 0);
 	render_ts(r, cmd);
 	bind_compute(r, s, cmd, s->visible_pipe, 0, 0, 0, 0);
 	vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
@@ -756,14 +697,13 @@ void atlas_finish(render *r)
 	for (int i = 0; i < 5; i++)
 		if (cp[i])
 			vkDestroyPipeline(d, cp[i], NULL);
-	render_pipeline_destroy(r, &s->ids_pipe);
 	if (s->comp_layout)
 		vkDestroyPipelineLayout(d, s->comp_layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
 	for (int i = 0; i < B_COUNT; i++)
 		vkdev_buffer_destroy(r->dev, &s->buf[i]);
-	vkdev_image_destroy(r->dev, &s->ids);
+	ids_pass_finish(r, &s->ids);
 	vkdev_image_destroy(r->dev, &s->atlas);
 	vkdev_image_destroy(r->dev, &s->scratch);
 	vkdev_image_destroy(r->dev, &s->shown);
@@ -780,39 +720,7 @@ void atlas_finish(render *r)
 
 int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err_size)
 {
-	atlas_state *s = state_of(r);
-	VkDeviceSize size = (VkDeviceSize)r->desc.width * r->desc.height * 16;
-	vkdev_buffer b = {0};
-	VkCommandBuffer cmd;
-	VkResult res = vkdev_buffer_create(r->dev, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-					   true, "atlas ids copy", &b);
-	if (!res && upload)
-		memcpy(b.mapped, ids, size);
-	if (!res)
-		res = vkdev_cmd_begin(r->dev, &cmd);
-	if (res) {
-		vkdev_buffer_destroy(r->dev, &b);
-		return render_vk_error(err, err_size, "atlas ids copy", res);
-	}
-	VkImageLayout tl = upload ? VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-	VkAccessFlags2 ta = upload ? VK_ACCESS_2_TRANSFER_WRITE_BIT : VK_ACCESS_2_TRANSFER_READ_BIT;
-	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, upload ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL,
-			    tl, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, ta);
-	VkBufferImageCopy c = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
-			       .imageExtent = {r->desc.width, r->desc.height, 1}};
-	if (upload)
-		vkCmdCopyBufferToImage(cmd, b.buffer, s->ids.image, tl, 1, &c);
-	else
-		vkCmdCopyImageToBuffer(cmd, s->ids.image, tl, b.buffer, 1, &c);
-	vkdev_barrier_image(cmd, &s->ids, VK_IMAGE_ASPECT_COLOR_BIT, tl, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-			    ta, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-	render_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
-		       VK_ACCESS_2_HOST_READ_BIT);
-	res = vkdev_cmd_submit_wait(r->dev, cmd);
-	if (!res && !upload)
-		memcpy(ids, b.mapped, size);
-	vkdev_buffer_destroy(r->dev, &b);
-	return res ? render_vk_error(err, err_size, "atlas ids copy", res) : TL_OK;
+	return ids_pass_copy(r, &state_of(r)->ids, ids, upload, err, err_size);
 }
 
 int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size)

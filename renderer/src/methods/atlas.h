@@ -5,6 +5,7 @@
 #ifndef TASLAB_ATLAS_H
 #define TASLAB_ATLAS_H
 
+#include "../passes/ids.h"
 #include "../passes/passes.h"
 
 enum { ATLAS_SA = 0, ATLAS_SAU, ATLAS_TASA };

@@ -39,15 +39,20 @@ void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, Vk
 	vkCmdEndRendering(cmd);
 }
 
-void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
+void render_depth_discard(render *r, VkCommandBuffer cmd)
 {
-	uint32_t w = r->desc.width, h = r->desc.height;
 	vkdev_barrier_image(cmd, &r->depth, VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
 			    VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
 			    VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
 			    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
+}
+
+void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot)
+{
+	uint32_t w = r->desc.width, h = r->desc.height;
+	render_depth_discard(r, cmd);
 	render_depth_only_pass(r, cmd, r->depth.view, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, w, h, &r->depth_pipe,
 			       &r->depth_mask_pipe, slot, 0, NULL);
 	VkMemoryBarrier2 mb = {

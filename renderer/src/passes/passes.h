@@ -21,6 +21,9 @@ void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, Vk
 			    uint32_t h, const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot,
 			    uint32_t layer, const uint8_t *casters);
 int render_depth_init(render *r, char *err, size_t err_size);
+/* The depth target, its contents discarded, ready as the depth attachment of a pass that clears it (after the
+ * previous frame's depth tests; the depth pre-pass and the ids pass). */
+void render_depth_discard(render *r, VkCommandBuffer cmd);
 void render_pass_depth(render *r, VkCommandBuffer cmd, uint32_t slot);
 
 /* ---- shade.c: forward shading (depth EQUAL after the pre-pass) and BLEND compositing ---- */

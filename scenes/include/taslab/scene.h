@@ -31,7 +31,7 @@ extern "C" {
 #define SCENE_FOV_MIN_DEG 1.0
 #define SCENE_FOV_MAX_DEG 179.0
 #define SCENE_DEPTH_RANGE_MAX 1e7
-#define SCENE_MAX_LIGHTS 16       /* shading loop bound (shaders/common.glsl: MAX_LIGHTS) */
+#define SCENE_MAX_LIGHTS 16       /* shading loop bound (= GPU_MAX_LIGHTS, renderer/shaders/common/gpu_layout.h) */
 #define SCENE_MAX_SHADOW_LAYERS 48 /* directional/spot: 1 layer, point: 6 (cube faces) */
 #define SCENE_TEX_NONE (-1)
 

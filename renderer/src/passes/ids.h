@@ -1,0 +1,38 @@
+/* ids.h (private) — the visibility (ids) pass: per pixel the exact nearest surface as (object, triangle,
+ * barycentrics) ([TAS] sec. 6.2 step 1; TAS-METHODS section 4 "Visible set"). Shared by the shading-atlas methods
+ * (sa, sau, tasa: methods/atlas.c) and the compacted sample path of BASELINES.md section 0, which both shade
+ * surfaces found here, so it lives among the passes (issue 30.4; ARCHITECTURE.md "Where new work goes").
+ *
+ * The image (width x height, RGBA32UI): x object + 1 (0: background), y triangle in the object's mesh, z and w
+ * the perspective-correct barycentrics of corners 1 and 2 as float bits. Opaque and masked objects are drawn
+ * (MASK alpha-tested as in the depth pre-pass); BLEND objects are not, they are composited later. The pass also
+ * leaves the frame's depth in the render's depth target (for that compositing).
+ *
+ * Lifecycle: an ids_pass is embedded in its user's state, ids_pass_init / ids_pass_finish (finish accepts a
+ * zeroed or half-initialised pass). The image is bound by the user into its own descriptor sets. */
+#ifndef TASLAB_IDS_H
+#define TASLAB_IDS_H
+
+#include "passes.h"
+
+typedef struct ids_pass {
+	vkdev_image image;                /* the ids, GENERAL layout between frames */
+	VkDescriptorSetLayout set_layout; /* set 1 of the pass: the scene's vertices and indices (common/ids.vert.in) */
+	VkDescriptorSet set;
+	render_pipeline pipe;
+} ids_pass;
+
+int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size);
+void ids_pass_finish(render *r, ids_pass *p);
+
+/* Records the pass for state slot `slot`: the image cleared to 0 and the depth target to 1, then every opaque and
+ * masked object in scene order with depth LESS_OR_EQUAL and write (among exactly coplanar surfaces the last drawn
+ * wins, as in ref's EQUAL shading pass). Ends with the image in GENERAL layout, its writes visible to compute
+ * shader reads; the caller orders earlier reads of the image (previous frame) by the pass's own barrier. */
+void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot);
+
+/* Diagnostics for the tests (methods/method_debug.h): copies the image out to `ids` (width x height x 4 words), or
+ * with `upload` from `ids` into the image; waits for the copy. */
+int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size);
+
+#endif
