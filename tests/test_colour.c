@@ -317,12 +317,17 @@ static void test_lut_nonfinite(void **state)
 	static const struct {
 		const char *file;
 		int line;
-		const char *value, *want;
+		const char *value, *want, *why;
 	} cases[] = {
-		{"shaper.spi1d", 6, "nan", "shaper.spi1d: a value of this LUT"},
-		{"shaper.spi1d", 300, "inf", "shaper.spi1d: a value of this LUT"},
-		{"grade.cube", 12, "0.5 nan 0.5", "grade.cube: a value of this LUT"},
-		{"grade.cube", 12, "0.5 0.5 -inf", "grade.cube: a value of this LUT"},
+		{"shaper.spi1d", 6, "nan", "shaper.spi1d: a value of this LUT", "not a finite number"},
+		{"shaper.spi1d", 300, "inf", "shaper.spi1d: a value of this LUT", "not a finite number"},
+		{"grade.cube", 12, "0.5 nan 0.5", "grade.cube: a value of this LUT", "not a finite number"},
+		{"grade.cube", 12, "0.5 0.5 -inf", "grade.cube: a value of this LUT", "not a finite number"},
+		/* issue 31 (fuzz_lut): a .cube size OpenColorIO 2.1 would allocate before reading an entry (600^3: 2.6 GB),
+		 * refused before OCIO reads the file: outside the Cube spec, or more entries than the file can hold */
+		{"grade.cube", 2, "LUT_3D_SIZE 600", "grade.cube: LUT_3D_SIZE must be 2 to 256", "Cube LUT Specification"},
+		{"grade.cube", 2, "LUT_3D_SIZE 200", "grade.cube: declares 8000000 entries", "bytes can hold"},
+		{"grade.cube", 2, "LUT_1D_SIZE 4000000000", "grade.cube: LUT_1D_SIZE must be 2 to 65536", "Cube LUT"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
 		/* a folder per case: OpenColorIO caches LUT files by path for the life of the process */
@@ -337,7 +342,7 @@ static void test_lut_nonfinite(void **state)
 		colour_desc cd = {.config_path = cfg, .display = "sRGB", .view = "Graded", .ignore_env = 1};
 		if (!colour_create(&cd, &c, err, sizeof err))
 			fail_msg("%s line %d = '%s' was accepted", cases[i].file, cases[i].line, cases[i].value);
-		if (!strstr(err, "not a finite number") || !strstr(err, cases[i].want) || strchr(err, '\n'))
+		if (!strstr(err, cases[i].why) || !strstr(err, cases[i].want) || strchr(err, '\n'))
 			fail_msg("%s line %d = '%s': message '%s'", cases[i].file, cases[i].line, cases[i].value, err);
 		assert_null(c);
 	}
@@ -348,7 +353,7 @@ static void test_lut_nonfinite(void **state)
 		 "--quiet --out %s",
 		 TASLAB_BINARY, cfg, run);
 	int st = tu_run(cmd, out, sizeof out);
-	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "not a finite number"))
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, cases[sizeof cases / sizeof *cases - 1].why))
 		fail_msg("%s: exit %d:\n%s", cmd, st, out);
 	assert_false(tu_file_exists(run));
 	/* finite values (a new folder, for the cache): the check passes, and the render runs */

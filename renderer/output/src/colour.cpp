@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -247,6 +248,70 @@ static bool lut_files_finite(const OCIO::ConstConfigRcPtr &cfg, const OCIO::Cons
 	return false;
 }
 
+/* Issue 31 (fuzz_lut finding): OpenColorIO 2.1's .cube reader allocates the grid a LUT_3D_SIZE / LUT_1D_SIZE line
+ * declares before it reads a single entry (a 37-byte file declaring 600^3 asked for 2.6 GB), while its other readers
+ * bound the size (spi3d, csp and clf grids at 129, 1D lengths at 1024x1024). OCIO tries every reader on a file whose
+ * extension fails, so every LUT file is checked, whatever its name: a declared size must be within the Adobe Cube
+ * LUT Specification 1.0 (3D grid 2-256, 1D 2-65536) and backed by the file (each entry line is at least "0 0 0\n",
+ * 6 bytes). Returns "" or what is wrong. */
+static std::string lut_declared_size_problem(const char *path)
+{
+	FILE *f = std::fopen(path, "rb");
+	if (!f)
+		return ""; /* OCIO says why it cannot read it */
+	std::fseek(f, 0, SEEK_END);
+	long size = std::ftell(f);
+	std::rewind(f);
+	char line[256];
+	std::string why;
+	for (int n = 0; why.empty() && n < 4096 && std::fgets(line, sizeof line, f); n++) {
+		const char *p = line + std::strspn(line, " \t");
+		bool three = !std::strncmp(p, "LUT_3D_SIZE", 11), one = !std::strncmp(p, "LUT_1D_SIZE", 11);
+		if (!three && !one)
+			continue;
+		char *end;
+		unsigned long long v = std::strtoull(p + 11, &end, 10);
+		unsigned long long entries = three ? v * v * v : v, max = three ? 256 : 65536;
+		if (end == p + 11 || v < 2 || v > max)
+			why = std::string(three ? "LUT_3D_SIZE" : "LUT_1D_SIZE") + " must be 2 to " + std::to_string(max) +
+			      " (Adobe Cube LUT Specification 1.0)";
+		else if (size < 0 || entries * 6 > (unsigned long long)size)
+			why = "declares " + std::to_string(entries) + " entries, more than its " + std::to_string(size) +
+			      " bytes can hold";
+	}
+	std::fclose(f);
+	return why;
+}
+
+/* The LUT files of a transform (FileTransforms, inside groups too) checked with lut_declared_size_problem before
+ * OCIO reads any of them. *file gets the resolved path of the first bad file. */
+static bool lut_files_bounded(const OCIO::ConstConfigRcPtr &cfg, const OCIO::ConstTransformRcPtr &t, std::string &file,
+			      std::string &why)
+{
+	if (!t)
+		return true;
+	if (auto g = OCIO::DynamicPtrCast<const OCIO::GroupTransform>(t)) {
+		for (int i = 0; i < g->getNumTransforms(); i++)
+			if (!lut_files_bounded(cfg, g->getTransform(i), file, why))
+				return false;
+		return true;
+	}
+	auto f = OCIO::DynamicPtrCast<const OCIO::FileTransform>(t);
+	if (!f || !f->getSrc())
+		return true;
+	const char *resolved = nullptr;
+	try {
+		resolved = cfg->getCurrentContext()->resolveFileLocation(f->getSrc());
+	} catch (const OCIO::Exception &) {
+		return true; /* not found: OCIO's own message says so when it builds the processor */
+	}
+	why = resolved ? lut_declared_size_problem(resolved) : "";
+	if (why.empty())
+		return true;
+	file = resolved;
+	return false;
+}
+
 static OCIO::ConstProcessorRcPtr default_processor(OCIO::ConstConfigRcPtr &cfg)
 {
 	cfg = OCIO::Config::CreateRaw();
@@ -323,6 +388,18 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 			if (!found) {
 				std::snprintf(err, err_size, "%s: display '%s' has no view '%s' (views: %s)", path, display, view,
 					      views.c_str());
+				delete c;
+				return -1;
+			}
+			std::string file, why;
+			for (const char *cs : {cfg->getDisplayViewColorSpaceName(display, view), (const char *)OCIO::ROLE_SCENE_LINEAR}) {
+				auto space = cs ? cfg->getColorSpace(cs) : nullptr;
+				if (space && file.empty() &&
+				    lut_files_bounded(cfg, space->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE), file, why))
+					lut_files_bounded(cfg, space->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE), file, why);
+			}
+			if (!file.empty()) {
+				std::snprintf(err, err_size, "%s: %s; fix the LUT file", file.c_str(), why.c_str());
 				delete c;
 				return -1;
 			}
