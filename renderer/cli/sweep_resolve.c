@@ -1,6 +1,7 @@
 #define _XOPEN_SOURCE 700 /* realpath */
-/* sweep_resolve.c — a sweep request (file and/or options) resolved against the scene files and the method registry
- * into the spec written to SWEEP/sweep.json (sweep_cli.h, output/sweep.h; DESIGN sections 4 and 9). */
+/* sweep_resolve.c — the sweep key table (output/sweep_keys.h) as `taslab sweep` options and their overlay onto a
+ * request, and a sweep request (file and/or options) resolved against the scene files and the method registry into
+ * the spec written to SWEEP/sweep.json (sweep_cli.h, output/sweep.h; DESIGN sections 4 and 9, issue 30.2). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

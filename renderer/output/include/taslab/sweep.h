@@ -111,6 +111,7 @@ typedef struct sweep_spec {
 	size_t scene_count;
 	sweep_variant variants[SWEEP_MAX_VARIANTS]; /* "ref" among them */
 	size_t variant_count;
+	/* the settings kept as given (the SWEEP_KEY_SPEC keys of sweep_keys.h), defaults filled by the resolver */
 	uint32_t width, height;
 	char baseline[SWEEP_NAME_MAX];  /* a variant token of the list */
 	char metrics[128];              /* metric list for `metrics diff` ("all") */
