@@ -417,7 +417,11 @@ static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
 /* A setting kept as given (a SWEEP_KEY_SPEC key) from sweep.json into `f`, its field in the spec. */
 static int read_spec_key(const ctx *c, const sweep_key *k, json_t *v, char *f)
 {
-	if (!v && (k->flags & SWEEP_KEY_OPTIONAL)) {
+	/* a key added after the first sweeps: absent in the older sweep.json files, and a number 0 when not given (as in
+	 * the request), so a sweep without it resumes as the same sweep */
+	if ((k->flags & SWEEP_KEY_OPTIONAL) &&
+	    (!v || ((k->type == SWEEP_KEY_NUMBER || k->type == SWEEP_KEY_WHOLE) && json_is_number(v) &&
+		    json_number_value(v) == 0))) {
 		memset(f, 0, sweep_key_value_size(k));
 		return TL_OK;
 	}

@@ -43,7 +43,9 @@ typedef enum sweep_key_type {
 enum {
 	SWEEP_KEY_SPEC = 1u << 0,      /* kept as given in sweep_spec at spec_offset: written to and read from sweep.json */
 	SWEEP_KEY_EMPTY_OK = 1u << 1,  /* SPEC strings: "" in sweep.json means "not given" (the default choice) */
-	SWEEP_KEY_OPTIONAL = 1u << 2,  /* SPEC: a sweep.json without it (made before the key existed) reads as zero */
+	SWEEP_KEY_OPTIONAL = 1u << 2,  /* SPEC: a sweep.json without it (made before the key existed) reads as zero, and
+					* so does a NUMBER or WHOLE 0 ("not given", unless the resolver fills a default):
+					* a key added later is SPEC | OPTIONAL, so the sweeps made before it still resume */
 	SWEEP_KEY_RELATIVE = 1u << 3,  /* in a file, a path relative to the file's folder (NAMES: the entries that look
 					* like a path: a '/' or a .json/.gltf/.glb name) */
 	SWEEP_KEY_RESUME_OK = 1u << 4, /* may be given on the command line when resuming a resolved sweep.json (it does
