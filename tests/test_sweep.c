@@ -13,6 +13,7 @@
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
 #include "taslab/sweep.h"
+#include "taslab/sweep_keys.h"
 #include "taslab/tl_fs.h"
 #include "test_util.h"
 
@@ -141,11 +142,11 @@ static void test_request_file(void **state)
 	assert_true(r->threshold_count == 2 && r->thresholds[1] == 16.5);
 	assert_true(r->period_count == 2 && r->periods[1] == 8);
 	assert_true(r->width == 48 && r->height == 32 && r->fps == 30 && r->ppd == 40 && r->validation && r->jobs == 3);
-	assert_true(r->truth && (r->set & SWEEP_SET_TRUTH));
+	assert_true(r->truth && sweep_request_has(r, "truth"));
 	snprintf(want, sizeof want, "%s/sw", dir);
 	assert_string_equal(r->out, want);
-	assert_true(r->set & SWEEP_SET_FRAMES);
-	assert_false(r->set & SWEEP_SET_VIEW);
+	assert_true(sweep_request_has(r, "frames"));
+	assert_false(sweep_request_has(r, "view"));
 	p = write_file(dir, "s2.json", "{\"scenes\": [\"turntable\"], \"cameras\": \"all\", \"methods\": \"all\", \"size\": \"96x54\"}");
 	assert_int_equal(sweep_request_read(p, r, err, sizeof err), 0);
 	assert_true(r->cameras_all && r->methods_all && r->width == 96 && r->height == 54);
@@ -184,23 +185,41 @@ static void test_request_file(void **state)
 	free(r2);
 }
 
+/* The options of `taslab sweep` from an argument string (split at spaces), through the command line's parser. A sweep
+ * file name stands in as the positional, so the parser does not ask for --scenes: the resolver's messages are tested.
+ * The values point into a static buffer, valid until the next call. */
+static const sweep_opts *opts_of(const char *args)
+{
+	static _Alignas(max_align_t) unsigned char opts[CLI_OPTS_MAX_B];
+	static cli_ctx ctx;
+	static char buf[2048];
+	char *argv[64] = {"sweep", "unused.json"};
+	int argc = 2;
+	snprintf(buf, sizeof buf, "%s", args);
+	for (char *t = strtok(buf, " "); t && argc < 64; t = strtok(NULL, " "))
+		argv[argc++] = t;
+	if (cli_parse_command(cli_find_command("sweep"), argc, argv, opts, &ctx))
+		fail_msg("%s: %s", args, ctx.err);
+	return (const sweep_opts *)opts;
+}
+
 /* Resolution through the same path as `taslab sweep`: options onto a request, then the resolver. */
-static int resolve(const sweep_opts *o, sweep_spec *s)
+static int resolve(const char *args, sweep_spec *s)
 {
 	sweep_request *r = calloc(1, sizeof *r);
-	int rc = cli_sweep_request_from_opts(o, r, err, sizeof err);
+	int rc = cli_sweep_request_from_opts(opts_of(args), r, err, sizeof err);
 	if (!rc)
 		rc = cli_sweep_resolve(r, s, err, sizeof err);
 	free(r);
 	return rc;
 }
 
-static void resolve_fails(const sweep_opts *o, const char *needle)
+static void resolve_fails(const char *args, const char *needle)
 {
 	sweep_spec *s = calloc(1, sizeof *s);
-	int rc = resolve(o, s);
+	int rc = resolve(args, s);
 	if (rc == 0 || !strstr(err, needle) || strchr(err, '\n'))
-		fail_msg("rc %d, message '%s', expected one line with '%s'", rc, err, needle);
+		fail_msg("%s: rc %d, message '%s', expected one line with '%s'", args, rc, err, needle);
 	free(s);
 }
 
@@ -216,9 +235,8 @@ static void test_resolve(void **state)
 {
 	(void)state;
 	sweep_spec *s = calloc(1, sizeof *s);
-	sweep_opts o = {.scenes = "turntable", .variants = "ref,tfr@8,rrc/4,tarc-oracle@8", .frames = "10:14",
-			.size = {48, 32}};
-	assert_int_equal(resolve(&o, s), 0);
+#define O "--scenes turntable --variants ref,tfr@8,rrc/4,tarc-oracle@8 --frames 10:14 --size 48x32"
+	assert_int_equal(resolve(O, s), 0);
 	assert_int_equal(s->scene_count, 1);
 	assert_string_equal(s->scenes[0].name, "turntable");
 	assert_true(s->scenes[0].path[0] == '/'); /* absolute: tasks run from anywhere */
@@ -238,73 +256,48 @@ static void test_resolve(void **state)
 	assert_true(s->width == 48 && s->height == 32 && s->display_transform[0]);
 
 	/* methods x thresholds x periods, from the registry's option tables; ref always; flags as extra variants */
-	sweep_opts m = {.scenes = "turntable", .cameras = "orbit", .methods = "tfr,tarc,rrc", .thresholds = "4,16",
-			.periods = "2"};
-	assert_int_equal(resolve(&m, s), 0);
+#define M "--scenes turntable --cameras orbit --methods tfr,tarc,rrc --thresholds 4,16 --periods 2"
+	assert_int_equal(resolve(M, s), 0);
 	const char *want[] = {"ref", "tfr@4", "tfr@16", "tarc@4", "tarc@16", "tarc-oracle@4", "tarc-oracle@16", "rrc/2"};
 	assert_int_equal(s->variant_count, sizeof want / sizeof want[0]);
 	for (size_t i = 0; i < sizeof want / sizeof want[0]; i++)
 		assert_string_equal(s->variants[i].variant, want[i]);
 	/* "all": every available method (so sa, sau, tasa join when they land) */
-	sweep_opts all = {.scenes = "turntable", .cameras = "orbit", .methods = "all", .thresholds = "8", .periods = "4",
-			  .variants = "ref,tfr@8"};
-	assert_int_equal(resolve(&all, s), 0);
+	assert_int_equal(resolve("--scenes turntable --cameras orbit --methods all --thresholds 8 --periods 4 "
+				 "--variants ref,tfr@8", s), 0);
 	assert_true(find_variant(s, "rrc/4") != (size_t)-1 && find_variant(s, "tarc-oracle@8") != (size_t)-1);
 	assert_string_equal(s->variants[1].variant, "tfr@8"); /* explicit ones first, expansion does not repeat them */
 
 	/* cameras: bare names in every scene, SCENE/CAMERA for one */
-	sweep_opts c = {.scenes = "turntable,calm", .cameras = "turntable/overview,calm/walk,calm/robots",
-			.variants = "ref", .frames = "0:2"};
-	assert_int_equal(resolve(&c, s), 0);
+	assert_int_equal(resolve("--scenes turntable,calm --cameras turntable/overview,calm/walk,calm/robots "
+				 "--variants ref --frames 0:2", s), 0);
 	assert_true(s->scenes[0].camera_count == 1 && !strcmp(s->scenes[0].cameras[0].name, "overview"));
 	assert_true(s->scenes[1].camera_count == 2 && !strcmp(s->scenes[1].cameras[1].motion, "stationary"));
 	free(s);
 
-	/* bad input: one line naming what is wrong */
-	sweep_opts b = o;
-	b.variants = "tfr@8,rrc/4";
-	resolve_fails(&b, "no ref");
-	b.variants = "ref,warp@8";
-	resolve_fails(&b, "unknown method 'warp'");
-	b.variants = "ref,tfr@8,tfr@8";
-	resolve_fails(&b, "'tfr@8' is listed twice");
-	b.variants = "ref,ref@8";
-	resolve_fails(&b, "variants:");
-	b.variants = "ref,tarc-oracle-oracle@8"; /* issue 31.9: was accepted as tarc-oracle@8 */
-	resolve_fails(&b, "variant 'tarc-oracle-oracle@8': '-oracle' is given twice");
-	b = o;
-	b.scenes = "turntable,no_such_scene";
-	resolve_fails(&b, "no_such_scene");
-	b.scenes = "turntable,turntable";
-	resolve_fails(&b, "listed twice");
-	b = o;
-	b.cameras = "helicopter";
-	resolve_fails(&b, "no camera path 'helicopter' (available: orbit, overview");
-	b.cameras = "calm/walk";
-	resolve_fails(&b, "not in --scenes");
-	b = o;
-	b.frames = "9:3";
-	resolve_fails(&b, "--frames");
-	b.frames = "4294967290:4294967295"; /* issue 31.5: written negative into sweep.json ((int) of a uint32) */
-	resolve_fails(&b, "--frames '4294967290:4294967295' is not A:B");
-	b.frames = NULL;
-	b.baseline = "tfr@4";
-	resolve_fails(&b, "baseline: tfr@4 is not one of the variants");
-	b.baseline = NULL;
-	b.metrics = "maxrgb,vmaf";
-	resolve_fails(&b, "unknown metric 'vmaf'");
-	b = m;
-	b.thresholds = NULL;
-	resolve_fails(&b, "tfr has a threshold: give --thresholds");
-	b = m;
-	b.methods = "tfr,warp";
-	resolve_fails(&b, "unknown method 'warp'");
-	b = o;
-	b.variants = NULL;
-	resolve_fails(&b, "--variants");
-	b = o;
-	b.scenes = NULL;
-	resolve_fails(&b, "--scenes is required");
+	/* bad input: one line naming what is wrong (a later option replaces an earlier one, as on the command line) */
+	resolve_fails(O " --variants tfr@8,rrc/4", "no ref");
+	resolve_fails(O " --variants ref,warp@8", "unknown method 'warp'");
+	resolve_fails(O " --variants ref,tfr@8,tfr@8", "'tfr@8' is listed twice");
+	resolve_fails(O " --variants ref,ref@8", "variants:");
+	/* issue 31.9: was accepted as tarc-oracle@8 */
+	resolve_fails(O " --variants ref,tarc-oracle-oracle@8", "variant 'tarc-oracle-oracle@8': '-oracle' is given twice");
+	resolve_fails(O " --scenes turntable,no_such_scene", "no_such_scene");
+	resolve_fails(O " --scenes turntable,turntable", "listed twice");
+	resolve_fails(O " --cameras helicopter", "no camera path 'helicopter' (available: orbit, overview");
+	resolve_fails(O " --cameras calm/walk", "not in --scenes");
+	resolve_fails(O " --frames 9:3", "--frames");
+	/* issue 31.5: written negative into sweep.json ((int) of a uint32) */
+	resolve_fails(O " --frames 4294967290:4294967295", "--frames '4294967290:4294967295' is not A:B");
+	resolve_fails(O " --baseline tfr@4", "baseline: tfr@4 is not one of the variants");
+	resolve_fails(O " --metrics maxrgb,vmaf", "unknown metric 'vmaf'");
+	resolve_fails("--scenes turntable --cameras orbit --methods tfr,tarc,rrc --periods 2",
+		      "tfr has a threshold: give --thresholds");
+	resolve_fails(M " --methods tfr,warp", "unknown method 'warp'");
+	resolve_fails("--scenes turntable --frames 10:14 --size 48x32", "--variants");
+	resolve_fails("--variants ref,tfr@8 --frames 10:14 --size 48x32", "--scenes is required");
+#undef O
+#undef M
 }
 
 static void test_spec_file_and_plan(void **state)
@@ -312,8 +305,7 @@ static void test_spec_file_and_plan(void **state)
 	(void)state;
 	const char *dir = tu_tmpdir("sweep_spec");
 	sweep_spec *s = calloc(1, sizeof *s), *t = calloc(1, sizeof *t);
-	sweep_opts o = {.scenes = "turntable", .variants = "ref,tfr@8,rrc/4", .frames = "0:3", .size = {48, 32}};
-	assert_int_equal(resolve(&o, s), 0);
+	assert_int_equal(resolve("--scenes turntable --variants ref,tfr@8,rrc/4 --frames 0:3 --size 48x32", s), 0);
 	char path[4096], what[256];
 	snprintf(path, sizeof path, "%s/sweep.json", dir);
 	assert_int_equal(sweep_spec_write(path, s, err, sizeof err), 0);
@@ -483,6 +475,142 @@ static void test_values(void **state)
 	assert_false(sty_report_metric_known("no_such_column"));
 }
 
+/* "--ocio-config" for the key "ocio_config". */
+static void flag_of(const sweep_key *k, char *out, size_t n)
+{
+	snprintf(out, n, "--%s", k->name);
+	for (char *p = out; *p; p++)
+		*p = *p == '_' ? '-' : *p;
+}
+
+/* Issue 30.2: the sweep key table is the one declaration of a sweep setting. Every key of it is in `taslab sweep
+ * --help` (as its option and among the file's keys) and is accepted from the command line, a JSON and a TOML sweep
+ * file with the same result (the whole request, byte for byte); a key the spec keeps round-trips through sweep.json
+ * and, changed, makes another sweep whose difference names the key. */
+static void test_keys_agree(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_keys");
+	size_t n, help_size = 0;
+	const sweep_key *keys = sweep_keys(&n);
+	char *help = NULL;
+	FILE *hf = open_memstream(&help, &help_size);
+	assert_non_null(hf);
+	cli_print_help(hf, cli_find_command("sweep"));
+	fclose(hf);
+	const char *keys_line = strstr(help, "keys:");
+	assert_non_null(keys_line);
+	sweep_spec *base = calloc(1, sizeof *base), *spec = calloc(1, sizeof *spec), *back = calloc(1, sizeof *back);
+	sweep_request *a = calloc(1, sizeof *a), *b = calloc(1, sizeof *b), *c = calloc(1, sizeof *c);
+	assert_int_equal(resolve("--scenes turntable --variants ref --frames 0:2 --size 48x32", base), 0);
+	assert_true(n > 0 && n <= SWEEP_CLI_KEYS_MAX);
+	for (size_t i = 0; i < n; i++) {
+		const sweep_key *k = &keys[i];
+		char flag[64], needle[80], cli[256], val[256], path[4096], what[512];
+		flag_of(k, flag, sizeof flag);
+		snprintf(needle, sizeof needle, "\n  %s ", flag);
+		char word[80], word_nl[80];
+		snprintf(word, sizeof word, " %s ", k->name);
+		snprintf(word_nl, sizeof word_nl, " %s\n", k->name);
+		if (!strstr(help, needle) || (!strstr(keys_line, word) && !strstr(keys_line, word_nl)))
+			fail_msg("%s: not in 'taslab sweep --help' as %s and among the file's keys", k->name, flag);
+		/* one value of the key's type, as the command line and as a file (JSON and TOML write these alike) */
+		const char *text = "ref";
+		switch (k->type) {
+		case SWEEP_KEY_NAMES: text = "a1,b2", snprintf(val, sizeof val, "[\"a1\", \"b2\"]"); break;
+		case SWEEP_KEY_NUMBERS: text = "2,4.5", snprintf(val, sizeof val, "[2, 4.5]"); break;
+		case SWEEP_KEY_WHOLES: text = "2,8", snprintf(val, sizeof val, "[2, 8]"); break;
+		case SWEEP_KEY_STRING: text = k->flags & SWEEP_KEY_RELATIVE ? "/tmp/ref" : "ref"; /* absolute stays as is */
+			snprintf(val, sizeof val, "\"%s\"", text);
+			break;
+		case SWEEP_KEY_FRAMES: text = "0:3", snprintf(val, sizeof val, "\"0:3\""); break;
+		case SWEEP_KEY_SIZE: text = "40x30", snprintf(val, sizeof val, "\"40x30\""); break;
+		case SWEEP_KEY_NUMBER: snprintf(val, sizeof val, "%.17g", (k->lo + k->hi) / 2), text = val; break;
+		case SWEEP_KEY_WHOLE: snprintf(val, sizeof val, "%u", (unsigned)k->lo + 1), text = val; break;
+		case SWEEP_KEY_BOOL: text = NULL, snprintf(val, sizeof val, "true"); break;
+		default: fail_msg("%s: type %d", k->name, (int)k->type);
+		}
+		snprintf(cli, sizeof cli, "%s%s%s", flag, text ? " " : "", text ? text : "");
+		memset(a, 0, sizeof *a);
+		if (cli_sweep_request_from_opts(opts_of(cli), a, err, sizeof err))
+			fail_msg("%s: %s", cli, err);
+		char doc[600];
+		snprintf(doc, sizeof doc, "{\"%s\": %s}", k->name, val);
+		if (sweep_request_read(write_file(dir, "k.json", doc), b, err, sizeof err))
+			fail_msg("%s: %s", doc, err);
+		snprintf(doc, sizeof doc, "%s = %s\n", k->name, val);
+		if (sweep_request_read(write_file(dir, "k.toml", doc), c, err, sizeof err))
+			fail_msg("%s: %s", doc, err);
+		if (memcmp(a, b, sizeof *a) || memcmp(b, c, sizeof *b) || !sweep_request_has(a, k->name))
+			fail_msg("%s: the command line, JSON and TOML give different requests", k->name);
+		if (!(k->flags & SWEEP_KEY_SPEC))
+			continue;
+		*spec = *base;
+		memcpy((char *)spec + k->spec_offset, (const char *)a + k->offset, sweep_key_value_size(k));
+		snprintf(path, sizeof path, "%s/sweep.json", dir);
+		if (sweep_spec_write(path, spec, err, sizeof err) || sweep_spec_read(path, back, err, sizeof err))
+			fail_msg("%s: %s", k->name, err);
+		if (memcmp((char *)back + k->spec_offset, (char *)a + k->offset, sweep_key_value_size(k)) ||
+		    sweep_spec_compare(spec, back, what, sizeof what))
+			fail_msg("%s: does not round-trip through sweep.json", k->name);
+		if (sweep_spec_compare(base, spec, what, sizeof what) != 1 || strncmp(what, k->name, strlen(k->name)))
+			fail_msg("%s: a changed value is not another sweep ('%s')", k->name, what);
+	}
+	free(help);
+	free(base), free(spec), free(back);
+	free(a), free(b), free(c);
+}
+
+/* Issue 30.2: a value out of its key's range says the same from the command line and from a file — the range from the
+ * key's one table line — after where it came from ("--ppd '2000' " / "FILE: \"ppd\": "); one line each. */
+static void test_keys_range_message(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_keys_range");
+	static _Alignas(max_align_t) unsigned char opts[CLI_OPTS_MAX_B];
+	static cli_ctx ctx;
+	size_t n, checked = 0;
+	const sweep_key *keys = sweep_keys(&n);
+	sweep_request *r = calloc(1, sizeof *r);
+	for (size_t i = 0; i < n; i++) {
+		const sweep_key *k = &keys[i];
+		bool list = k->type == SWEEP_KEY_NUMBERS || k->type == SWEEP_KEY_WHOLES;
+		if (!list && k->type != SWEEP_KEY_NUMBER && k->type != SWEEP_KEY_WHOLE)
+			continue;
+		char flag[64], value[64], doc[256];
+		flag_of(k, flag, sizeof flag);
+		snprintf(value, sizeof value, "%.17g", k->hi + 1);
+		char *argv[] = {"sweep", "unused.json", flag, value};
+		int rc = cli_parse_command(cli_find_command("sweep"), 4, argv, opts, &ctx);
+		if (!rc) /* lists are split and checked when they go onto the request */
+			rc = cli_sweep_request_from_opts((const sweep_opts *)opts, r, ctx.err, sizeof ctx.err);
+		snprintf(doc, sizeof doc, list ? "{\"%s\": [%s]}" : "{\"%s\": %s}", k->name, value);
+		int frc = sweep_request_read(write_file(dir, "k.json", doc), r, err, sizeof err);
+		const char *cli_why = strstr(ctx.err, "must be"), *file_why = strstr(err, "must be");
+		char at[80];
+		snprintf(at, sizeof at, "\"%s\": must be", k->name);
+		if (rc != TL_ERR_ARG || frc != TL_ERR_INPUT || !cli_why || !file_why || strcmp(cli_why, file_why) ||
+		    !strstr(ctx.err, flag) || !strstr(err, at) || strchr(ctx.err, '\n') || strchr(err, '\n'))
+			fail_msg("%s %s: command line '%s' (rc %d), file '%s' (rc %d)", flag, value, ctx.err, rc, err, frc);
+		checked++;
+	}
+	assert_true(checked >= 5); /* thresholds, periods, fps, ppd, jobs */
+	free(r);
+	/* ppd's range is FLIP's own (metrics/src/metric_flip.c): its ends are accepted by the metric, beyond them not */
+	const sweep_key *ppd = sweep_key_find("ppd");
+	assert_non_null(ppd);
+	double ends[] = {ppd->lo, ppd->hi, ppd->hi * 1.5};
+	for (int e = 0; e < 3; e++) {
+		mtr_option_value o = {"ppd", ends[e]};
+		mtr_compare_desc d = {.metrics = "flip", .options = &o, .option_count = 1, .threads = 1};
+		mtr_comparer *cmp = NULL;
+		int rc = mtr_comparer_create(&d, &cmp, err, sizeof err);
+		mtr_comparer_destroy(&cmp);
+		if ((rc == 0) != (e < 2))
+			fail_msg("ppd %g: FLIP says %d (%s)", ends[e], rc, err);
+	}
+}
+
 /* The command line: sweep and report options as the parser takes them. */
 static void test_cli(void **state)
 {
@@ -495,7 +623,11 @@ static void test_cli(void **state)
 		      "--size", "960x540", "--out", "sweeps/s1", "--jobs", "2", "--slurm-dry-run", "--slurm-opts", "-p gpu"};
 	assert_int_equal(cli_parse_command(c, 17, ok, opts, &ctx), 0);
 	sweep_opts *o = (sweep_opts *)opts;
-	assert_true(o->jobs == 2 && o->slurm_dry_run && !strcmp(o->slurm_opts, "-p gpu") && o->size[0] == 960);
+	assert_true(o->slurm_dry_run && !strcmp(o->slurm_opts, "-p gpu"));
+	sweep_request *req = calloc(1, sizeof *req);
+	assert_int_equal(cli_sweep_request_from_opts(o, req, err, sizeof err), 0);
+	assert_true(req->jobs == 2 && req->width == 960 && req->cameras_all && req->scene_count == 2);
+	free(req);
 	char *bad1[] = {"sweep", "--scenes", "calm", "--jobs", "0"};
 	assert_int_equal(cli_parse_command(c, 5, bad1, opts, &ctx), TL_ERR_ARG);
 	assert_non_null(strstr(ctx.err, "--jobs"));
@@ -525,6 +657,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_request_file), cmocka_unit_test(test_request_toml), cmocka_unit_test(test_resolve), cmocka_unit_test(test_spec_file_and_plan),
 		cmocka_unit_test(test_spec_bad),     cmocka_unit_test(test_values),  cmocka_unit_test(test_cli),
+		cmocka_unit_test(test_keys_agree),   cmocka_unit_test(test_keys_range_message),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -21,6 +21,7 @@
 #include "taslab/metrics.h"
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
+#include "taslab/sweep_keys.h"
 #include "taslab/tl_clock.h"
 #include "taslab/tl_fs.h"
 
@@ -73,50 +74,9 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 
 /* ------------------------------------------------------------------ sweep */
 
+/* The options of the sweep alone; the settings (--scenes ... --jobs) are the sweep key table's, each also a key of the
+ * sweep file (output/sweep_keys.h, cli_sweep_key_options). */
 static const cli_opt sweep_options[] = {
-	{.name = "scenes", .arg = "LIST",
-	 .help = "built-in scene names or scene files, comma-separated (e.g. calm,moderate,dynamic)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, scenes)},
-	{.name = "cameras", .arg = "LIST",
-	 .help = "camera paths: all (default), or names (each in every scene) and SCENE/CAMERA entries",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, cameras)},
-	{.name = "variants", .arg = "LIST",
-	 .help = "variants, comma-separated, ref among them (e.g. ref,tfr@2,tfr@8,tarc@8,rrc/4; see 'taslab render --help')",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, variants)},
-	{.name = "methods", .arg = "LIST",
-	 .help = "also every variant of these methods (or all available ones) at --thresholds and --periods, plus ref",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, methods)},
-	{.name = "thresholds", .arg = "LIST",
-	 .help = "T values for --methods (e.g. 2,4,8,16,32,64)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, thresholds)},
-	{.name = "periods", .arg = "LIST",
-	 .help = "period values for --methods (e.g. 2,4,8)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, periods)},
-	{.name = "frames", .arg = "A:B",
-	 .help = "frames A..B-1 of every scene; also A, :B, A: (default: each scene's whole clip)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, frames)},
-	{.name = "size", .arg = "WxH",
-	 .help = "frame size (default 960x540)",
-	 .type = CLI_SIZE, .offset = offsetof(sweep_opts, size)},
-	{.name = "fps", .arg = "F",
-	 .help = "frame rate (default: each scene's)",
-	 .type = CLI_DOUBLE, .offset = offsetof(sweep_opts, fps), .lo = 1, .hi = 1000},
-	{.name = "out", .arg = "SWEEP",
-	 .help = "the sweep folder (runs/, clips/, metrics/, summary.csv, table1.md, report/)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, out)},
-	{.name = "baseline", .arg = "VARIANT",
-	 .help = "variant the shaded-sample reductions are relative to, or auto (default: sa for sa/sau/tasa when sa "
-		 "is swept, as the paper's Table 1; ref otherwise)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, baseline)},
-	{.name = "metrics", .arg = "LIST",
-	 .help = "metrics against ref: maxrgb,psnr,ssim,flicker,flip or all (default)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, metrics)},
-	{.name = "ppd", .arg = "F",
-	 .help = "FLIP pixels per degree (default 67.0206)",
-	 .type = CLI_DOUBLE, .offset = offsetof(sweep_opts, ppd), .lo = 1e-3, .hi = 1000},
-	{.name = "jobs", .arg = "N",
-	 .help = "runs at a time on this machine, each in its own process (default 1)",
-	 .type = CLI_UINT, .offset = offsetof(sweep_opts, jobs), .lo = 1, .hi = 256},
 	{.name = "slurm", .arg = NULL,
 	 .help = "submit the incomplete runs as a Slurm job array (one task per run) and a dependent report job",
 	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, slurm)},
@@ -139,35 +99,10 @@ static const cli_opt sweep_options[] = {
 	{.name = "quiet", .arg = NULL,
 	 .help = "no progress output",
 	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, quiet)},
-	{.name = "device", .arg = "D",
-	 .help = "Vulkan device for every run: index, name substring, or 'lavapipe' (default: a GPU if present)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, device)},
-	{.name = "validation", .arg = NULL,
-	 .help = "every run with the Khronos validation layer; any message fails the run",
-	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, validation)},
-	{.name = "truth", .arg = NULL,
-	 .help = "render every variant whose method has --truth with it: late_samples and late_percent in summary.csv "
-		 "(reused samples more than T from their true shading; costs shading them too)",
-	 .type = CLI_FLAG, .offset = offsetof(sweep_opts, truth)},
-	{.name = "ocio-config", .arg = "F",
-	 .help = "OpenColorIO config for the display transform (default: $OCIO, else the built-in ACES 1.0 SDR-video)",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, ocio_config)},
-	{.name = "display", .arg = "D",
-	 .help = "display of that config",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, display)},
-	{.name = "view", .arg = "V",
-	 .help = "view of that display",
-	 .type = CLI_STRING, .offset = offsetof(sweep_opts, view)},
 	{0},
 };
 
-/* Options that change what is swept: refused together with a resolved SWEEP/sweep.json. */
-static bool changes_spec(const sweep_opts *o)
-{
-	return o->scenes || o->cameras || o->variants || o->methods || o->thresholds || o->periods || o->frames ||
-	       o->size[0] || o->fps > 0 || o->baseline || o->metrics || o->ppd > 0 || o->device || o->validation || o->truth ||
-	       o->ocio_config || o->display || o->view;
-}
+static const cli_opt *sweep_dynamic(void) { return cli_sweep_key_options(); }
 
 static int sweep_validate(void *opts, cli_ctx *ctx)
 {
@@ -183,7 +118,7 @@ static int sweep_validate(void *opts, cli_ctx *ctx)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--slurm and --task exclude each other");
 	if (o->slurm_opts && !o->slurm && !o->slurm_dry_run)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--slurm-opts goes with --slurm or --slurm-dry-run");
-	if (!ctx->npos && !o->scenes)
+	if (!ctx->npos && !cli_sweep_opt_given(o, "scenes"))
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 				"give a sweep file or --scenes, --variants and --out (see 'taslab sweep --help')");
 	return TL_OK;
@@ -284,7 +219,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 			resolved = true;
 			const char *slash = strrchr(file, '/');
 			snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - file) : 1, slash ? file : ".");
-			if (changes_spec(o) || o->out)
+			if (cli_sweep_opts_change_spec(o)) /* options that change what is swept, or --out */
 				rc = tl_error(err, err_size, TL_ERR_ARG,
 					      "%s is a resolved sweep: options that change it cannot be added (write a sweep file)",
 					      file);
@@ -308,9 +243,10 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 					    err_size);
 		goto done;
 	}
-	if (!rc && !resolved) {
+	if (!rc) /* the settings given (resuming: only --jobs, checked above) */
 		rc = cli_sweep_request_from_opts(o, req, err, err_size);
-		if (!rc && !req->out[0])
+	if (!rc && !resolved) {
+		if (!req->out[0])
 			rc = tl_error(err, err_size, TL_ERR_ARG, "--out SWEEP is required (or \"out\" in the sweep file)");
 		if (!rc)
 			rc = cli_sweep_resolve(req, spec, err, err_size);
@@ -355,7 +291,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 		rc = cli_sweep_slurm(spec, dir, o->slurm_opts, o->slurm_dry_run, err, err_size);
 		goto done;
 	}
-	unsigned jobs = o->jobs ? o->jobs : req->jobs ? req->jobs : 1;
+	unsigned jobs = req->jobs ? req->jobs : 1;
 	size_t failed = 0, incomplete = 0;
 	double t0 = tl_clock_s();
 	rc = cli_sweep_local(spec, dir, jobs, o->quiet, &failed, err, err_size);
@@ -390,12 +326,14 @@ done:
 
 static void sweep_help(FILE *out)
 {
+	cli_sweep_keys_help(out);
+	char keys[512];
 	fprintf(out, "\nsweep file (JSON, or TOML when the name ends in .toml; options given on the command line override it):\n"
 		     "  {\"scenes\": [\"calm\", \"moderate\"], \"cameras\": \"all\", \"variants\": [\"ref\", \"tfr@8\", \"rrc/4\"],\n"
 		     "   \"methods\": [\"tarc\"], \"thresholds\": [4, 16], \"periods\": [4], \"frames\": \"0:300\",\n"
-		     "   \"size\": \"960x540\", \"out\": \"sweeps/s1\", \"jobs\": 2}\n"
-		     "  keys: scenes cameras variants methods thresholds periods frames size fps out baseline metrics ppd\n"
-		     "        device ocio_config display view validation truth jobs (paths relative to the file's folder)\n"
+		     "   \"size\": \"960x540\", \"out\": \"sweeps/s1\", \"jobs\": 2}\n");
+	cli_print_option(out, 0, "keys:", sweep_key_list(" ", keys, sizeof keys));
+	fprintf(out, "  (lists as JSON/TOML lists; paths relative to the file's folder)\n"
 		     "\nresume: run the same command again, or 'taslab sweep SWEEP/sweep.json': complete runs (manifest.json)\n"
 		     "are kept, the rest is redone. Exit status 0 when every run completed, 1 when some failed.\n");
 }
@@ -411,6 +349,7 @@ const cli_command cli_cmd_sweep = {
 		       "resolved sweep is written to SWEEP/sweep.json first. --jobs N runs N renders at a time; --slurm\n"
 		       "submits a job array instead. Prints the report's path on stdout.",
 	.options = sweep_options,
+	.dynamic_options = sweep_dynamic,
 	.opts_size = sizeof(sweep_opts),
 	.validate = sweep_validate,
 	.max_pos = 1,

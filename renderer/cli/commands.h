@@ -71,14 +71,22 @@ typedef struct study_opts {
 	bool keep_flagged;
 } study_opts;
 
-/* `taslab sweep` (cmd_sweep.c): every option may also come from the sweep file; given options override it. */
-typedef struct sweep_opts {
-	const char *scenes, *cameras, *variants, *methods, *thresholds, *periods, *frames, *out, *baseline, *metrics;
+/* A sweep setting as the command line gave it: the option parser's own types (CLI_STRING for lists and strings,
+ * CLI_DOUBLE, CLI_UINT, CLI_SIZE, CLI_FLAG) write into it; all zero when not given (a number's range starts above 0). */
+typedef union sweep_cli_value {
+	const char *text;
+	double number;
+	uint32_t whole;
 	uint32_t size[2];
-	double fps, ppd;
-	const char *device, *ocio_config, *display, *view;
-	bool validation, truth;
-	uint32_t jobs;
+	bool flag;
+} sweep_cli_value;
+
+#define SWEEP_CLI_KEYS_MAX 32
+
+/* `taslab sweep` (cmd_sweep.c): the settings are the sweep key table's (output/sweep_keys.h), each also a key of the
+ * sweep file; given options override the file's. */
+typedef struct sweep_opts {
+	sweep_cli_value keys[SWEEP_CLI_KEYS_MAX]; /* [i]: key i of sweep_keys() (cli_sweep_key_options) */
 	bool slurm, slurm_dry_run, no_report, quiet, redo_damaged;
 	const char *slurm_opts, *task;
 } sweep_opts;

@@ -6,12 +6,23 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "commands.h"
 #include "taslab/sweep.h"
 
-/* Overlays the options given on the command line onto `r` (a request read from a sweep file, or zeroed).
- * TL_ERR_ARG for malformed lists. */
+/* The command-line options of the sweep key table (output/sweep_keys.h): --NAME for key NAME ('_' as '-'), parsed
+ * by the one option parser into sweep_opts.keys (the key's index). Built once. */
+const cli_opt *cli_sweep_key_options(void);
+/* Whether the command line gave the sweep key `name` ("scenes"). */
+bool cli_sweep_opt_given(const sweep_opts *o, const char *name);
+/* Whether it gave a setting that changes the sweep (any key but the SWEEP_KEY_RESUME_OK ones: --jobs). */
+bool cli_sweep_opts_change_spec(const sweep_opts *o);
+/* Lists the settings for `taslab sweep --help`: the option, its help, and the sweep file key it also is. */
+void cli_sweep_keys_help(FILE *out);
+
+/* Overlays the options given on the command line onto `r` (a request read from a sweep file, or zeroed), key by key
+ * as the table says. TL_ERR_ARG for malformed lists. */
 int cli_sweep_request_from_opts(const sweep_opts *o, sweep_request *r, char *err, size_t err_size);
 
 /* Resolves a request into a spec: scenes loaded (names, paths, cameras and their motion, frame range, fps), variants

@@ -1,6 +1,7 @@
 #define _XOPEN_SOURCE 700 /* realpath */
-/* sweep_resolve.c — a sweep request (file and/or options) resolved against the scene files and the method registry
- * into the spec written to SWEEP/sweep.json (sweep_cli.h, output/sweep.h; DESIGN sections 4 and 9). */
+/* sweep_resolve.c — the sweep key table (output/sweep_keys.h) as `taslab sweep` options and their overlay onto a
+ * request, and a sweep request (file and/or options) resolved against the scene files and the method registry into
+ * the spec written to SWEEP/sweep.json (sweep_cli.h, output/sweep.h; DESIGN sections 4 and 9, issue 30.2). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +13,7 @@
 #include "taslab/metrics.h"
 #include "taslab/metrics_flip.h"
 #include "taslab/scene.h"
+#include "taslab/sweep_keys.h"
 
 /* ------------------------------------------------------------------ options onto the request */
 
@@ -29,83 +31,139 @@ static int split_into(const char *list, const char *what, char *rows, size_t row
 	return rc;
 }
 
+/* "--ocio-config" for the key "ocio_config". */
+static void key_flag(const sweep_key *k, char *out, size_t n)
+{
+	snprintf(out, n, "--%s", k->name);
+	for (char *p = out; *p; p++)
+		if (*p == '_')
+			*p = '-';
+}
+
+static bool key_given(const sweep_key *k, const sweep_cli_value *v)
+{
+	switch (k->type) {
+	case SWEEP_KEY_SIZE: return v->size[0] > 0;
+	case SWEEP_KEY_NUMBER: return v->number > 0;
+	case SWEEP_KEY_WHOLE: return v->whole > 0;
+	case SWEEP_KEY_BOOL: return v->flag;
+	default: return v->text != NULL;
+	}
+}
+
+const cli_opt *cli_sweep_key_options(void)
+{
+	/* as cli_method_options: the table is built from the key table on first use and stays */
+	static cli_opt table[SWEEP_CLI_KEYS_MAX + 1];
+	static char names[SWEEP_CLI_KEYS_MAX][40];
+	if (table[0].name)
+		return table;
+	size_t n;
+	const sweep_key *keys = sweep_keys(&n);
+	for (size_t i = 0; i < n && i < SWEEP_CLI_KEYS_MAX; i++) {
+		static const cli_opt_type types[SWEEP_KEY_TYPE_COUNT] = {
+			[SWEEP_KEY_NAMES] = CLI_STRING, [SWEEP_KEY_NUMBERS] = CLI_STRING, [SWEEP_KEY_WHOLES] = CLI_STRING,
+			[SWEEP_KEY_STRING] = CLI_STRING, [SWEEP_KEY_FRAMES] = CLI_STRING,  [SWEEP_KEY_SIZE] = CLI_SIZE,
+			[SWEEP_KEY_NUMBER] = CLI_DOUBLE, [SWEEP_KEY_WHOLE] = CLI_UINT,      [SWEEP_KEY_BOOL] = CLI_FLAG,
+		};
+		char flag[48];
+		key_flag(&keys[i], flag, sizeof flag);
+		snprintf(names[i], sizeof names[i], "%s", flag + 2);
+		table[i] = (cli_opt){.name = names[i], .arg = keys[i].type == SWEEP_KEY_BOOL ? NULL : keys[i].arg,
+				     .help = keys[i].help, .type = types[keys[i].type],
+				     .offset = offsetof(sweep_opts, keys) + i * sizeof(sweep_cli_value), .lo = keys[i].lo,
+				     .hi = keys[i].hi};
+	}
+	return table;
+}
+
+bool cli_sweep_opt_given(const sweep_opts *o, const char *name)
+{
+	size_t n;
+	const sweep_key *keys = sweep_keys(&n), *k = sweep_key_find(name);
+	return k && key_given(k, &o->keys[k - keys]);
+}
+
+bool cli_sweep_opts_change_spec(const sweep_opts *o)
+{
+	size_t n;
+	const sweep_key *keys = sweep_keys(&n);
+	for (size_t i = 0; i < n; i++)
+		if (!(keys[i].flags & SWEEP_KEY_RESUME_OK) && key_given(&keys[i], &o->keys[i]))
+			return true;
+	return false;
+}
+
+void cli_sweep_keys_help(FILE *out)
+{
+	size_t n;
+	const sweep_key *keys = sweep_keys(&n);
+	fprintf(out, "\nsweep settings (each also a sweep file key: NAME with '_' for '-'; lists comma-separated here):\n");
+	for (size_t i = 0; i < n; i++) {
+		char flag[48], left[80];
+		key_flag(&keys[i], flag, sizeof flag);
+		snprintf(left, sizeof left, "%s%s%s", flag, keys[i].arg ? " " : "", keys[i].arg ? keys[i].arg : "");
+		cli_print_option(out, 0, left, keys[i].help);
+	}
+}
+
 int cli_sweep_request_from_opts(const sweep_opts *o, sweep_request *r, char *err, size_t err_size)
 {
+	size_t nkeys;
+	const sweep_key *keys = sweep_keys(&nkeys);
 	int rc = TL_OK;
-	if (o->scenes) {
-		rc = split_into(o->scenes, "--scenes", &r->scenes[0][0], sizeof r->scenes[0], SWEEP_MAX_SCENES,
-				&r->scene_count, err, err_size);
-		r->set |= SWEEP_SET_SCENES;
-	}
-	if (!rc && o->cameras) {
-		r->cameras_all = !strcmp(o->cameras, "all");
-		r->camera_count = 0;
-		if (!r->cameras_all)
-			rc = split_into(o->cameras, "--cameras", &r->cameras[0][0], sizeof r->cameras[0],
-					sizeof r->cameras / sizeof r->cameras[0], &r->camera_count, err, err_size);
-		r->set |= SWEEP_SET_CAMERAS;
-	}
-	if (!rc && o->variants) {
-		rc = split_into(o->variants, "--variants", &r->variants[0][0], sizeof r->variants[0], SWEEP_MAX_VARIANTS,
-				&r->variant_count, err, err_size);
-		r->set |= SWEEP_SET_VARIANTS;
-	}
-	if (!rc && o->methods) {
-		r->methods_all = !strcmp(o->methods, "all");
-		r->method_count = 0;
-		if (!r->methods_all)
-			rc = split_into(o->methods, "--methods", &r->methods[0][0], sizeof r->methods[0], SWEEP_MAX_VARIANTS,
-					&r->method_count, err, err_size);
-		r->set |= SWEEP_SET_METHODS;
-	}
-	if (!rc && o->thresholds) {
-		float T[SWEEP_MAX_VALUES];
-		rc = cli_parse_float_list(o->thresholds, "--thresholds: T", 1e-6, 255, T, SWEEP_MAX_VALUES, &r->threshold_count,
-					  err, err_size);
-		for (size_t i = 0; !rc && i < r->threshold_count; i++)
-			r->thresholds[i] = T[i];
-		r->set |= SWEEP_SET_THRESHOLDS;
-	}
-	if (!rc && o->periods) {
-		char buf[512];
-		const char *items[SWEEP_MAX_VALUES];
-		rc = cli_split_list(o->periods, "--periods", buf, sizeof buf, items, SWEEP_MAX_VALUES, &r->period_count, err,
-				    err_size);
-		for (size_t i = 0; !rc && i < r->period_count; i++) {
-			uint64_t v;
-			rc = cli_parse_uint(items[i], "--periods: N", 1, 1024, &v, err, err_size);
-			r->periods[i] = (uint32_t)v;
+	for (size_t i = 0; !rc && i < nkeys; i++) {
+		const sweep_key *k = &keys[i];
+		const sweep_cli_value *v = &o->keys[i];
+		char flag[48], *f = (char *)r + k->offset;
+		size_t *count = (size_t *)((char *)r + k->count_offset);
+		if (!key_given(k, v))
+			continue;
+		key_flag(k, flag, sizeof flag);
+		switch (k->type) {
+		case SWEEP_KEY_NAMES: {
+			bool *all = k->all ? (bool *)((char *)r + k->all_offset) : NULL;
+			*count = 0;
+			if (all && (*all = !strcmp(v->text, k->all)))
+				break;
+			rc = split_into(v->text, flag, f, k->size, k->max, count, err, err_size);
+			break;
 		}
-		r->set |= SWEEP_SET_PERIODS;
+		case SWEEP_KEY_NUMBERS: {
+			/* through float, as --threshold (a variant's T is a float: tfr@8.1 names the T it renders) */
+			float x[SWEEP_MAX_VALUES];
+			rc = cli_parse_float_list(v->text, flag, k->lo, k->hi, x, k->max < SWEEP_MAX_VALUES ? k->max : SWEEP_MAX_VALUES,
+						  count, err, err_size);
+			for (size_t j = 0; !rc && j < *count; j++)
+				((double *)f)[j] = x[j];
+			break;
+		}
+		case SWEEP_KEY_WHOLES: {
+			char buf[512];
+			const char *items[SWEEP_MAX_VALUES];
+			rc = cli_split_list(v->text, flag, buf, sizeof buf, items, k->max < SWEEP_MAX_VALUES ? k->max : SWEEP_MAX_VALUES,
+					    count, err, err_size);
+			for (size_t j = 0; !rc && j < *count; j++) {
+				uint64_t u;
+				rc = cli_parse_uint(items[j], flag, (uint64_t)k->lo, (uint64_t)k->hi, &u, err, err_size);
+				((uint32_t *)f)[j] = (uint32_t)u;
+			}
+			break;
+		}
+		case SWEEP_KEY_STRING:
+		case SWEEP_KEY_FRAMES: /* --frames is checked against each scene's clip by the resolver */
+			if (strlen(v->text) >= k->size)
+				return tl_error(err, err_size, TL_ERR_ARG, "%s is too long", flag);
+			snprintf(f, k->size, "%s", v->text);
+			break;
+		case SWEEP_KEY_SIZE: memcpy(f, v->size, sizeof v->size); break;
+		case SWEEP_KEY_NUMBER: *(double *)f = v->number; break;
+		case SWEEP_KEY_WHOLE: *(uint32_t *)f = v->whole; break;
+		case SWEEP_KEY_BOOL: *(bool *)f = true; break;
+		default: return tl_error(err, err_size, TL_ERR_INTERNAL, "sweep key %s: bad table line", k->name);
+		}
+		r->set |= sweep_key_bit(k);
 	}
-#define COPY(field, flag, bit)                                                                                     \
-	if (!rc && o->field) {                                                                                     \
-		if (strlen(o->field) >= sizeof r->field)                                                           \
-			return tl_error(err, err_size, TL_ERR_ARG, "--%s is too long", flag);                      \
-		snprintf(r->field, sizeof r->field, "%s", o->field);                                               \
-		r->set |= bit;                                                                                     \
-	}
-	COPY(frames, "frames", SWEEP_SET_FRAMES)
-	COPY(out, "out", SWEEP_SET_OUT)
-	COPY(baseline, "baseline", SWEEP_SET_BASELINE)
-	COPY(metrics, "metrics", SWEEP_SET_METRICS)
-	COPY(device, "device", SWEEP_SET_DEVICE)
-	COPY(ocio_config, "ocio-config", SWEEP_SET_OCIO)
-	COPY(display, "display", SWEEP_SET_DISPLAY)
-	COPY(view, "view", SWEEP_SET_VIEW)
-#undef COPY
-	if (o->size[0])
-		r->width = o->size[0], r->height = o->size[1], r->set |= SWEEP_SET_SIZE;
-	if (o->fps > 0)
-		r->fps = o->fps, r->set |= SWEEP_SET_FPS;
-	if (o->ppd > 0)
-		r->ppd = o->ppd, r->set |= SWEEP_SET_PPD;
-	if (o->validation)
-		r->validation = true, r->set |= SWEEP_SET_VALIDATION;
-	if (o->truth)
-		r->truth = true, r->set |= SWEEP_SET_TRUTH;
-	if (o->jobs)
-		r->jobs = o->jobs, r->set |= SWEEP_SET_JOBS;
 	return rc;
 }
 
@@ -269,6 +327,9 @@ static int expand_method(const sweep_request *r, const method_info *m, sweep_spe
 int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t err_size)
 {
 	memset(s, 0, sizeof *s);
+	/* the settings a sweep keeps as given (device, validation, truth, the display transform's config, display and
+	 * view, ...: the SWEEP_KEY_SPEC keys); size, baseline, metrics and ppd get their defaults below */
+	sweep_spec_copy_keys(s, r);
 	int rc;
 	if (!r->scene_count)
 		return tl_error(err, err_size, TL_ERR_ARG, "--scenes is required (e.g. --scenes calm,moderate; see 'taslab scenes')");
@@ -330,12 +391,6 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	if (mtr_metric_parse(s->metrics, &mask, err, err_size))
 		return TL_ERR_ARG;
 	s->ppd = r->ppd > 0 ? r->ppd : MTR_FLIP_PPD_DEFAULT;
-	snprintf(s->device, sizeof s->device, "%s", r->device);
-	s->validation = r->validation;
-	s->truth = r->truth;
-	snprintf(s->ocio_config, sizeof s->ocio_config, "%s", r->ocio_config);
-	snprintf(s->display, sizeof s->display, "%s", r->display);
-	snprintf(s->view, sizeof s->view, "%s", r->view);
 	s->width = r->width ? r->width : 960;
 	s->height = r->height ? r->height : 540;
 	for (size_t i = 0; i < r->camera_count; i++)

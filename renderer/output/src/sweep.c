@@ -10,6 +10,7 @@
 #include <strings.h>
 
 #include "taslab/run.h"
+#include "taslab/sweep_keys.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
 #include "taslab/tl_parse.h"
@@ -159,6 +160,68 @@ static int get_frames(const ctx *c, const char *key, json_t *v, char *dst, size_
 
 /* ------------------------------------------------------------------ request */
 
+/* A scene entry that is a path (a '/' or a file extension) rather than a built-in scene's name, as the command line's
+ * --scenes tells them apart (cli_resolve_scene). */
+static bool looks_like_path(const char *s)
+{
+	return strchr(s, '/') || strstr(s, ".json") || strstr(s, ".gltf") || strstr(s, ".glb");
+}
+
+/* One key's value from a file into the request, as the key's table line says (sweep_keys.h). */
+static int read_key(const ctx *c, const sweep_key *k, json_t *v, sweep_request *r)
+{
+	char *f = (char *)r + k->offset, tmp[SWEEP_PATH_MAX];
+	size_t *count = (size_t *)((char *)r + k->count_offset);
+	int rc = TL_OK;
+	r->set |= sweep_key_bit(k);
+	switch (k->type) {
+	case SWEEP_KEY_NAMES:
+		if (k->all && json_is_string(v) && !strcmp(json_string_value(v), k->all)) {
+			*(bool *)((char *)r + k->all_offset) = true;
+			break;
+		}
+		rc = get_string_list(c, k->name, v, f, k->size, k->max, count, false);
+		for (size_t i = 0; !rc && (k->flags & SWEEP_KEY_RELATIVE) && i < *count; i++) {
+			char *e = f + i * k->size;
+			if (looks_like_path(e)) {
+				relative_to(c->file, e, tmp, sizeof tmp);
+				snprintf(e, k->size, "%s", tmp);
+			}
+		}
+		break;
+	case SWEEP_KEY_NUMBERS:
+	case SWEEP_KEY_WHOLES: {
+		if (!json_is_array(v) || !json_array_size(v) || json_array_size(v) > k->max)
+			return bad(c, k->name, "must be a list of 1..%zu numbers", k->max);
+		size_t i;
+		json_t *e;
+		json_array_foreach(v, i, e) {
+			if (k->type == SWEEP_KEY_NUMBERS)
+				rc = get_number(c, k->name, e, k->lo, k->hi, (double *)f + i);
+			else
+				rc = get_uint(c, k->name, e, (json_int_t)k->lo, (json_int_t)k->hi, (uint32_t *)f + i);
+			if (rc)
+				break;
+		}
+		*count = json_array_size(v);
+		break;
+	}
+	case SWEEP_KEY_STRING:
+		if (!(k->flags & SWEEP_KEY_RELATIVE))
+			rc = get_string(c, k->name, v, f, k->size);
+		else if (!(rc = get_string(c, k->name, v, tmp, sizeof tmp)))
+			relative_to(c->file, tmp, f, k->size);
+		break;
+	case SWEEP_KEY_FRAMES: rc = get_frames(c, k->name, v, f, k->size); break;
+	case SWEEP_KEY_SIZE: rc = get_size(c, k->name, v, (uint32_t *)f, (uint32_t *)f + 1); break;
+	case SWEEP_KEY_NUMBER: rc = get_number(c, k->name, v, k->lo, k->hi, (double *)f); break;
+	case SWEEP_KEY_WHOLE: rc = get_uint(c, k->name, v, (json_int_t)k->lo, (json_int_t)k->hi, (uint32_t *)f); break;
+	case SWEEP_KEY_BOOL: rc = get_bool(c, k->name, v, (bool *)f); break;
+	default: rc = tl_error(c->err, c->err_size, TL_ERR_INTERNAL, "sweep key %s: bad table line", k->name);
+	}
+	return rc;
+}
+
 int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err_size)
 {
 	memset(r, 0, sizeof *r);
@@ -176,114 +239,17 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 	const char *key;
 	json_t *v;
 	json_object_foreach(j, key, v) {
-		if (!strcmp(key, "scenes")) {
-			rc = get_string_list(&c, key, v, &r->scenes[0][0], sizeof r->scenes[0], SWEEP_MAX_SCENES, &r->scene_count,
-					     false);
-			for (size_t i = 0; !rc && i < r->scene_count; i++) {
-				/* a path (it has a '/' or a file extension) is relative to the sweep file */
-				if (strchr(r->scenes[i], '/') || strstr(r->scenes[i], ".json") || strstr(r->scenes[i], ".gltf") ||
-				    strstr(r->scenes[i], ".glb")) {
-					char tmp[SWEEP_PATH_MAX];
-					relative_to(path, r->scenes[i], tmp, sizeof tmp);
-					snprintf(r->scenes[i], sizeof r->scenes[i], "%s", tmp);
-				}
-			}
-			r->set |= SWEEP_SET_SCENES;
-		} else if (!strcmp(key, "cameras")) {
-			if (json_is_string(v) && !strcmp(json_string_value(v), "all"))
-				r->cameras_all = true;
-			else
-				rc = get_string_list(&c, key, v, &r->cameras[0][0], sizeof r->cameras[0],
-						     sizeof r->cameras / sizeof r->cameras[0], &r->camera_count, false);
-			r->set |= SWEEP_SET_CAMERAS;
-		} else if (!strcmp(key, "variants")) {
-			rc = get_string_list(&c, key, v, &r->variants[0][0], sizeof r->variants[0], SWEEP_MAX_VARIANTS,
-					     &r->variant_count, false);
-			r->set |= SWEEP_SET_VARIANTS;
-		} else if (!strcmp(key, "methods")) {
-			if (json_is_string(v) && !strcmp(json_string_value(v), "all"))
-				r->methods_all = true;
-			else
-				rc = get_string_list(&c, key, v, &r->methods[0][0], sizeof r->methods[0], SWEEP_MAX_VARIANTS,
-						     &r->method_count, false);
-			r->set |= SWEEP_SET_METHODS;
-		} else if (!strcmp(key, "thresholds") || !strcmp(key, "periods")) {
-			bool T = key[0] == 't';
-			if (!json_is_array(v) || !json_array_size(v) || json_array_size(v) > SWEEP_MAX_VALUES) {
-				rc = bad(&c, key, "must be a list of 1..%d numbers", SWEEP_MAX_VALUES);
-				break;
-			}
-			size_t i;
-			json_t *e;
-			json_array_foreach(v, i, e) {
-				if (T)
-					rc = get_number(&c, key, e, 1e-6, 255, &r->thresholds[i]);
-				else
-					rc = get_uint(&c, key, e, 1, 1024, &r->periods[i]);
-				if (rc)
-					break;
-			}
-			if (T)
-				r->threshold_count = json_array_size(v), r->set |= SWEEP_SET_THRESHOLDS;
-			else
-				r->period_count = json_array_size(v), r->set |= SWEEP_SET_PERIODS;
-		} else if (!strcmp(key, "frames")) {
-			rc = get_frames(&c, key, v, r->frames, sizeof r->frames);
-			r->set |= SWEEP_SET_FRAMES;
-		} else if (!strcmp(key, "size")) {
-			rc = get_size(&c, key, v, &r->width, &r->height);
-			r->set |= SWEEP_SET_SIZE;
-		} else if (!strcmp(key, "fps")) {
-			rc = get_number(&c, key, v, 1, 1000, &r->fps);
-			r->set |= SWEEP_SET_FPS;
-		} else if (!strcmp(key, "ppd")) {
-			rc = get_number(&c, key, v, 1e-3, 1000, &r->ppd);
-			r->set |= SWEEP_SET_PPD;
-		} else if (!strcmp(key, "out")) {
-			char tmp[SWEEP_PATH_MAX];
-			if (!(rc = get_string(&c, key, v, tmp, sizeof tmp)))
-				relative_to(path, tmp, r->out, sizeof r->out);
-			r->set |= SWEEP_SET_OUT;
-		} else if (!strcmp(key, "baseline")) {
-			rc = get_string(&c, key, v, r->baseline, sizeof r->baseline);
-			r->set |= SWEEP_SET_BASELINE;
-		} else if (!strcmp(key, "metrics")) {
-			rc = get_string(&c, key, v, r->metrics, sizeof r->metrics);
-			r->set |= SWEEP_SET_METRICS;
-		} else if (!strcmp(key, "device")) {
-			rc = get_string(&c, key, v, r->device, sizeof r->device);
-			r->set |= SWEEP_SET_DEVICE;
-		} else if (!strcmp(key, "ocio_config")) {
-			char tmp[SWEEP_PATH_MAX];
-			if (!(rc = get_string(&c, key, v, tmp, sizeof tmp)))
-				relative_to(path, tmp, r->ocio_config, sizeof r->ocio_config);
-			r->set |= SWEEP_SET_OCIO;
-		} else if (!strcmp(key, "display")) {
-			rc = get_string(&c, key, v, r->display, sizeof r->display);
-			r->set |= SWEEP_SET_DISPLAY;
-		} else if (!strcmp(key, "view")) {
-			rc = get_string(&c, key, v, r->view, sizeof r->view);
-			r->set |= SWEEP_SET_VIEW;
-		} else if (!strcmp(key, "validation")) {
-			rc = get_bool(&c, key, v, &r->validation);
-			r->set |= SWEEP_SET_VALIDATION;
-		} else if (!strcmp(key, "truth")) {
-			rc = get_bool(&c, key, v, &r->truth);
-			r->set |= SWEEP_SET_TRUTH;
-		} else if (!strcmp(key, "jobs")) {
-			rc = get_uint(&c, key, v, 1, 256, &r->jobs);
-			r->set |= SWEEP_SET_JOBS;
+		const sweep_key *k = sweep_key_find(key);
+		if (k) {
+			rc = read_key(&c, k, v, r);
 		} else if (!strcmp(key, "taslab_sweep")) {
 			rc = tl_error(err, err_size, TL_ERR_INPUT,
 				      "%s: a resolved sweep.json, not a sweep file (give it as 'taslab sweep %s' to resume)", path,
 				      path);
 		} else {
-			char pk[80];
-			rc = tl_error(err, err_size, TL_ERR_INPUT,
-				      "%s: unknown key \"%s\" (known: scenes, cameras, variants, methods, thresholds, periods, "
-				      "frames, size, fps, out, baseline, metrics, ppd, device, ocio_config, display, view, "
-				      "validation, truth, jobs)",
-				      path, printable(key, pk, sizeof pk));
+			char pk[80], known[512];
+			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: unknown key \"%s\" (known: %s)", path,
+				      printable(key, pk, sizeof pk), sweep_key_list(", ", known, sizeof known));
 		}
 		if (rc)
 			break;
@@ -295,6 +261,20 @@ int sweep_request_read(const char *path, sweep_request *r, char *err, size_t err
 /* ------------------------------------------------------------------ spec */
 
 static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+/* A scalar key's value (at `f`) as sweep.json holds it. NULL for a string that is not UTF-8. */
+static json_t *key_json(const sweep_key *k, const char *f)
+{
+	switch (k->type) {
+	case SWEEP_KEY_STRING:
+	case SWEEP_KEY_FRAMES: return json_string(f);
+	case SWEEP_KEY_SIZE: return json_pack("[i,i]", (int)((const uint32_t *)f)[0], (int)((const uint32_t *)f)[1]);
+	case SWEEP_KEY_NUMBER: return json_real(*(const double *)f);
+	case SWEEP_KEY_WHOLE: return json_integer(*(const uint32_t *)f);
+	case SWEEP_KEY_BOOL: return json_boolean(*(const bool *)f);
+	default: return NULL;
+	}
+}
 
 int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size)
 {
@@ -315,11 +295,17 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 							  "method", v->method, "T", jnum(v->T), "period",
 							  v->period ? json_integer(v->period) : json_null()));
 	}
-	json_t *j = json_pack("{s:i, s:o, s:o, s:[i,i], s:s, s:s, s:f, s:s, s:b, s:b, s:s, s:s, s:s, s:s, s:s}", "taslab_sweep", 1,
-			      "scenes", scenes, "variants", variants, "size", (int)s->width, (int)s->height, "baseline",
-			      s->baseline, "metrics", s->metrics, "ppd", s->ppd, "device", s->device, "validation",
-			      (int)s->validation, "truth", (int)s->truth, "ocio_config", s->ocio_config, "display", s->display, "view", s->view,
+	json_t *j = json_pack("{s:i, s:o, s:o, s:s, s:s}", "taslab_sweep", 1, "scenes", scenes, "variants", variants,
 			      "display_transform", s->display_transform, "colour_digest", s->colour_digest);
+	/* the settings kept as given: one entry per SWEEP_KEY_SPEC key of the table (sweep_keys.h) */
+	size_t nkeys;
+	const sweep_key *keys = sweep_keys(&nkeys);
+	for (size_t i = 0; j && i < nkeys; i++)
+		if ((keys[i].flags & SWEEP_KEY_SPEC) &&
+		    json_object_set_new(j, keys[i].name, key_json(&keys[i], (const char *)s + keys[i].spec_offset))) {
+			json_decref(j); /* a string that is not UTF-8: written as nothing, as json_pack refuses it */
+			j = NULL;
+		}
 	int rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
 	return rc;
@@ -428,6 +414,30 @@ static int read_scene(const ctx *c, json_t *o, sweep_scene *sc)
 	return rc;
 }
 
+/* A setting kept as given (a SWEEP_KEY_SPEC key) from sweep.json into `f`, its field in the spec. */
+static int read_spec_key(const ctx *c, const sweep_key *k, json_t *v, char *f)
+{
+	/* a key added after the first sweeps: absent in the older sweep.json files, and a number 0 when not given (as in
+	 * the request), so a sweep without it resumes as the same sweep */
+	if ((k->flags & SWEEP_KEY_OPTIONAL) &&
+	    (!v || ((k->type == SWEEP_KEY_NUMBER || k->type == SWEEP_KEY_WHOLE) && json_is_number(v) &&
+		    json_number_value(v) == 0))) {
+		memset(f, 0, sweep_key_value_size(k));
+		return TL_OK;
+	}
+	switch (k->type) {
+	case SWEEP_KEY_STRING:
+	case SWEEP_KEY_FRAMES:
+		return k->flags & SWEEP_KEY_EMPTY_OK ? get_string_or_empty(c, k->name, v, f, k->size)
+						     : get_string(c, k->name, v, f, k->size);
+	case SWEEP_KEY_SIZE: return get_size(c, k->name, v, (uint32_t *)f, (uint32_t *)f + 1);
+	case SWEEP_KEY_NUMBER: return get_number(c, k->name, v, k->lo, k->hi, (double *)f);
+	case SWEEP_KEY_WHOLE: return get_uint(c, k->name, v, (json_int_t)k->lo, (json_int_t)k->hi, (uint32_t *)f);
+	case SWEEP_KEY_BOOL: return get_bool(c, k->name, v, (bool *)f);
+	default: return tl_error(c->err, c->err_size, TL_ERR_INTERNAL, "sweep key %s: not one sweep.json holds", k->name);
+	}
+}
+
 int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 {
 	memset(s, 0, sizeof *s);
@@ -436,9 +446,13 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	if (rc)
 		return rc;
 	ctx c = {path, err, err_size};
-	static const char *const keys[] = {"taslab_sweep", "scenes", "variants", "size", "baseline", "metrics", "ppd",
-					   "device", "validation", "truth", "ocio_config", "display", "view",
-					   "display_transform", "colour_digest", NULL};
+	/* the spec's own keys, then the settings kept as given (the SWEEP_KEY_SPEC keys of sweep_keys.h) */
+	const char *keys[40] = {"taslab_sweep", "scenes", "variants", "display_transform", "colour_digest"};
+	size_t nkeys, n = 5;
+	const sweep_key *table = sweep_keys(&nkeys);
+	for (size_t i = 0; i < nkeys && n + 1 < sizeof keys / sizeof keys[0]; i++)
+		if (table[i].flags & SWEEP_KEY_SPEC)
+			keys[n++] = table[i].name;
 	json_t *scenes = json_object_get(j, "scenes"), *variants = json_object_get(j, "variants");
 	if (!json_is_object(j) || json_integer_value(json_object_get(j, "taslab_sweep")) != 1)
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab sweep.json (no \"taslab_sweep\": 1)", path);
@@ -466,35 +480,14 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	}
 	if (!rc && !has_ref)
 		rc = bad(&c, "variants", "no ref variant (every run is compared with the ref run of its scene and path)");
-	if (!rc)
-		rc = get_size(&c, "size", json_object_get(j, "size"), &s->width, &s->height);
-	if (!rc)
-		rc = get_string(&c, "baseline", json_object_get(j, "baseline"), s->baseline, sizeof s->baseline);
+	for (size_t i = 0; !rc && i < nkeys; i++)
+		if (table[i].flags & SWEEP_KEY_SPEC)
+			rc = read_spec_key(&c, &table[i], json_object_get(j, table[i].name), (char *)s + table[i].spec_offset);
 	bool baseline_found = !rc && !strcmp(s->baseline, "auto");
 	for (size_t i = 0; !rc && i < s->variant_count; i++)
 		baseline_found |= !strcmp(s->variants[i].variant, s->baseline);
 	if (!rc && !baseline_found)
 		rc = bad(&c, "baseline", "'%s' is not one of the variants", s->baseline);
-	if (!rc)
-		rc = get_string(&c, "metrics", json_object_get(j, "metrics"), s->metrics, sizeof s->metrics);
-	if (!rc)
-		rc = get_number(&c, "ppd", json_object_get(j, "ppd"), 1e-3, 1000, &s->ppd);
-	if (!rc)
-		rc = get_bool(&c, "validation", json_object_get(j, "validation"), &s->validation);
-	/* "truth" came later: a sweep.json without it was made without --truth */
-	json_t *truth = json_object_get(j, "truth");
-	s->truth = false;
-	if (!rc && truth)
-		rc = get_bool(&c, "truth", truth, &s->truth);
-	if (!rc)
-		rc = get_string_or_empty(&c, "device", json_object_get(j, "device"), s->device, sizeof s->device);
-	if (!rc)
-		rc = get_string_or_empty(&c, "ocio_config", json_object_get(j, "ocio_config"), s->ocio_config,
-					 sizeof s->ocio_config);
-	if (!rc)
-		rc = get_string_or_empty(&c, "display", json_object_get(j, "display"), s->display, sizeof s->display);
-	if (!rc)
-		rc = get_string_or_empty(&c, "view", json_object_get(j, "view"), s->view, sizeof s->view);
 	if (!rc)
 		rc = get_string(&c, "display_transform", json_object_get(j, "display_transform"), s->display_transform,
 				sizeof s->display_transform);
@@ -518,6 +511,33 @@ static int differ(char *what, size_t n, const char *fmt, ...)
 }
 
 static bool same_num(double a, double b) { return (isnan(a) && isnan(b)) || a == b; }
+
+/* A setting's value in words for sweep_spec_compare's message (strings quoted, so "" shows). */
+static const char *key_text(const sweep_key *k, const char *f, char *out, size_t n)
+{
+	switch (k->type) {
+	case SWEEP_KEY_STRING:
+	case SWEEP_KEY_FRAMES: snprintf(out, n, "'%s'", f); break;
+	case SWEEP_KEY_SIZE: snprintf(out, n, "%ux%u", ((const uint32_t *)f)[0], ((const uint32_t *)f)[1]); break;
+	case SWEEP_KEY_NUMBER: snprintf(out, n, "%g", *(const double *)f); break;
+	case SWEEP_KEY_WHOLE: snprintf(out, n, "%u", *(const uint32_t *)f); break;
+	case SWEEP_KEY_BOOL: snprintf(out, n, "%s", *(const bool *)f ? "on" : "off"); break;
+	default: snprintf(out, n, "?");
+	}
+	return out;
+}
+
+/* Whether two values of a setting are the same: numbers exactly, the rest by their bytes up to a string's end. */
+static bool key_same(const sweep_key *k, const char *a, const char *b)
+{
+	switch (k->type) {
+	case SWEEP_KEY_STRING:
+	case SWEEP_KEY_FRAMES: return !strcmp(a, b);
+	case SWEEP_KEY_NUMBER: return *(const double *)a == *(const double *)b;
+	case SWEEP_KEY_BOOL: return *(const bool *)a == *(const bool *)b;
+	default: return !memcmp(a, b, sweep_key_value_size(k));
+	}
+}
 
 int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t n)
 {
@@ -546,20 +566,17 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 		if (strcmp(a->variants[i].variant, b->variants[i].variant) || strcmp(a->variants[i].id, b->variants[i].id) ||
 		    !same_num(a->variants[i].T, b->variants[i].T) || a->variants[i].period != b->variants[i].period)
 			return differ(what, n, "variant %s vs %s", a->variants[i].variant, b->variants[i].variant);
-	if (a->width != b->width || a->height != b->height)
-		return differ(what, n, "size %ux%u vs %ux%u", a->width, a->height, b->width, b->height);
-	if (strcmp(a->baseline, b->baseline))
-		return differ(what, n, "baseline %s vs %s", a->baseline, b->baseline);
-	if (strcmp(a->metrics, b->metrics) || a->ppd != b->ppd)
-		return differ(what, n, "metrics %s (ppd %g) vs %s (ppd %g)", a->metrics, a->ppd, b->metrics, b->ppd);
-	if (strcmp(a->device, b->device))
-		return differ(what, n, "device '%s' vs '%s'", a->device, b->device);
-	if (a->validation != b->validation)
-		return differ(what, n, "validation %s vs %s", a->validation ? "on" : "off", b->validation ? "on" : "off");
-	if (a->truth != b->truth)
-		return differ(what, n, "truth %s vs %s", a->truth ? "on" : "off", b->truth ? "on" : "off");
-	if (strcmp(a->display_transform, b->display_transform) || strcmp(a->ocio_config, b->ocio_config) ||
-	    strcmp(a->display, b->display) || strcmp(a->view, b->view))
+	/* the settings kept as given: any difference is another sweep ("ppd 40 vs 67.0206", "truth on vs off") */
+	size_t nkeys;
+	const sweep_key *keys = sweep_keys(&nkeys);
+	for (size_t i = 0; i < nkeys; i++) {
+		const char *x = (const char *)a + keys[i].spec_offset, *y = (const char *)b + keys[i].spec_offset;
+		char tx[SWEEP_PATH_MAX + 8], ty[SWEEP_PATH_MAX + 8];
+		if ((keys[i].flags & SWEEP_KEY_SPEC) && !key_same(&keys[i], x, y))
+			return differ(what, n, "%s %s vs %s", keys[i].name, key_text(&keys[i], x, tx, sizeof tx),
+				      key_text(&keys[i], y, ty, sizeof ty));
+	}
+	if (strcmp(a->display_transform, b->display_transform))
 		return differ(what, n, "display transform %s vs %s", a->display_transform, b->display_transform);
 	if (strcmp(a->colour_digest, b->colour_digest))
 		return differ(what, n, "the OpenColorIO config or one of its LUTs changed (content digest %s vs %s)",

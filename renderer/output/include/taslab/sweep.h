@@ -10,22 +10,11 @@
  *    name, T and period, the size, the display transform and the metric settings. Rerunning `taslab sweep` on it
  *    (or on the same request) resumes the sweep; `taslab report`, Slurm tasks and the local job runner read it.
  *
- * Sweep file (request) keys — anything else is refused with one line naming the key:
- *   scenes     ["calm", "scenes/x.json", ...]            required
- *   cameras    "all" (default) or ["walk", "calm/robots", ...]: a bare name must exist in every scene,
- *              SCENE/CAMERA picks a path of one scene
- *   variants   ["ref", "tfr@8", "rrc/4", "tarc-oracle@8", ...]
- *   methods    "all" or ["tfr", "tarc", ...]: expanded with thresholds / periods (ref always included), added to
- *   thresholds [4, 16]   periods [4]                       the variants
- *   frames     "A:B" | "A" | ":B" | "A:" (default the whole clip of each scene)
- *   size       "WxH" or [W, H] (default 960x540)      fps  number (default each scene's)
- *   out        the sweep folder (relative to the sweep file's folder)
- *   baseline   variant the reductions are relative to, or "auto" (default: sa for atlas methods when sa is swept,
- *              else ref)
- *   metrics    "all" or "maxrgb,psnr,..."           ppd  FLIP pixels per degree
- *   device, ocio_config, display, view, validation (bool), jobs (whole number)
- *   truth      bool: render the variants whose method has a `truth` option with it (late_samples)
- * Relative scene paths are relative to the sweep file's folder too.
+ * Sweep file (request) keys: the table of sweep_keys.h (src/sweep_keys.c) — one line per key, from which this reader,
+ * the command line of `taslab sweep`, its help and sweep.json's settings follow; anything else is refused with one
+ * line naming the key. Lists (scenes, cameras, variants, methods, thresholds, periods) are JSON/TOML lists, or
+ * "all" for cameras and methods; size is "WxH" or [W, H]; frames "A:B" | "A" | ":B" | "A:". Relative paths (out,
+ * ocio_config, and scene entries that are paths) are relative to the sweep file's folder.
  *
  * Folder layout (index i of the plan: all `ref` runs first, scene-major, then every other run scene-major,
  * camera, variant — the order Slurm array task ids and `--task I` use):
@@ -62,18 +51,9 @@ extern "C" {
 
 /* ---- request ---- */
 
-/* Which keys a request sets (so command-line options can override a file's). */
-enum {
-	SWEEP_SET_SCENES = 1u << 0, SWEEP_SET_CAMERAS = 1u << 1, SWEEP_SET_VARIANTS = 1u << 2,
-	SWEEP_SET_METHODS = 1u << 3, SWEEP_SET_THRESHOLDS = 1u << 4, SWEEP_SET_PERIODS = 1u << 5,
-	SWEEP_SET_FRAMES = 1u << 6, SWEEP_SET_SIZE = 1u << 7, SWEEP_SET_FPS = 1u << 8, SWEEP_SET_OUT = 1u << 9,
-	SWEEP_SET_BASELINE = 1u << 10, SWEEP_SET_METRICS = 1u << 11, SWEEP_SET_PPD = 1u << 12,
-	SWEEP_SET_DEVICE = 1u << 13, SWEEP_SET_OCIO = 1u << 14, SWEEP_SET_DISPLAY = 1u << 15, SWEEP_SET_VIEW = 1u << 16,
-	SWEEP_SET_VALIDATION = 1u << 17, SWEEP_SET_JOBS = 1u << 18, SWEEP_SET_TRUTH = 1u << 19,
-};
-
+/* The fields of the keys of sweep_keys.h (each key's line says which); the resolver fills the defaults. */
 typedef struct sweep_request {
-	uint32_t set;                                   /* SWEEP_SET_* */
+	uint32_t set;                                   /* bit i: key i of sweep_keys() was given (sweep_request_has) */
 	char scenes[SWEEP_MAX_SCENES][SWEEP_PATH_MAX];  /* names or paths */
 	size_t scene_count;
 	bool cameras_all;
@@ -131,6 +111,7 @@ typedef struct sweep_spec {
 	size_t scene_count;
 	sweep_variant variants[SWEEP_MAX_VARIANTS]; /* "ref" among them */
 	size_t variant_count;
+	/* the settings kept as given (the SWEEP_KEY_SPEC keys of sweep_keys.h), defaults filled by the resolver */
 	uint32_t width, height;
 	char baseline[SWEEP_NAME_MAX];  /* a variant token of the list */
 	char metrics[128];              /* metric list for `metrics diff` ("all") */
