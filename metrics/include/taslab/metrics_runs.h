@@ -35,7 +35,7 @@ typedef struct mtr_run_summary {
 } mtr_run_summary;
 
 /* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: the variant the run's manifest
- * names as its baseline — "sa" for the atlas methods sa, sau, tasa, as Table 1 of the paper reduces against SA — when
+ * names as its baseline — sa for the atlas methods sa, sau, tasa, as Table 1 of the paper reduces against SA — when
  * that run is there, else the reference run) and speedups against the reference run (the manifest's
  * method_facts.reference: `ref`), both with the same scene, camera path, first frame, frame count and size. Runs
  * without such a partner get NAN. A manifest without inputs.method_facts (made before taslab recorded them) is
