@@ -13,7 +13,7 @@
 /* A new study at `db` (must not exist), knowing the registry's methods as `taslab study` does. */
 static inline sty *created(const char *db)
 {
-	char err[1024];
+	char err[1024] = "describing the methods failed";
 	sty *s = NULL;
 	if (sty_create(db, &s, err, sizeof err) || tu_describe_methods(s))
 		fail_msg("%s", err);
