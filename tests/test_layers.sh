@@ -16,6 +16,7 @@ check renderer/src/device '#include "\.\./(frame|passes|methods|analysis)/' "dev
 check renderer/src/frame '#include "\.\./(passes|methods|analysis)/' "frame/ must not include passes/, methods/, analysis/"
 check renderer/src/passes '#include "\.\./(methods|analysis)/' "passes/ must not include methods/ or analysis/"
 check renderer/src/methods '#include "\.\./analysis/' "methods/ must not include analysis/"
+check renderer/src/frame 'extern const render_method ' "frame/ names no method (methods/registry.c is the only list, issue 30.1)"
 for lib in scenes renderer/base renderer/output renderer/src metrics/src study/src; do
   check "$lib" '#include "(cli|commands)\.h"' "a library including the CLI header"
   check "$lib" '(^|[^_a-z])exit\(' "exit() in a library (return a tl_err instead)"
@@ -23,5 +24,15 @@ done
 check scenes '#include "taslab/(render|vkdev|run|metrics|study)' "scenes/ sees only base"
 check renderer/output '#include "taslab/(render|vkdev|scene|metrics|study|method)' "output/ sees only base"
 check metrics/src '#include "taslab/(render|vkdev|analyze|method|study)' "metrics/ sees only output and base"
+# Issue 30.1: knowledge about methods lives only in the method registry. The study and metrics libraries read what
+# they need from manifest.json and pairs.json (method_facts), so no method name of the registry's METHODS list (or a
+# -FLAG form of one, tarc-oracle) appears there as a string literal; a line using such a word for something else
+# says "not a method name".
+names=$(sed -n 's/^[[:space:]]*X(\([a-z0-9_]*\)).*/\1/p' renderer/src/methods/registry.c | paste -sd'|' -)
+if [ -z "$names" ]; then echo "layer rule broken: no METHODS list in renderer/src/methods/registry.c"; bad=1; fi
+for lib in study/src study/include metrics/src metrics/include; do
+  hits=$(grep -rnE "\"($names)(-[a-z]+)?\"" "$lib" --include=*.c --include=*.h 2>/dev/null | grep -v "not a method name")
+  if [ -n "$hits" ]; then echo "layer rule broken (a method name in $lib: read method_facts instead):"; echo "$hits" | sed 's/^/  /'; bad=1; fi
+done
 [ $bad = 0 ] && echo "layers: all rules hold"
 exit $bad

@@ -37,6 +37,7 @@ static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, boo
 	run_info info = {.scene_name = "s", .scene_path = "s.json", .camera = "c", .camera_motion = "moving",
 			 .device = "dev", .driver = "drv", .method = "tarc-oracle", .variant = "tarc-oracle@8",
 			 .threshold = 8, .options = opts, .option_count = 3, .derived = derived, .derived_count = 1,
+			 .facts = {.known = true, .family = "reprojection", .baseline = "ref", .takes_threshold = true},
 			 .ocio_version = "2.1.2", .vulkan_api = "1.3.230", .first_frame = first,
 			 .last_frame = first + n - 1, .width = W, .height = H, .fps = 30, .write_exr = exr, .write_png = png,
 			 .write_decisions = with_decisions};
@@ -76,6 +77,10 @@ static void test_run_round_trip(void **state)
 	assert_true(m.threshold == 8 && m.period == 0 && m.fps == 30);
 	assert_true(m.first_frame == 10 && m.last_frame == 12 && m.width == W && m.height == H);
 	assert_int_equal(m.frames, 3);
+	/* what metrics and studies need to know of the method (issue 30.1) */
+	assert_true(m.facts.known && m.facts.takes_threshold && !m.facts.takes_period && !m.facts.reference);
+	assert_string_equal(m.facts.family, "reprojection");
+	assert_string_equal(m.facts.baseline, "ref");
 	assert_int_equal(run_check_frames(d, &m, "png", err, sizeof err), TL_OK);
 	assert_int_equal(run_check_frames(d, &m, "exr", err, sizeof err), TL_OK);
 	run_stats st;
@@ -97,6 +102,8 @@ static void test_run_round_trip(void **state)
 	/* integer options and sizes are JSON integers, real-valued ones stay reals (issue 24.8) */
 	assert_non_null(strstr(text, "\"max-age\": 7,\n")); /* keys sorted: max-age, oracle, threshold */
 	assert_non_null(strstr(text, "\"threshold\": 8.0"));
+	assert_non_null(strstr(text, "\"method_facts\": {\n      \"baseline\": \"ref\",\n      \"family\": \"reprojection\",\n"
+				     "      \"reference\": false,\n      \"takes_period\": false,\n      \"takes_threshold\": true\n"));
 	/* what the method derived, and the versions (DESIGN section 5) */
 	assert_non_null(strstr(text, "\"method_derived\": {\n      \"atlas_width\": 256\n"));
 	assert_non_null(strstr(text, "\"opencolorio\": \"2.1.2\""));
@@ -371,12 +378,14 @@ static void test_pairs(void **state)
 	char err[1024], p[4096];
 	const char *d = tu_tmpdir("output_pairs");
 	pairs_condition c[2] = {{.id = "tfr-T8", .method = "tfr", .variant = "tfr@8", .T = 8, .run = "runs/tfr-T8",
-				 .clip = "clips/tfr-T8.webm", .inspect = "inspect/tfr-T8.webm"},
+				 .clip = "clips/tfr-T8.webm", .inspect = "inspect/tfr-T8.webm",
+				 .facts = {.known = true, .family = "forward", .baseline = "ref", .takes_threshold = true}},
 				{.id = "rrc-N4", .method = "rrc", .variant = "rrc/4", .T = NAN, .period = 4,
 				 .run = "runs/rrc-N4", .clip = "clips/rrc-N4.webm", .inspect = "inspect/rrc-N4.webm"}};
 	pairs_set s = {.scene = "calm", .camera = "walk", .camera_motion = "moving", .scene_path = "scenes/calm.json",
 		       .display_transform = "ACES", .fps = 60, .first_frame = 0, .last_frame = 59, .width = 96,
-		       .height = 54, .ref_run = "runs/ref", .ref_clip = "clips/ref.webm", .conditions = c, .count = 2};
+		       .height = 54, .ref_run = "runs/ref", .ref_clip = "clips/ref.webm", .ref_method = "ref",
+		       .conditions = c, .count = 2};
 	snprintf(p, sizeof p, "%s/pairs.json", d);
 	assert_int_equal(pairs_write(p, &s, err, sizeof err), TL_OK);
 	pairs_set r;
@@ -385,6 +394,11 @@ static void test_pairs(void **state)
 	assert_string_equal(r.conditions[1].variant, "rrc/4");
 	assert_true(isnan(r.conditions[1].T) && r.conditions[1].period == 4 && r.conditions[0].T == 8);
 	assert_true(r.last_frame == 59 && r.width == 96 && r.fps == 60);
+	/* the method facts and the reference's method (issue 30.1); a condition written without them reads as unknown */
+	assert_true(r.conditions[0].facts.known && r.conditions[0].facts.takes_threshold && !r.conditions[0].facts.takes_period);
+	assert_string_equal(r.conditions[0].facts.family, "forward");
+	assert_false(r.conditions[1].facts.known);
+	assert_string_equal(r.ref_method, "ref");
 	pairs_free(&r);
 	/* Paths leading out of the set are refused. */
 	const char *evil[] = {"../x.webm", "/etc/passwd", "clips/../../x.webm"};

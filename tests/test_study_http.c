@@ -22,6 +22,7 @@
 
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
+#include "test_study_methods.h"
 #include "test_util.h"
 
 static double now_s(void)
@@ -59,7 +60,8 @@ static sty *study_of_one(const char *dir, char *code, size_t code_size)
 	sty *s = NULL;
 	sty_design_desc d = {.stimuli = stim, .participants = 1, .seed = 1, .training = 1, .catch_trials = 0};
 	sty_design_summary sm;
-	if (sty_create(db, &s, err, sizeof err) || sty_design(s, &d, &sm, err, sizeof err) || sty_commit(s, err, sizeof err))
+	if (sty_create(db, &s, err, sizeof err) || tu_describe_methods(s) || sty_design(s, &d, &sm, err, sizeof err) ||
+	    sty_commit(s, err, sizeof err))
 		fail_msg("%s", err);
 	char **codes;
 	size_t n;

@@ -5,16 +5,17 @@
 #define TASLAB_TEST_STUDY_UTIL_H
 
 #include "taslab/study.h"
+#include "test_study_methods.h"
 #include "test_util.h"
 
 #define REF_DIR TASLAB_SOURCE_DIR "/tests/reference"
 
-/* A new study at `db` (must not exist). */
+/* A new study at `db` (must not exist), knowing the registry's methods as `taslab study` does. */
 static inline sty *created(const char *db)
 {
-	char err[1024];
+	char err[1024] = "describing the methods failed";
 	sty *s = NULL;
-	if (sty_create(db, &s, err, sizeof err))
+	if (sty_create(db, &s, err, sizeof err) || tu_describe_methods(s))
 		fail_msg("%s", err);
 	return s;
 }

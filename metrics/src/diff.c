@@ -434,7 +434,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	res->seconds = tl_clock_s() - t0;
 	res->compute_seconds = compute;
 	const mtr_frame_stats *p = &res->pooled;
-	json_t *j = json_pack("{s:s, s:s, s:s, s:I}", "ref", d->ref, "test", d->test, "format",
+	static const char ref_key[] = "ref"; /* summary.json's key of the reference frames: not a method name */
+	json_t *j = json_pack("{s:s, s:s, s:s, s:I}", ref_key, d->ref, "test", d->test, "format",
 			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)ra.n);
 	json_t *sel = json_array();
 	for (int m = 0; mtr_metric_name(m); m++)

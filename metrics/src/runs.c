@@ -44,9 +44,13 @@ static int summarise_one(const char *run, mtr_run_summary *s, char *err, size_t 
 	run_manifest m;
 	run_stats st;
 	int rc = run_manifest_read(run, &m, err, err_size);
+	if (!rc && !m.facts.known) /* made before the manifest said what it is (issue 30.1): no baseline can be found */
+		return tl_error(err, err_size, TL_ERR_INPUT,
+				"%s/manifest.json: no inputs.method_facts (made by an older taslab); render the run again", run);
 	if (rc || (rc = run_stats_read(run, &st, err, err_size)))
 		return rc;
 	snprintf(s->method, sizeof s->method, "%s", m.method);
+	s->facts = m.facts;
 	snprintf(s->variant, sizeof s->variant, "%s", m.variant[0] ? m.variant : m.method);
 	snprintf(s->scene, sizeof s->scene, "%s", m.scene);
 	snprintf(s->camera, sizeof s->camera, "%s", m.camera);
@@ -112,21 +116,23 @@ int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, 
 	}
 	for (size_t i = 0; i < n; i++) {
 		out[i].reduction = out[i].speedup_vs_ref = NAN;
-		/* default baseline: sa for the atlas methods when its run is there (Table 1 is "reduction to SA"), else ref */
-		const char *base = baseline ? baseline : "ref";
-		bool atlas = !strcmp(out[i].method, "sa") || !strcmp(out[i].method, "sau") || !strncmp(out[i].method, "tasa", 4);
-		if (!baseline && atlas)
-			for (size_t r = 0; r < n; r++)
-				if (same_clip(&out[r], &out[i]) && !strcmp(out[r].variant, "sa"))
-					base = "sa";
+		/* Default baseline: the one the run's manifest names when its run is there (sa for the atlas methods: Table 1
+		 * is "reduction to SA"), else the reference run (issue 30.1: the manifests say which, not method names). */
+		const char *base = baseline;
+		for (size_t r = 0; !base && r < n; r++)
+			if (same_clip(&out[r], &out[i]) && !strcmp(out[r].variant, out[i].facts.baseline))
+				base = out[i].facts.baseline;
+		for (size_t r = 0; !base && r < n; r++)
+			if (same_clip(&out[r], &out[i]) && out[r].facts.reference)
+				base = out[r].variant;
 		for (size_t r = 0; r < n; r++) {
 			if (!same_clip(&out[r], &out[i]))
 				continue;
-			if (!isfinite(out[i].reduction) && !strcmp(out[r].variant, base) && out[r].shaded_samples > 0) {
+			if (base && !isfinite(out[i].reduction) && !strcmp(out[r].variant, base) && out[r].shaded_samples > 0) {
 				out[i].reduction = 1.0 - out[i].shaded_samples / out[r].shaded_samples;
 				snprintf(out[i].baseline, sizeof out[i].baseline, "%s", base);
 			}
-			if (!isfinite(out[i].speedup_vs_ref) && !strcmp(out[r].method, "ref"))
+			if (!isfinite(out[i].speedup_vs_ref) && out[r].facts.reference)
 				out[i].speedup_vs_ref = out[r].gpu_ms_median / out[i].gpu_ms_median;
 		}
 	}

@@ -141,6 +141,7 @@ static int pair_main(void *opts, cli_ctx *ctx)
 	method_config ref;
 	if ((rc = method_config_init(&ref, "ref", err, err_size)))
 		return rc;
+	snprintf(set.ref_method, sizeof set.ref_method, "%s", ref.method->name);
 	/* Index -1 is the reference; then the variants. */
 	for (int k = -1; k < (int)o->count; k++) {
 		const method_config *mc = k < 0 ? &ref : &o->configs[k];
@@ -171,6 +172,7 @@ static int pair_main(void *opts, cli_ctx *ctx)
 		method_config_variant(mc, c->variant, sizeof c->variant);
 		c->T = method_config_threshold(mc);
 		c->period = method_config_period(mc);
+		method_facts(mc->method, &c->facts); /* what the study needs to know of the method (issue 30.1) */
 		snprintf(c->run, sizeof c->run, "runs/%s", same_as_ref ? "ref" : id);
 		snprintf(c->clip, sizeof c->clip, "clips/%s.webm", same_as_ref ? "ref" : id);
 		snprintf(c->inspect, sizeof c->inspect, "inspect/%s.webm", id);

@@ -48,6 +48,8 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 	colour_hex[0] = 0;
 	if (d->colour)
 		colour_digest(d->colour, colour_hex);
+	run_method_facts facts; /* what metrics and studies need to know of the method (issue 30.1) */
+	method_facts(mc->method, &facts);
 	run_info info = {
 		.scene_digest = scene_hex,
 		.colour_digest = colour_hex[0] ? colour_hex : NULL,
@@ -59,6 +61,7 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.variant = variant,
 		.threshold = method_config_threshold(mc),
 		.period = method_config_period(mc),
+		.facts = facts,
 		.options = opts,
 		.option_count = nopt,
 		.derived = derived,

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "taslab/method.h"
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
 
@@ -113,6 +114,28 @@ static int study_validate(void *opts, cli_ctx *ctx)
 static volatile sig_atomic_t stop_flag;
 static void on_signal(int sig) { (void)sig; stop_flag = 1; }
 
+/* The methods of taslab's registry, described to the study (issue 30.1: the study module knows no method by name):
+ * every method and every "-FLAG" form of it (tarc-oracle), the variant method names a ratings file or pairs.json
+ * carries. */
+static int describe_methods(sty *s, char *err, size_t err_size)
+{
+	size_t n;
+	const method_info *const *m = method_list(&n);
+	int rc = TL_OK;
+	for (size_t i = 0; i < n && !rc; i++) {
+		run_method_facts f;
+		method_facts(m[i], &f);
+		rc = sty_describe_method(s, m[i]->name, &f, err, err_size);
+		for (size_t k = 0; k < m[i]->option_count && !rc; k++)
+			if (m[i]->options[k].variant == '-') {
+				char name[64];
+				snprintf(name, sizeof name, "%s-%s", m[i]->name, m[i]->options[k].name);
+				rc = sty_describe_method(s, name, &f, err, err_size);
+			}
+	}
+	return rc;
+}
+
 static int study_main(void *opts, cli_ctx *ctx)
 {
 	study_opts *o = opts, ov = *o;
@@ -126,6 +149,10 @@ static int study_main(void *opts, cli_ctx *ctx)
 	int rc = create ? sty_create(o->db, &s, err, err_size) : sty_open(o->db, &s, err, err_size);
 	if (rc)
 		return rc;
+	if ((rc = describe_methods(s, err, err_size))) {
+		sty_close(&s);
+		return rc;
+	}
 	if (!strcmp(sub, "design")) {
 		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
 				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every};

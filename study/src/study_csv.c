@@ -78,8 +78,9 @@ int sty_check_output(const sty *s, const char *path, char *err, size_t err_size)
 /* Column `i` of the answers query as a safe CSV text cell. */
 #define CELL(st, i, buf) sty_csv_cell((const char *)sqlite3_column_text(st, i), buf, sizeof buf)
 
-static void write_long(sqlite3_stmt *st, FILE *f)
+static void write_long(sqlite3_stmt *st, FILE *f, const char *ref)
 {
+	(void)ref;
 	fprintf(f, "%s\n", LONG_HEADER);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
@@ -98,7 +99,8 @@ static void write_long(sqlite3_stmt *st, FILE *f)
 	}
 }
 
-static void write_pwcmp(sqlite3_stmt *st, FILE *f)
+/* `ref`: the reference's condition name, its method name (issue 30.1: described, not written here). */
+static void write_pwcmp(sqlite3_stmt *st, FILE *f, const char *ref)
 {
 	fprintf(f, "observer,scene,condition_A,condition_B,selected_A\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
@@ -114,7 +116,7 @@ static void write_pwcmp(sqlite3_stmt *st, FILE *f)
 		sty_csv_cell(grp, cgrp, sizeof cgrp);
 		CELL(st, 0, obs);
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
-		const char *a = ref_first ? "ref" : ccond, *b = ref_first ? ccond : "ref";
+		const char *a = ref_first ? ref : ccond, *b = ref_first ? ccond : ref;
 		if (answer == 0) { /* "same": half a vote each way */
 			fprintf(f, "%s,%s,%s,%s,1\n%s,%s,%s,%s,0\n", obs, cgrp, a, b, obs, cgrp, a, b);
 		} else {
@@ -126,8 +128,11 @@ static void write_pwcmp(sqlite3_stmt *st, FILE *f)
 int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err, size_t err_size)
 {
 	const char *paths[2] = {long_path, pwcmp_path};
-	void (*writers[2])(sqlite3_stmt *, FILE *) = {write_long, write_pwcmp};
+	void (*writers[2])(sqlite3_stmt *, FILE *, const char *) = {write_long, write_pwcmp};
 	int rc = TL_OK;
+	const char *ref = sty_reference_method(s);
+	if (pwcmp_path && !ref)
+		return tl_error(err, err_size, TL_ERR_INTERNAL, "pwcmp export: no reference method described (sty_describe_method)");
 	/* Every check before anything is written: neither output is the database or its journal, nor the other. */
 	for (int i = 0; i < 2; i++)
 		if (paths[i] && (rc = sty_check_output(s, paths[i], err, err_size)))
@@ -146,7 +151,7 @@ int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err,
 			rc = sty_db_fail(s, err, err_size, "export");
 			break;
 		}
-		writers[i](st, out[i].f);
+		writers[i](st, out[i].f, ref);
 		if (sqlite3_finalize(st) != SQLITE_OK)
 			rc = sty_db_fail(s, err, err_size, "export");
 	}
@@ -227,7 +232,7 @@ static int safe_name(const char *s, size_t max)
 
 /* One data row; `with_period`: the file has the period column (LONG_HEADER), else the DESIGN section 7 layout
  * without it. A file without period reads as if it had the column, empty. */
-static int parse_row(char *line, bool with_period, row *r, char *why, size_t why_size)
+static int parse_row(const sty *s, char *line, bool with_period, row *r, char *why, size_t why_size)
 {
 	static char none[1] = "";
 	char *c[13], *f[13];
@@ -261,8 +266,9 @@ static int parse_row(char *line, bool with_period, row *r, char *why, size_t why
 		return -1;
 	}
 	snprintf(r->motion, sizeof r->motion, "%s", f[4]);
-	if (sty_method_has_threshold(r->method) < 0) /* the message of the rule below, before T and period are read */
-		return sty_condition_rule(r->method, NAN, 0, why, why_size);
+	const run_method_facts *facts = sty_method_facts(s, r->method); /* described by the caller (issue 30.1) */
+	if (!facts) /* the message of the rule below, before T and period are read */
+		return sty_condition_rule(facts, r->method, NAN, 0, why, why_size);
 	r->T = NAN;
 	if (f[6][0]) {
 		char *e;
@@ -279,7 +285,7 @@ static int parse_row(char *line, bool with_period, row *r, char *why, size_t why
 		return -1;
 	}
 	/* T and period exactly as the method has them (the rule design applies to pairs.json). */
-	if (sty_condition_rule(r->method, r->T, r->period, why, why_size))
+	if (sty_condition_rule(facts, r->method, r->T, r->period, why, why_size))
 		return -1;
 	if (parse_long(f[8], 0, 1, &v)) {
 		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[8]);
@@ -361,7 +367,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			goto done;
 		}
 		rows = nr;
-		if (parse_row(line, with_period, &rows[n], why, sizeof why)) {
+		if (parse_row(s, line, with_period, &rows[n], why, sizeof why)) {
 			snprintf(err, err_size, "%s:%zu: %s; nothing imported", path, lineno, why);
 			goto done;
 		}

@@ -336,36 +336,47 @@ int sty_set_served_url(sty *s, const char *url, char *err, size_t err_size)
 	return bad ? sty_db_fail(s, err, err_size, "storing the served URL") : TL_OK;
 }
 
-int sty_method_has_threshold(const char *method)
+int sty_describe_method(sty *s, const char *method, const run_method_facts *facts, char *err, size_t err_size)
 {
-	/* DESIGN section 4: --threshold T belongs to tfr, tarc, tasa (and the oracle variants of tarc/tasa). */
-	static const char *const with[] = {"tfr", "tarc", "tasa", "tarc-oracle", "tasa-oracle"};
-	static const char *const without[] = {"ref", "rrc", "sa", "sau"};
-	for (size_t i = 0; i < sizeof with / sizeof *with; i++)
-		if (!strcmp(method, with[i]))
-			return 1;
-	for (size_t i = 0; i < sizeof without / sizeof *without; i++)
-		if (!strcmp(method, without[i]))
-			return 0;
-	return -1;
+	size_t i = 0;
+	while (i < s->method_count && strcmp(s->methods[i].name, method))
+		i++;
+	if (strlen(method) >= sizeof s->methods[0].name || i == STY_MAX_METHODS)
+		return tl_error(err, err_size, TL_ERR_ARG, "method '%s': name too long, or more than %d methods", method,
+				STY_MAX_METHODS);
+	snprintf(s->methods[i].name, sizeof s->methods[i].name, "%s", method);
+	s->methods[i].facts = *facts;
+	s->methods[i].facts.known = true;
+	if (i == s->method_count)
+		s->method_count++;
+	return TL_OK;
 }
 
-int sty_method_has_period(const char *method)
+const run_method_facts *sty_method_facts(const sty *s, const char *method)
 {
-	/* DESIGN section 4: --period N belongs to rrc and sau. */
-	if (sty_method_has_threshold(method) < 0)
-		return -1;
-	return !strcmp(method, "rrc") || !strcmp(method, "sau");
+	for (size_t i = 0; i < s->method_count; i++)
+		if (!strcmp(s->methods[i].name, method))
+			return &s->methods[i].facts;
+	return NULL;
+}
+
+const char *sty_reference_method(const sty *s)
+{
+	for (size_t i = 0; i < s->method_count; i++)
+		if (s->methods[i].facts.reference)
+			return s->methods[i].name;
+	return NULL;
 }
 
 bool sty_period_valid(long period) { return period == 1 || period == 2 || period == 4 || period == 8; }
 
-int sty_condition_rule(const char *method, double T, long period, char *why, size_t why_size)
+int sty_condition_rule(const run_method_facts *f, const char *method, double T, long period, char *why,
+		       size_t why_size)
 {
-	int has_T = sty_method_has_threshold(method), has_N = sty_method_has_period(method);
-	if (has_T < 0 || has_N < 0)
-		snprintf(why, why_size, "method '%s' is not one of ref tfr rrc tarc tarc-oracle sa sau tasa tasa-oracle "
-			 "(DESIGN section 4)", method);
+	bool has_T = f && f->takes_threshold, has_N = f && f->takes_period;
+	if (!f || !f->known) /* issue 30.1: no list of names here; the registry or pairs.json describes each method */
+		snprintf(why, why_size, "method '%s' is not one of the methods taslab knows (its method registry, or "
+			 "pairs.json's method_facts)", method);
 	else if (has_T && isnan(T))
 		snprintf(why, why_size, "method %s needs a threshold T", method);
 	else if (!has_T && !isnan(T))
@@ -389,11 +400,12 @@ typedef struct cond {
 	uint32_t period; /* 0: none */
 	char ref_clip[512], test_clip[512];
 	int is_catch;
+	char ref_method[32]; /* the reference's method name (pairs.json reference.method), for added catch trials */
 } cond;
 
 /* Reads one pairs.json (from `taslab pair`, output/pairs.h) into conditions; `rel` is its folder relative to
  * the stimuli. Every clip it names must exist, so a session never fails midway on a missing file. */
-static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, char *err, size_t err_size)
+static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs, size_t *n, char *err, size_t err_size)
 {
 	pairs_set set;
 	int rc = pairs_read(file, &set, err, err_size);
@@ -422,7 +434,8 @@ static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, c
 	for (size_t i = 0; i < set.count; i++) {
 		const pairs_condition *c = &set.conditions[i];
 		char why[160];
-		if (sty_condition_rule(c->method, c->T, (long)c->period, why, sizeof why)) {
+		const run_method_facts *f = c->facts.known ? &c->facts : sty_method_facts(s, c->method);
+		if (sty_condition_rule(f, c->method, c->T, (long)c->period, why, sizeof why)) {
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: condition '%s': %s", file, c->id, why);
 			pairs_free(&set);
 			return rc;
@@ -446,7 +459,10 @@ static int read_pairs(const char *file, const char *rel, cond **cs, size_t *n, c
 		x->period = c->period;
 		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", set.ref_clip);
 		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", c->clip);
-		x->is_catch = !strcmp(c->method, "ref"); /* reference against itself */
+		/* reference against itself; the facts from the file, else the caller's (checked above) */
+		x->is_catch = (c->facts.known ? &c->facts : sty_method_facts(s, c->method))->reference;
+		const char *ref = set.ref_method[0] ? set.ref_method : sty_reference_method(s);
+		snprintf(x->ref_method, sizeof x->ref_method, "%s", ref ? ref : "");
 	}
 	pairs_free(&set);
 	return TL_OK;
@@ -509,7 +525,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	qsort(sets, nsets, sizeof *sets, cmp_str);
 	for (size_t i = 0; i < nsets; i++) {
 		snprintf(p, sizeof p, "%s%s%s/pairs.json", root, sets[i][0] ? "/" : "", sets[i]);
-		if ((rc = read_pairs(p, sets[i], &cs, &nc, err, err_size)))
+		if ((rc = read_pairs(s, p, sets[i], &cs, &nc, err, err_size)))
 			goto done;
 		rc = TL_ERR_ARG;
 	}
@@ -532,7 +548,12 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 					goto done;
 				cs = ncs;
 				cs[nc] = cs[i];
-				snprintf(cs[nc].method, sizeof cs[nc].method, "ref");
+				if (!cs[i].ref_method[0]) {
+					snprintf(err, err_size, "a pairs.json names no reference method (made by an older taslab); "
+						 "make the set again with 'taslab pair'");
+					goto done;
+				}
+				snprintf(cs[nc].method, sizeof cs[nc].method, "%s", cs[i].ref_method);
 				cs[nc].T = NAN;
 				cs[nc].period = 0;
 				snprintf(cs[nc].test_clip, sizeof cs[nc].test_clip, "%s", cs[i].ref_clip);

@@ -17,15 +17,22 @@ struct sty {
 	char token[33];
 	char served_url[256];
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
+	struct sty_method {   /* the caller's method descriptions (sty_describe_method, issue 30.1) */
+		char name[32];
+		run_method_facts facts;
+	} methods[STY_MAX_METHODS];
+	size_t method_count;
 };
 
 /* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);
 
-/* The DESIGN section 4 rule for a condition, shared by design (pairs.json) and import: a known method name, T
- * (NAN: none) exactly when the method has a threshold, period (0: none) exactly when it has one, 1/2/4/8.
+/* The DESIGN section 4 rule for a condition, shared by design (pairs.json) and import: a described method (`f`: its
+ * facts from pairs.json or sty_method_facts; NULL or not known: an unknown method), T (NAN: none) exactly when the
+ * method takes a threshold, period (0: none) exactly when it takes one, 1/2/4/8.
  * Returns 0, or -1 with the reason in `why` ("method rrc needs a period (1, 2, 4 or 8)"). */
-int sty_condition_rule(const char *method, double T, long period, char *why, size_t why_size);
+int sty_condition_rule(const run_method_facts *f, const char *method, double T, long period, char *why,
+		       size_t why_size);
 
 /* 128 random bits from the kernel as 32 lowercase hex digits (codes, tokens, clip names must be unguessable). */
 int sty_random_hex(char out[33]);

@@ -405,7 +405,7 @@ static int group_plots(const char *rdir, const char *stem, grow *g, size_t ng, b
 					snprintf(col, sizeof col, "exceed_%g", mtr_thresholds[t]);
 					any |= isfinite(mtr_sweep_value(g[i].r, col));
 				}
-				if (!any || !strcmp(v->id, "ref"))
+				if (!any || g[i].r->summary.facts.reference) /* the reference, from its manifest (issue 30.1) */
 					continue;
 				len += (size_t)snprintf(parts + len, sizeof parts - len,
 							"%s'-' using 1:2 with linespoints dt 2 lw 2 pt 6 title '%s'",
@@ -414,7 +414,7 @@ static int group_plots(const char *rdir, const char *stem, grow *g, size_t ng, b
 				continue;
 			}
 			double y = mtr_sweep_value(g[i].r, p->column);
-			if (!isfinite(y) || (!strcmp(v->id, "ref") && strcmp(p->column, "speedup_vs_ref")))
+			if (!isfinite(y) || (g[i].r->summary.facts.reference && strcmp(p->column, "speedup_vs_ref")))
 				continue;
 			len += (size_t)snprintf(parts + len, sizeof parts - len, "%s%.9g with lines dt 2 lw 2 title '%s'",
 						len ? ", " : "", y, v->variant);
@@ -427,7 +427,7 @@ static int group_plots(const char *rdir, const char *stem, grow *g, size_t ng, b
 		if (exceed) /* the inline blocks, in the order of the '-' entries */
 			for (size_t i = 0; i < ng; i++) {
 				const sweep_variant *v = g[i].v;
-				if (isfinite(v->T) || !g[i].r->status.run || !strcmp(v->id, "ref"))
+				if (isfinite(v->T) || !g[i].r->status.run || g[i].r->summary.facts.reference)
 					continue;
 				bool any = false;
 				for (int t = 0; t < MTR_THRESHOLD_COUNT; t++) {

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "taslab/study.h"
+#include "../test_study_methods.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -52,7 +53,7 @@ static sty *import_export(const char *csv, const char *db, const char *exp, size
 {
 	char err[1024] = "";
 	sty *s = NULL;
-	if (sty_create(db, &s, err, sizeof err))
+	if (sty_create(db, &s, err, sizeof err) || tu_describe_methods(s))
 		__builtin_trap(); /* the previous input's study was deleted on close */
 	*rc = sty_import_long(s, csv, rows, err, sizeof err);
 	if (*rc) {

@@ -25,6 +25,7 @@
 
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
+#include "../test_study_methods.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -93,7 +94,8 @@ static void setup(void)
 	snprintf(p, sizeof p, "%s/study.db", stim); /* kept among the stimuli: it must never be served */
 	sty_design_desc d = {.stimuli = stim, .participants = 2, .seed = 7, .training = 1, .catch_trials = 1, .break_every = 2};
 	sty_design_summary sm;
-	if (sty_create(p, &study, err, sizeof err) || sty_design(study, &d, &sm, err, sizeof err) ||
+	if (sty_create(p, &study, err, sizeof err) || tu_describe_methods(study) ||
+	    sty_design(study, &d, &sm, err, sizeof err) ||
 	    sty_commit(study, err, sizeof err)) {
 		fprintf(stderr, "fuzz_serve: %s\n", err);
 		abort();

@@ -7,6 +7,8 @@
 
 #include <stddef.h>
 
+#include "taslab/run.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -14,6 +16,7 @@ extern "C" {
 typedef struct mtr_run_summary {
 	char path[1024];
 	char method[32], variant[64], scene[64], camera[64], camera_motion[16];
+	run_method_facts facts;     /* the manifest's inputs.method_facts: reference, baseline (issue 30.1) */
 	double threshold;           /* T, NAN when the method has none */
 	unsigned period;            /* N, 0 when the method has none */
 	unsigned width, height, first_frame;
@@ -31,10 +34,12 @@ typedef struct mtr_run_summary {
 	double late_samples;        /* --truth: sum; NAN when absent */
 } mtr_run_summary;
 
-/* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: "sa" for the atlas methods sa,
- * sau, tasa when an sa run is there — Table 1 of the paper reduces against SA — else "ref") and speedups against the
- * `ref` run, both with the same scene, camera path, first frame, frame count and size. Runs without such a partner
- * get NAN. */
+/* Summarises `n` runs. Reductions are against the run of variant `baseline` (NULL: the variant the run's manifest
+ * names as its baseline — sa for the atlas methods sa, sau, tasa, as Table 1 of the paper reduces against SA — when
+ * that run is there, else the reference run) and speedups against the reference run (the manifest's
+ * method_facts.reference: `ref`), both with the same scene, camera path, first frame, frame count and size. Runs
+ * without such a partner get NAN. A manifest without inputs.method_facts (made before taslab recorded them) is
+ * TL_ERR_INPUT: render the run again. */
 int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, mtr_run_summary *out, char *err,
 		       size_t err_size);
 

@@ -4,7 +4,11 @@
  * Every method lives in one file (renderer/src/methods/<name>.c) that exports its frame operations and a
  * table of options (name, help, type, default, range; libvmaf's feature-extractor shape). `taslab render
  * --help`, the manifest's "method_options" and variant parsing are generated from these tables, so a new
- * option is one table line and a new method one file plus one registry line (renderer/src/frame/methods.c).
+ * option is one table line and a new method one file plus one registry line (renderer/src/methods/registry.c).
+ *
+ * What other modules need to know of a method (its family, the baseline its reductions are against, whether it is
+ * the reference, whether it takes T or a period) is in its method_info too; method_facts() turns it into the
+ * run_method_facts that manifest.json and pairs.json carry, so metrics/ and study/ never name a method (issue 30.1).
  *
  * Variants (DESIGN section 4): NAME[-FLAG...][@T][/N], e.g. ref, tfr@8, tarc@8, tarc-oracle@8, rrc/4, sau/8.
  * "@" sets the method's threshold option, "/" its period option, "-FLAG" one of its boolean options
@@ -55,6 +59,15 @@ typedef struct method_info {
 	size_t option_count;
 	size_t options_size;          /* sizeof the method's options struct (<= METHOD_OPTIONS_MAX_B) */
 	bool decisions;               /* makes per-sample reuse decisions it can report (render --decisions) */
+	/* The method's family, by what it reuses (DESIGN section 4, BASELINES.md): "reference" (shades everything),
+	 * "forward" (tfr: per-pixel reuse by re-evaluating old shading), "reprojection" (pixel caches: rrc, tarc and
+	 * the reprojection alternatives of BASELINES.md), "atlas" (atlas blocks: sa, sau, tasa), "rate" (variable rate
+	 * shading, BASELINES.md A7), "deferred" (adaptive deferred shading, A8). */
+	const char *family;
+	/* The method whose run this one's shaded-sample reductions are against when that run is in the same set (paper
+	 * Table 1 reduces the atlas methods against sa); NULL: the reference. */
+	const char *baseline;
+	bool reference;               /* the reference every other method is compared with (exactly one) */
 	/* Cross-option checks beyond the table's ranges (NULL: none); called by method_config_check. */
 	int (*check)(const void *options, char *err, size_t err_size);
 } method_info;
@@ -63,6 +76,12 @@ typedef struct method_info {
 const method_info *const *method_list(size_t *count);
 /* The method called `name`, or NULL. */
 const method_info *method_find(const char *name);
+/* The reference method (method_info.reference). */
+const method_info *method_reference(void);
+/* What manifest.json and pairs.json record of method `m` (run.h): family, baseline (the reference's name when
+ * m->baseline is NULL), reference, and takes_threshold / takes_period from its option table (an option set by '@'
+ * or '/' in variants). */
+void method_facts(const method_info *m, run_method_facts *out);
 
 #define METHOD_OPTIONS_MAX_B 64
 

@@ -10,6 +10,8 @@
 #include "taslab/tl_error.h"
 #include "taslab/tl_json.h"
 
+#include "method_facts.h"
+
 int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size)
 {
 	json_t *conds = json_array();
@@ -20,12 +22,16 @@ int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size
 						       isfinite(c->T) ? json_real(c->T) : json_null(), "period",
 						       c->period ? json_integer(c->period) : json_null(), "run", c->run, "clip",
 						       c->clip, "inspect", c->inspect));
+		if (c->facts.known)
+			json_object_set_new(json_array_get(conds, i), "method_facts", method_facts_json(&c->facts));
 	}
 	json_t *m = json_pack("{s:i, s:s, s:s, s:s, s:s, s:f, s:[I,I], s:[i,i], s:s, s:{s:s, s:s}, s:o}", "taslab_pairs", 1,
 			      "scene", s->scene, "scene_path", s->scene_path, "camera", s->camera, "camera_motion",
 			      s->camera_motion, "fps", s->fps, "frames", (json_int_t)s->first_frame, (json_int_t)s->last_frame, "size",
 			      (int)s->width, (int)s->height, "display_transform", s->display_transform, "reference", "run",
 			      s->ref_run, "clip", s->ref_clip, "conditions", conds);
+	if (m && s->ref_method[0])
+		json_object_set_new(json_object_get(m, "reference"), "method", json_string(s->ref_method));
 	int rc = tl_json_write(path, m, err, err_size);
 	json_decref(m);
 	return rc;
@@ -73,6 +79,8 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 	else if (get_str(ref, "clip", s->ref_clip, sizeof s->ref_clip, 1) ||
 		 (json_object_get(ref, "run") && get_str(ref, "run", s->ref_run, sizeof s->ref_run, 1)))
 		bad = "reference.clip (and reference.run) must be relative paths inside the set";
+	else if (json_object_get(ref, "method") && get_str(ref, "method", s->ref_method, sizeof s->ref_method, 0))
+		bad = "reference.method must be a method name";
 	else if (!json_is_array(conds))
 		bad = "conditions must be an array";
 	else if (json_array_size(fr) != 2 || (sz && json_array_size(sz) != 2) || !(json_number_value(json_object_get(j, "fps")) > 0))
@@ -97,6 +105,11 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 		    get_str(c, "clip", x->clip, sizeof x->clip, 1) || (T && !json_is_null(T) && !json_is_number(T)) ||
 		    (N && !json_is_null(N) && !json_is_integer(N))) {
 			bad = "a condition lacks method or a relative clip path, or has a non-numeric T/period";
+			break;
+		}
+		if (method_facts_read(json_object_get(c, "method_facts"), &x->facts)) {
+			bad = "a condition's method_facts is not an object of family, baseline, reference, takes_threshold, "
+			      "takes_period";
 			break;
 		}
 		if (get_str(c, "variant", x->variant, sizeof x->variant, 0))

@@ -14,6 +14,8 @@
 #include "taslab/tl_fs.h"
 #include "taslab/tl_json.h"
 
+#include "method_facts.h"
+
 static void copy_str(json_t *o, const char *key, char *dst, size_t n)
 {
 	const char *v = json_string_value(json_object_get(o, key));
@@ -52,6 +54,11 @@ int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_si
 		snprintf(m->variant, sizeof m->variant, "%s", m->method);
 	copy_str(json_object_get(j, "device"), "name", m->device, sizeof m->device);
 	copy_str(out, "display_transform", m->display_transform, sizeof m->display_transform);
+	if (method_facts_read(json_object_get(in, "method_facts"), &m->facts)) {
+		json_decref(j);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: inputs.method_facts is not a valid object; render the run again",
+				path);
+	}
 	m->threshold = json_is_number(T) ? json_number_value(T) : NAN;
 	m->period = json_is_integer(N) && json_integer_value(N) > 0 ? (uint32_t)json_integer_value(N) : 0;
 	json_int_t a = json_integer_value(json_array_get(fr, 0)), b = json_integer_value(json_array_get(fr, 1));

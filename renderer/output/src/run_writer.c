@@ -17,6 +17,8 @@
 #include "taslab/tl_json.h"
 #include "taslab/version.h"
 
+#include "method_facts.h"
+
 struct run_writer {
 	char dir[TL_PATH_MAX];
 	run_info info;
@@ -120,7 +122,7 @@ static json_t *inputs_json(const run_info *in)
 	for (size_t i = 0; i < in->derived_count; i++)
 		json_object_set_new(derived, in->derived[i].key, option_json(&in->derived[i]));
 	/* Frames as 64-bit JSON integers: a frame number is a uint32_t (an int turned frames >= 2^31 negative). */
-	return json_pack("{s:s, s:s?, s:s?, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
+	json_t *j = json_pack("{s:s, s:s?, s:s?, s:s, s:s, s:s?, s:s, s:s?, s:o, s:o, s:o, s:o, s:[I,I], s:[i,i], s:f}", "scene",
 			 in->scene_name, "scene_digest", in->scene_digest, "colour_digest", in->colour_digest, "scene_path",
 			 in->scene_path, "camera", in->camera, "camera_motion",
 			 in->camera_motion, "method", in->method, "variant", in->variant, "threshold",
@@ -128,6 +130,10 @@ static json_t *inputs_json(const run_info *in)
 			 in->period ? json_integer(in->period) : json_null(), "method_options", opts, "method_derived", derived, "frames",
 			 (json_int_t)in->first_frame, (json_int_t)in->last_frame, "size", (int)in->width, (int)in->height, "fps",
 			 (double)in->fps);
+	/* What metrics and studies need to know of the method, so they need not know its name (issue 30.1). */
+	if (j && in->facts.known)
+		json_object_set_new(j, "method_facts", method_facts_json(&in->facts));
+	return j;
 }
 
 int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size)

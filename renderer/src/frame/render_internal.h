@@ -50,15 +50,9 @@ typedef struct render_method {
 	size_t (*derived)(const render *r, run_option *out, size_t max);
 } render_method;
 
-/* The registry (methods/registry.c): the implementation of an available method, else NULL. */
+/* The registry (methods/registry.c, the only list of methods; each method file defines its render_method_NAME):
+ * the implementation of an available method, else NULL. */
 const render_method *render_method_of(const method_info *info);
-extern const render_method render_method_ref;
-extern const render_method render_method_tfr;
-extern const render_method render_method_rrc;
-extern const render_method render_method_tarc;
-extern const render_method render_method_sa;
-extern const render_method render_method_sau;
-extern const render_method render_method_tasa;
 
 /* ---- the render object ---- */
 

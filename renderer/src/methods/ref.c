@@ -49,7 +49,11 @@ static void ref_collect(render *r, frame_stats *st)
 }
 
 const render_method render_method_ref = {
-	.info = {.name = "ref", .summary = "forward shading of every visible sample every frame (the reference)", .available = true},
+	.info = {.name = "ref",
+		 .summary = "forward shading of every visible sample every frame (the reference)",
+		 .available = true,
+		 .family = "reference",
+		 .reference = true},
 	.pass_names = ref_passes,
 	.pass_count = sizeof ref_passes / sizeof ref_passes[0],
 	.prepare = ref_prepare,

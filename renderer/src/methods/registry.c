@@ -1,5 +1,6 @@
-/* methods.c — the method registry, option tables and variant syntax (method.h). The only list of methods:
- * adding a method is one file in methods/ and one line here. */
+/* registry.c — the method registry, option tables and variant syntax (method.h). The only list of methods:
+ * adding a method is one file in methods/ (defining `const render_method render_method_NAME`) and one X(NAME)
+ * line in METHODS below (issue 30.1: no per-method declarations in the frame core). */
 #include "../frame/render_internal.h"
 
 #include <math.h>
@@ -7,21 +8,28 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Implemented methods, then the planned ones of DESIGN section 4 (listed in help, refused with a message). */
-static const render_method *const implemented[] = {
-	&render_method_ref,
-	&render_method_tfr,
-	&render_method_rrc,
-	&render_method_tarc,
-	&render_method_sa,
-	&render_method_sau,
-	&render_method_tasa,
-};
+/* Every method, in the order of `render --help` (the implemented ones first, then any planned ones of DESIGN
+ * section 4, listed in help and refused with a message). */
+#define METHODS(X)                                                                                                    \
+	X(ref)                                                                                                         \
+	X(tfr)                                                                                                         \
+	X(rrc)                                                                                                         \
+	X(tarc)                                                                                                        \
+	X(sa)                                                                                                          \
+	X(sau)                                                                                                         \
+	X(tasa)
 
-static const method_info *const all[] = {
-	&render_method_ref.info, &render_method_tfr.info, &render_method_rrc.info, &render_method_tarc.info,
-	&render_method_sa.info,	 &render_method_sau.info, &render_method_tasa.info,
-};
+#define DECLARE(name) extern const render_method render_method_##name;
+METHODS(DECLARE)
+#undef DECLARE
+
+#define ENTRY(name) &render_method_##name,
+static const render_method *const implemented[] = {METHODS(ENTRY)};
+#undef ENTRY
+/* The same list as method_info pointers, for method_list (derived from METHODS, not a second list). */
+#define INFO(name) &render_method_##name.info,
+static const method_info *const all[] = {METHODS(INFO)};
+#undef INFO
 
 const method_info *const *method_list(size_t *count)
 {
@@ -39,10 +47,40 @@ const method_info *method_find(const char *name)
 
 const render_method *render_method_of(const method_info *info)
 {
-	for (size_t i = 0; info && i < sizeof implemented / sizeof implemented[0]; i++)
+	for (size_t i = 0; info && info->available && i < sizeof implemented / sizeof implemented[0]; i++)
 		if (&implemented[i]->info == info)
 			return implemented[i];
 	return NULL;
+}
+
+const method_info *method_reference(void)
+{
+	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+		if (all[i]->reference)
+			return all[i];
+	return NULL;
+}
+
+static bool has_sigil(const method_info *m, char sigil)
+{
+	for (size_t i = 0; i < m->option_count; i++)
+		if (m->options[i].variant == sigil)
+			return true;
+	return false;
+}
+
+void method_facts(const method_info *m, run_method_facts *out)
+{
+	memset(out, 0, sizeof *out);
+	const method_info *ref = method_reference();
+	const char *base = m->baseline ? m->baseline : ref ? ref->name : "";
+	out->known = true;
+	snprintf(out->family, sizeof out->family, "%s", m->family ? m->family : "");
+	snprintf(out->baseline, sizeof out->baseline, "%s", base);
+	out->reference = m->reference;
+	/* T and the period are the options a variant sets with '@' and '/' (method_config_threshold, _period). */
+	out->takes_threshold = has_sigil(m, '@');
+	out->takes_period = has_sigil(m, '/');
 }
 
 /* Names of the implemented methods, for messages. */
@@ -51,7 +89,8 @@ static void available_names(char *out, size_t n)
 	size_t len = 0;
 	out[0] = 0;
 	for (size_t i = 0; i < sizeof implemented / sizeof implemented[0] && len < n; i++)
-		len += (size_t)snprintf(out + len, n - len, "%s%s", i ? ", " : "", implemented[i]->info.name);
+		if (implemented[i]->info.available)
+			len += (size_t)snprintf(out + len, n - len, "%s%s", len ? ", " : "", implemented[i]->info.name);
 }
 
 static void *value_ptr(method_config *c, const method_option *o) { return c->values.bytes + o->offset; }

@@ -46,6 +46,7 @@ const render_method render_method_rrc = {
 	.info = {.name = "rrc",
 		 .summary = "reverse reprojection cache, 16x16 tiles refreshed round-robin every N frames",
 		 .available = true,
+		 .family = "reprojection",
 		 .options = rrc_option_table,
 		 .option_count = sizeof rrc_option_table / sizeof rrc_option_table[0],
 		 .decisions = true,

@@ -24,6 +24,8 @@ const render_method render_method_sa = {
 	.info = {.name = "sa",
 		 .summary = "shading atlas: visible blocks shaded every frame (paper sec. 4.3)",
 		 .available = true,
+		 .family = "atlas",
+		 .baseline = "sa", /* paper Table 1 reduces the atlas methods against SA */
 		 .options = sa_option_table,
 		 .option_count = sizeof sa_option_table / sizeof sa_option_table[0],
 		 .options_size = sizeof(sa_options)},

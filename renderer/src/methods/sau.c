@@ -41,6 +41,8 @@ const render_method render_method_sau = {
 	.info = {.name = "sau",
 		 .summary = "shading atlas with uniform temporal upsampling: each block reshaded every N frames (sec. 5.1)",
 		 .available = true,
+		 .family = "atlas",
+		 .baseline = "sa", /* paper Table 1 reduces the atlas methods against SA */
 		 .options = sau_option_table,
 		 .option_count = sizeof sau_option_table / sizeof sau_option_table[0],
 		 .options_size = sizeof(sau_options)},

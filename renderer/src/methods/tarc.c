@@ -66,6 +66,7 @@ const render_method render_method_tarc = {
 	.info = {.name = "tarc",
 		 .summary = "temporally adaptive reprojection caching (paper sec. 6.1); tarc-oracle: its ideal variant",
 		 .available = true,
+		 .family = "reprojection",
 		 .options = tarc_option_table,
 		 .option_count = sizeof tarc_option_table / sizeof tarc_option_table[0],
 		 .decisions = true,

@@ -54,6 +54,8 @@ const render_method render_method_tasa = {
 	.info = {.name = "tasa",
 		 .summary = "temporally adaptive shading atlas (paper sec. 6.2); tasa-oracle: its ideal variant",
 		 .available = true,
+		 .family = "atlas",
+		 .baseline = "sa", /* paper Table 1 reduces the atlas methods against SA */
 		 .options = tasa_option_table,
 		 .option_count = sizeof tasa_option_table / sizeof tasa_option_table[0],
 		 .options_size = sizeof(tasa_options),

@@ -224,6 +224,7 @@ const render_method render_method_tfr = {
 	.info = {.name = "tfr",
 		 .summary = "temporal forward rendering at threshold T: shading reused while within T of the truth (DESIGN section 4)",
 		 .available = true,
+		 .family = "forward",
 		 .options = tfr_option_table,
 		 .option_count = sizeof tfr_option_table / sizeof tfr_option_table[0],
 		 .options_size = sizeof(tfr_options)},

@@ -24,6 +24,7 @@
 #ifndef TASLAB_STUDY_H
 #define TASLAB_STUDY_H
 
+#include "taslab/run.h"
 #include "taslab/tl_error.h"
 #include <stdbool.h>
 #include <stddef.h>
@@ -65,12 +66,20 @@ const char *sty_admin_token(const sty *s);
 const char *sty_served_url(const sty *s);
 int sty_set_served_url(sty *s, const char *url, char *err, size_t err_size);
 
-/* Whether a method (DESIGN section 4 names, the variant's method name) has a threshold T: 1 for tfr, tarc,
- * tasa and their -oracle forms, 0 for ref, rrc, sa, sau, -1 for an unknown name. */
-int sty_method_has_threshold(const char *method);
-/* Whether a method has a period N (`--period`, variants rrc/4, sau/8): 1 for rrc and sau, 0 for the other
- * DESIGN section 4 names, -1 for an unknown name. A period is 1, 2, 4 or 8 (sty_period_valid). */
-int sty_method_has_period(const char *method);
+/* The study module knows no method by name (issue 30.1): what it needs of a method (whether it is the reference,
+ * whether it takes a threshold T or a period N) comes from the files — pairs.json's conditions[].method_facts (run.h)
+ * — or from the caller, which describes the methods of taslab's registry (method.h method_facts; the `taslab study`
+ * command does so for every variant method name, tarc-oracle included). `study import` checks a ratings file's
+ * T and period columns against these descriptions, and a design falls back on them for sets made before pairs.json
+ * recorded method_facts. A later description of a name replaces the earlier; TL_ERR_ARG when STY_MAX_METHODS names
+ * are described already or the name is too long. */
+#define STY_MAX_METHODS 128
+int sty_describe_method(sty *s, const char *method, const run_method_facts *facts, char *err, size_t err_size);
+/* The description of `method`, or NULL when none was given. */
+const run_method_facts *sty_method_facts(const sty *s, const char *method);
+/* The name of the described reference method (run_method_facts.reference), or NULL. */
+const char *sty_reference_method(const sty *s);
+/* A period is 1, 2, 4 or 8 (`--period`, variants rrc/4, sau/8). */
 bool sty_period_valid(long period);
 
 typedef struct sty_design_desc {
@@ -128,7 +137,8 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t
  * every CSV the study module writes. */
 int sty_export_long(sty *s, const char *path, char *err, size_t err_size);
 /* pwcmp layout (pw_scale_table defaults): observer,scene,condition_A,condition_B,selected_A — one row per
- * answer, condition names "ref", METHOD_T<T> (tfr_T8, tarc-oracle_T8), METHOD_N<period> (rrc_N4) or METHOD
+ * answer, condition names: the reference's method name (ref; sty_reference_method, else TL_ERR_INTERNAL),
+ * METHOD_T<T> (tfr_T8, tarc-oracle_T8), METHOD_N<period> (rrc_N4) or METHOD
  * (sa); a tie ("same") is written as two rows, one for each side. */
 int sty_export_pwcmp(sty *s, const char *path, char *err, size_t err_size);
 /* Both exports at once (either path may be NULL): every output is checked (sty_check_output, and the two are not

@@ -2,8 +2,13 @@
  * by the study module (DESIGN sections 5, 7):
  *
  *   { "taslab_pairs": 1, "scene", "scene_path", "camera", "camera_motion", "fps", "frames": [first, last],
- *     "size": [w, h], "display_transform", "reference": {"run", "clip"},
- *     "conditions": [ {"id", "method", "variant", "T", "period", "run", "clip", "inspect"}, ... ] }
+ *     "size": [w, h], "display_transform", "reference": {"run", "clip", "method"},
+ *     "conditions": [ {"id", "method", "variant", "T", "period", "method_facts", "run", "clip", "inspect"}, ... ] }
+ *
+ * "method_facts" (run.h run_method_facts) says what the study needs to know of a condition's method: whether it is
+ * the reference (a catch pair) and whether it takes T and a period (issue 30.1); reference.method names the
+ * reference method (the catch trials' condition). Sets made before they were recorded read with facts.known false
+ * and ref_method "".
  *
  * Paths are relative to the folder holding pairs.json; the reader refuses absolute paths and "..".
  * The file is written last and atomically: its presence means the set is complete. */
@@ -13,6 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "taslab/run.h"
 #include "taslab/tl_error.h"
 
 #ifdef __cplusplus
@@ -25,6 +31,7 @@ typedef struct pairs_condition {
 	char variant[64];     /* the variant token ("tarc-oracle@8") */
 	double T;             /* NAN when the method has no threshold */
 	uint32_t period;      /* 0 when the method has no period */
+	run_method_facts facts; /* "method_facts"; known false when the file has none */
 	char run[256], clip[256], inspect[256];
 } pairs_condition;
 
@@ -34,6 +41,7 @@ typedef struct pairs_set {
 	double fps;
 	uint32_t first_frame, last_frame, width, height;
 	char ref_run[256], ref_clip[256];
+	char ref_method[32];  /* reference.method: the reference's method name ("" when the file has none) */
 	pairs_condition *conditions; /* malloc'ed by pairs_read; borrowed by pairs_write */
 	size_t count;
 } pairs_set;

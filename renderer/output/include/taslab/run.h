@@ -43,12 +43,30 @@ typedef struct run_option {
 
 #define RUN_MAX_OPTIONS 16
 
+/* What the other modules need to know of a run's method (issue 30.1): the method registry (method.h,
+ * method_facts) writes them into manifest.json (inputs.method_facts) and pairs.json (conditions[].method_facts),
+ * and metrics/ and study/ read them from there instead of knowing method names:
+ *   "method_facts": {"family": "atlas", "baseline": "sa", "reference": false, "takes_threshold": true,
+ *                    "takes_period": false}
+ * A file made before they were recorded reads as known = false; its readers ask for the run (or set) to be made
+ * again. */
+typedef struct run_method_facts {
+	bool known;           /* the file recorded them */
+	char family[32];      /* "reference", "forward", "reprojection", "atlas", ... (method.h) */
+	char baseline[32];    /* the method whose run this one's reductions are against when that run is in the same
+			       * set ("sa" for the atlas methods, paper Table 1); the reference otherwise */
+	bool reference;       /* the reference method, which every other one is compared with */
+	bool takes_threshold; /* has a threshold T (variant @T) */
+	bool takes_period;    /* has a period N (variant /N) */
+} run_method_facts;
+
 typedef struct run_info {
 	const char *scene_name, *scene_path, *camera, *camera_motion, *device, *driver;
 	const char *method;  /* the variant's method name, e.g. "tarc-oracle" (EXR taslab:method, CSV method) */
 	const char *variant; /* the variant token, e.g. "tarc-oracle@8" */
 	double threshold;    /* T, NAN when the method has none */
 	uint32_t period;     /* N of rrc/sau, 0 when the method has none */
+	run_method_facts facts; /* inputs.method_facts */
 	const run_option *options; /* the method's options, all of them (defaults included) */
 	size_t option_count;
 	const run_option *derived; /* what the method derived from them (render_derived): inputs.method_derived */
@@ -89,6 +107,7 @@ typedef struct run_manifest {
 	char scene_digest[24], colour_digest[24]; /* "" when the manifest has none (made before they were recorded) */
 	double threshold;          /* NAN when absent */
 	uint32_t period;           /* 0 when absent */
+	run_method_facts facts;    /* inputs.method_facts; known = false in a manifest made before them */
 	uint32_t first_frame, last_frame, width, height;
 	double fps;
 	bool exr, png;
