@@ -71,13 +71,13 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 	out_file o;
 	size_t nT = meta->threshold_count;
 	if (tl_mkdirs(dir, err, err_size))
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	uint64_t visible = 0, visible_prev = 0;
 	for (size_t f = 0; f < n; f++)
 		visible += frames[f].visible, visible_prev += frames[f].visible_prev;
 
 	if (open_file(&o, dir, "coherence.csv", err, err_size))
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	fprintf(o.f, "T,k,unchanged_samples,visible_samples,fraction_unchanged\n");
 	json_t *at120 = json_object();
 	for (size_t i = 0; i < nT; i++)
@@ -96,11 +96,11 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 		}
 	if (close_file(&o, err, err_size)) {
 		json_decref(at120);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	if (open_file(&o, dir, "coherence_frames.csv", err, err_size)) {
 		json_decref(at120);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	fprintf(o.f, "frame,T,k,fraction_unchanged\n");
 	for (size_t f = 0; f < n; f++)
@@ -110,7 +110,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 					frames[f].visible ? (double)frames[f].unchanged[i][k] / (double)frames[f].visible : 0.0);
 	if (close_file(&o, err, err_size) || open_file(&o, dir, "visibility.csv", err, err_size)) {
 		json_decref(at120);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	fprintf(o.f, "frame,visible_samples,visible_at_previous,visibility_coherence\n");
 	for (size_t f = 0; f < n; f++)
@@ -119,7 +119,7 @@ int mtr_tfr_write_coherence(const analyze_result *frames, size_t n, const mtr_tf
 			frames[f].visible ? (double)frames[f].visible_prev / (double)frames[f].visible : 0.0);
 	if (close_file(&o, err, err_size)) {
 		json_decref(at120);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	if (plots) {
 		mtr_plot plot;
@@ -163,7 +163,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 	out_file o;
 	size_t nT = meta->threshold_count;
 	if (tl_mkdirs(dir, err, err_size) || open_file(&o, dir, "predictors.csv", err, err_size))
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	fprintf(o.f, "T,predictor,filtered,late,early,on_time,unchanged,samples,late_fraction,early_fraction,"
 		     "on_time_fraction,unchanged_fraction\n");
 	json_t *rows = json_array();
@@ -182,7 +182,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 		}
 	if (close_file(&o, err, err_size) || open_file(&o, dir, "predictors_frames.csv", err, err_size)) {
 		json_decref(rows);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	fprintf(o.f, "frame,T,predictor,filtered,late,early,on_time,unchanged,samples\n");
 	for (size_t f = 0; f < n; f++)
@@ -194,7 +194,7 @@ int mtr_tfr_write_predictors(const analyze_result *frames, size_t n, const mtr_t
 			}
 	if (close_file(&o, err, err_size)) {
 		json_decref(rows);
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	}
 	if (plots) {
 		/* Stacked bars: one group per T, bars single/long/inst, unfiltered then filtered (Figs. 7, 9). */
@@ -226,16 +226,16 @@ int mtr_tfr_write_gradients(const analyze_result *r, const mtr_tfr_meta *meta, c
 	char sub[4096], path[4300];
 	if (!r->gradients || !r->gradients_filtered) {
 		snprintf(err, err_size, "no gradient images kept for frame %u", r->frame);
-		return -1;
+		return TL_ERR_INTERNAL; /* the caller did not ask analyze to keep them */
 	}
 	snprintf(sub, sizeof sub, "%s/gradients", dir);
 	if (tl_mkdirs(sub, err, err_size))
-		return -1;
+		return TL_ERR_OUTPUT; /* a folder or file of DIR could not be written (issue 30.5) */
 	size_t np = (size_t)r->width * r->height;
 	float *map = malloc(np * sizeof *map);
 	if (!map) {
 		snprintf(err, err_size, "out of memory");
-		return -1;
+		return TL_ERR_NOMEM;
 	}
 	int rc = 0;
 	for (size_t i = 0; i < meta->threshold_count && !rc; i++)

@@ -2,7 +2,9 @@
  * 7, 8, 9): CSV and JSON for every figure, gnuplot plots and gradient heatmaps for people.
  *
  * Every file is written under a temporary name and renamed when complete; the JSON summary is written
- * last, so its presence means the folder is complete. */
+ * last, so its presence means the folder is complete. The writers return TL_OK, TL_ERR_OUTPUT when a folder or file
+ * under DIR cannot be written (a full disk: "write ...: No space left on device", exit 2 without "fix your command
+ * line"; issue 30.5), or TL_ERR_NOMEM; mtr_tfr_write_gradients TL_ERR_INTERNAL without kept gradients. */
 #ifndef TASLAB_METRICS_TFR_H
 #define TASLAB_METRICS_TFR_H
 

@@ -1,5 +1,6 @@
 // colour.cpp — OpenColorIO view transform on CPU and GPU (see colour.h).
 #include "taslab/colour.h"
+#include "taslab/tl_error.h"
 
 #include <OpenColorIO/OpenColorIO.h>
 
@@ -343,7 +344,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 	colour *c = new (std::nothrow) colour;
 	if (!c) {
 		std::snprintf(err, err_size, "out of memory");
-		return -1;
+		return TL_ERR_NOMEM;
 	}
 	const char *path = desc->config_path;
 	if (!path && !desc->ignore_env) {
@@ -359,7 +360,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 				std::snprintf(err, err_size, "--display/--view need an OCIO config (--ocio-config FILE or $OCIO); "
 							 "the built-in default is ACES 1.0 SDR-video on sRGB");
 				delete c;
-				return -1;
+				return TL_ERR_ARG;
 			}
 			proc = default_processor(cfg);
 			c->name = std::string("ACES 1.0 SDR-video output transform -> sRGB display (OCIO ") +
@@ -376,7 +377,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 					all += (i ? ", " : "") + std::string(cfg->getDisplay(i));
 				std::snprintf(err, err_size, "%s: no display '%s' (displays: %s)", path, display, all.c_str());
 				delete c;
-				return -1;
+				return TL_ERR_ARG;
 			}
 			const char *view = desc->view ? desc->view : cfg->getDefaultView(display);
 			found = false;
@@ -389,7 +390,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 				std::snprintf(err, err_size, "%s: display '%s' has no view '%s' (views: %s)", path, display, view,
 					      views.c_str());
 				delete c;
-				return -1;
+				return TL_ERR_ARG;
 			}
 			std::string file, why;
 			for (const char *cs : {cfg->getDisplayViewColorSpaceName(display, view), (const char *)OCIO::ROLE_SCENE_LINEAR}) {
@@ -401,7 +402,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 			if (!file.empty()) {
 				std::snprintf(err, err_size, "%s: %s; fix the LUT file", file.c_str(), why.c_str());
 				delete c;
-				return -1;
+				return TL_ERR_INPUT;
 			}
 			proc = cfg->getProcessor(OCIO::ROLE_SCENE_LINEAR, display, view, OCIO::TRANSFORM_DIR_FORWARD);
 			c->name = std::string(path) + ": scene_linear -> " + display + " / " + view;
@@ -424,14 +425,14 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 				std::snprintf(err, err_size, "%s: a value of this LUT is not a finite number (NaN or Inf); fix the LUT file",
 					      file.c_str());
 				delete c;
-				return -1;
+				return TL_ERR_INPUT;
 			}
 		}
 		if (!lut_values_finite(proc, bad)) {
 			std::snprintf(err, err_size, "%s: %s: a LUT value is not a finite number (NaN or Inf); fix the LUT file",
 				      c->name.c_str(), bad.c_str());
 			delete c;
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		c->cpu = proc->getOptimizedCPUProcessor(OCIO::BIT_DEPTH_F32, OCIO::BIT_DEPTH_F32, OCIO::OPTIMIZATION_LOSSLESS);
 		auto gpu = proc->getOptimizedGPUProcessor(OCIO::OPTIMIZATION_LOSSLESS);
@@ -445,7 +446,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 						 "taslab does not support; make them static in the config",
 				      path ? path : "default");
 			delete c;
-			return -1;
+			return TL_ERR_UNSUPPORTED;
 		}
 		c->glsl = sd->getShaderText();
 		collect_luts(sd, c->glsl, c->luts);
@@ -456,7 +457,7 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 								 "Inf); fix the LUT files of the view",
 						      c->name.c_str(), i, l.sampler.c_str());
 					delete c;
-					return -1;
+					return TL_ERR_INPUT;
 				}
 		c->rewritten = desc->keep_ocio_glsl ? 0 : restructure_glsl(c->glsl);
 	} catch (OCIO::Exception &e) {
@@ -466,14 +467,14 @@ extern "C" int colour_create(const colour_desc *desc, colour **out, char *err, s
 				ch = ' ';
 		std::snprintf(err, err_size, "OpenColorIO: %s", msg.c_str());
 		delete c;
-		return -1;
+		return TL_ERR_INPUT;
 	} catch (...) { /* std::bad_alloc (a large LUT copied): nothing may leave an extern "C" function */
 		std::snprintf(err, err_size, "%s: out of memory creating the view transform", path ? path : "default");
 		delete c;
-		return -1;
+		return TL_ERR_NOMEM;
 	}
 	*out = c;
-	return 0;
+	return TL_OK;
 }
 
 extern "C" void colour_destroy(colour **c)

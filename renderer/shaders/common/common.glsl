@@ -18,6 +18,7 @@ layout(set = 0, binding = 3) uniform sampler2DArray color_textures; // sRGB form
 layout(set = 0, binding = 4) uniform sampler2DArray data_textures;  // linear formats
 // the shadow-map pool (gpu_layout.h: GPU_SHADOW_CHUNKS)
 layout(set = 0, binding = 5) uniform sampler2DArrayShadow shadow_maps[GPU_SHADOW_CHUNKS];
+// binding 6: the reference shading's invocation counter, declared by the shaders that count (ref/count.glsl)
 
 layout(push_constant) uniform Push { GpuPush pc; }; // pc.slot, pc.object, ... (gpu_layout.h)
 

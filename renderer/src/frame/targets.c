@@ -1,5 +1,6 @@
 /* targets.c — render targets (depth, HDR, display), samplers, readback buffers, queries, the command
- * buffer, and the scene and display descriptor sets. */
+ * buffer, and the scene and display descriptor sets (scene set: frame states, objects, materials, textures,
+ * shadow maps — passes/shadow.c writes binding 5 — and the reference shading's counter, binding 6). */
 #include "render_internal.h"
 
 #include <stdio.h>

@@ -1,4 +1,4 @@
-/* method_ref.c — `ref`: forward shading of every visible sample every frame (DESIGN section 4),
+/* ref.c — `ref`: forward shading of every visible sample every frame (DESIGN section 4),
  * the reference all TAS methods are compared against. Passes: shadow maps, depth pre-pass
  * (so each visible sample is shaded exactly once, as in the paper's Forward+ baseline),
  * shading, display encoding, readback. */

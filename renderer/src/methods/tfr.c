@@ -1,4 +1,4 @@
-/* method_tfr.c — `tfr`: temporal forward rendering at threshold T (DESIGN section 4, paper sec. 3).
+/* tfr.c — `tfr`: temporal forward rendering at threshold T (DESIGN section 4, paper sec. 3).
  *
  * Every visible sample is shaded twice: now (s_0) and as it was a frames ago (s_a, every input taken
  * from the state slot of frame t - a: object transforms, lights, camera, shadow maps), where a is the

@@ -32,6 +32,10 @@ typedef struct colour_desc {
 	int keep_ocio_glsl;      /* use OCIO's GLSL as emitted, without the curve rewrite (tests compare both) */
 } colour_desc;
 
+/* The view transform of desc (issue 30.5: tl_err values). TL_OK; TL_ERR_ARG: --display/--view without a config, a
+ * display or view the config does not have; TL_ERR_INPUT: a config or LUT file OpenColorIO cannot read, a LUT value
+ * that is not finite, a .cube size the file does not back; TL_ERR_UNSUPPORTED: a view with dynamic properties;
+ * TL_ERR_NOMEM. `err` gets one line. */
 int colour_create(const colour_desc *desc, colour **out, char *err, size_t err_size);
 void colour_destroy(colour **c);
 /* One line naming the transform, e.g. "ACES 1.0 SDR-video -> sRGB (OCIO 2.1.2 builtins)". */
