@@ -9,6 +9,7 @@
  *  - observer screening against a hand-made table of catch-trial answers (test_screening): each participant's
  *    catch count, mean |answer|, "much better" count and flag (more than half of the catch answers |a| = 2), and
  *    that flagged observers' ratings leave the tally unless keep_flagged. */
+#define _DEFAULT_SOURCE /* popen (test_study_util.h) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -124,7 +125,7 @@ static void test_tally_vs_r(void **state)
 }
 
 /* One pair set (calm/still, stationary) with tfr@8 and tfr@16, small files as clips. */
-static void make_stimuli(const char *root)
+static void make_calm_stimuli(const char *root)
 {
 	char p[4096];
 	snprintf(p, sizeof p, "mkdir -p %s/calm-still/clips", root);
@@ -157,7 +158,7 @@ static void test_screening(void **state)
 	snprintf(dir, sizeof dir, "%s", dir0);
 	snprintf(stim, sizeof stim, "%s/stimuli", dir);
 	snprintf(db, sizeof db, "%s/s.db", dir);
-	make_stimuli(stim);
+	make_calm_stimuli(stim);
 	sty *s = created(db);
 	sty_design_desc dd = {.stimuli = stim, .participants = 4, .seed = 5, .catch_trials = 2};
 	sty_design_summary sm;

@@ -1,4 +1,6 @@
-/* study_internal.h (private) — the study handle and helpers shared by the study module's files. */
+/* study_internal.h (private) — the study handle and helpers shared by the study module's files: the database
+ * (study_db.c), the design (study_design.c), trial selection (study_select.h), CSV files (study_csv.c), the tally
+ * (study_tally.c), the server (study_serve*.c) and the sweep report (study_report*.c). */
 #ifndef TASLAB_STUDY_INTERNAL_H
 #define TASLAB_STUDY_INTERNAL_H
 
@@ -26,6 +28,10 @@ struct sty {
 
 /* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);
+
+/* Stores a value in the study's meta table (study_db.c; the design stores the stimulus folder and seed there).
+ * Returns 0, or -1 when SQLite fails (sty_db_fail says why). */
+int sty_meta_set(sty *s, const char *key, const char *val);
 
 /* The DESIGN section 4 rule for a condition, shared by design (pairs.json) and import: a described method (`f`: its
  * facts from pairs.json or sty_method_facts; NULL or not known: an unknown method), T (NAN: none) exactly when the

@@ -1,4 +1,5 @@
-/* study_tally.c — the statistics of a study (paper sec. 3, Fig. 3 and its footnotes, sec. 7.2; DESIGN section 7).
+/* study_tally.c — the statistics of a study, computed into a sty_result (paper sec. 3, Fig. 3 and its footnotes,
+ * sec. 7.2; DESIGN section 7).
  *
  * Per condition: Q = mean reference-relative rating with a 95% t interval over participants (each participant's
  * mean rating in that condition is one observation); p_ref = (n_ref + n_tie/2)/n over ratings with a Wilson
@@ -12,20 +13,20 @@
  * on more than half of them is flagged and left out unless keep_flagged.
  * Thurstone Case V: conditions are only ever compared with their reference, so the maximum-likelihood Case V
  * scale with the reference fixed at 0 is closed-form, JOD = -Phi^-1(p_ref)/Phi^-1(0.75) (1 JOD = 75% preference);
- * its 95% interval comes from a bootstrap over participants. */
+ * its 95% interval comes from a bootstrap over participants.
+ *
+ * The tally is computed as a value (study_result.h, issue 30.3): sty_tally_compute fills a sty_result, which the
+ * tally's files (study_tally_write.c), the sweep report and next the threshold fit and the simulator share. */
 #include <gsl/gsl_cdf.h>
 #include <gsl/gsl_rng.h>
-#include <jansson.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "study_internal.h"
 #include "taslab/metrics.h"
-#include "taslab/tl_fs.h"
-#include "taslab/tl_json.h"
+#include "taslab/study_result.h"
 
 /* ------------------------------------------------------------------ repeated-measures ANOVA */
 
@@ -185,7 +186,9 @@ static int is_flagged(const data *d, int64_t pid)
 	return 0;
 }
 
-static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char *err, size_t err_size)
+/* Reads the answered test trials into `d` (observers flagged by the screening left out unless keep_flagged) and
+ * the screening of every participant into res->observers. */
+static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char *err, size_t err_size)
 {
 	memset(d, 0, sizeof *d);
 	sqlite3_stmt *st;
@@ -196,16 +199,24 @@ static int load(sty *s, const sty_tally_desc *td, data *d, FILE *observers, char
 			       " LEFT JOIN answers a ON a.participant = t.participant AND a.idx = t.idx GROUP BY p.id ORDER BY p.id",
 			       -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "tally");
-	fprintf(observers, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged\n");
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int64_t pid = sqlite3_column_int64(st, 0);
 		int n = sqlite3_column_int(st, 2), strong = sqlite3_column_int(st, 4);
 		int flag = n > 0 && 2 * strong > n;
-		char label[160];
-		fprintf(observers, "%s,%d,", sty_csv_cell((const char *)sqlite3_column_text(st, 1), label, sizeof label), n);
-		if (n)
-			fprintf(observers, "%.4f", sqlite3_column_double(st, 3));
-		fprintf(observers, ",%d,%d\n", strong, flag);
+		sty_observer *no = realloc(res->observers, (res->observer_count + 1) * sizeof *no);
+		if (!no) {
+			sqlite3_finalize(st);
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		}
+		res->observers = no;
+		sty_observer *ob = &no[res->observer_count++];
+		memset(ob, 0, sizeof *ob);
+		ob->participant = pid;
+		snprintf(ob->label, sizeof ob->label, "%s", (const char *)sqlite3_column_text(st, 1));
+		ob->catch_n = n;
+		ob->catch_mean_abs = n ? sqlite3_column_double(st, 3) : NAN;
+		ob->catch_much_better = strong;
+		ob->flagged = flag;
 		if (flag && !td->keep_flagged) {
 			int64_t *nf = realloc(d->flagged, (d->nflagged + 1) * sizeof *nf);
 			if (nf) {
@@ -340,30 +351,6 @@ static int row_compute(const data *d, const sel *s, const int *use, row_stats *r
 	return 0;
 }
 
-static void csv_num(FILE *f, double v, const char *fmt)
-{
-	if (isfinite(v))
-		fprintf(f, fmt, v);
-}
-
-static void T_str(const condk *c, char *buf, size_t n)
-{
-	if (isnan(c->T))
-		buf[0] = 0;
-	else
-		snprintf(buf, n, "%g", c->T);
-}
-
-static void period_str(const condk *c, char *buf, size_t n)
-{
-	if (!c->period)
-		buf[0] = 0;
-	else
-		snprintf(buf, n, "%u", c->period);
-}
-
-static json_t *period_json(const condk *c) { return c->period ? json_integer(c->period) : json_null(); }
-
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
 /* Distinct values of scene (field 0) or motion (field 1) among the conditions of one variant. */
@@ -413,96 +400,213 @@ static void paired_t(const double *x, const double *y, size_t n, double *t, doub
 	*p = isfinite(*t) ? 2 * gsl_cdf_tdist_Q(fabs(*t), *df) : 0;
 }
 
-/* Every file a tally writes into its folder (fig3.png is gnuplot's, drawn from fig3.gp and fig3.csv). */
-static const char *const TALLY_FILES[] = {"observers.csv", "conditions.csv", "anova.csv", "posthoc.csv", "jod.csv",
-					  "tables.md", "fig3.csv", "conditions.json", "anova.json", "fig3.gp", "fig3.png"};
-#define TALLY_SET 9 /* the first nine are written as one set (tl_atomic_commit_set) */
+/* ------------------------------------------------------------------ the tally as a value */
 
-int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
+/* The distinct variants (method, T, period) of the data, sorted by method, T and period. */
+static int variants_of(const data *d, condk **out, size_t *n)
 {
-	char path[4200];
-	data d;
-	int rc = TL_ERR_ARG;
-	/* Outputs over inputs: no file of the tally may be the study database or its journal (a --db kept in the --out
-	 * folder under one of these names), checked before anything is written. */
-	for (size_t k = 0; k < sizeof TALLY_FILES / sizeof *TALLY_FILES; k++) {
-		snprintf(path, sizeof path, "%s/%s", td->out, TALLY_FILES[k]);
-		if ((rc = sty_check_output(s, path, err, err_size)))
-			return rc;
-	}
-	/* The files appear together or not at all: every one is written to its temporary file, and they are renamed
-	 * into place only when all are complete (a full disk, a failed query: the folder keeps what it had; a folder
-	 * made for this tally is removed again). */
-	bool made_dir = !tl_is_dir(td->out);
-	if ((rc = tl_mkdirs(td->out, err, err_size)))
-		return rc;
-	tl_fs_clean_temps(td->out);
-	tl_atomic outs[TALLY_SET] = {0};
-	snprintf(path, sizeof path, "%s/observers.csv", td->out);
-	if ((rc = tl_atomic_open(&outs[0], path, err, err_size))) {
-		if (made_dir)
-			rmdir(td->out);
-		return rc;
-	}
-	rc = load(s, td, &d, outs[0].f, err, err_size);
-	if (rc) {
-		tl_atomic_abort_set(outs, TALLY_SET);
-		if (made_dir)
-			rmdir(td->out);
-		free(d.o), free(d.c), free(d.flagged);
-		return rc;
-	}
-	/* Distinct variants (method, T, period), sorted by method, T and period. */
 	condk *mts = NULL;
 	size_t nmt = 0;
-	for (size_t i = 0; i < d.nc; i++) {
+	for (size_t i = 0; i < d->nc; i++) {
 		int seen = 0;
 		for (size_t k = 0; k < nmt; k++)
-			seen |= same_variant(&mts[k], &d.c[i]);
+			seen |= same_variant(&mts[k], &d->c[i]);
 		if (!seen) {
 			condk *nm = realloc(mts, (nmt + 1) * sizeof *nm);
 			if (!nm) {
-				rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
-				goto done;
+				free(mts);
+				return TL_ERR_NOMEM;
 			}
 			mts = nm;
-			mts[nmt++] = d.c[i];
+			mts[nmt++] = d->c[i];
 		}
 	}
 	if (nmt)
 		qsort(mts, nmt, sizeof *mts, cmp_variant);
-	FILE *fc = NULL, *fa = NULL, *fp = NULL, *fj = NULL, *fmd = NULL, *ff = NULL, *fcj = NULL, *faj = NULL;
-	FILE **files[TALLY_SET] = {NULL, &fc, &fa, &fp, &fj, &fmd, &ff, &fcj, &faj};
-	for (int k = 1; k < TALLY_SET; k++) {
-		snprintf(path, sizeof path, "%s/%s", td->out, TALLY_FILES[k]);
-		if ((rc = tl_atomic_open(&outs[k], path, err, err_size)))
-			goto close;
-		*files[k] = outs[k].f;
+	*out = mts;
+	*n = nmt;
+	return TL_OK;
+}
+
+/* The bootstrap state shared by every row: one generator drawn in row order, so intervals depend on the seed only. */
+typedef struct boot_state {
+	gsl_rng *rng;
+	uint32_t B;
+	int *use;       /* multiplicity per participant id */
+	int64_t *pids;  /* the participants of the row */
+	double *boot;   /* the B resampled JODs */
+} boot_state;
+
+/* The row of selection `sl` (variant m of the result): Q, p_ref, JND, and JOD with a bootstrap over the participants
+ * of this row. Returns 1 when the selection holds no rating (no row), 0, or TL_ERR_NOMEM. */
+static int row_of(const data *d, const sel *sl, size_t m, boot_state *bs, sty_row *row)
+{
+	row_stats r;
+	if (row_compute(d, sl, NULL, &r))
+		return 1;
+	memset(row, 0, sizeof *row);
+	row->variant = m;
+	row->pooled = !sl->scene;
+	snprintf(row->scene, sizeof row->scene, "%s", sl->scene ? sl->scene : "all");
+	snprintf(row->camera, sizeof row->camera, "%s", sl->camera ? sl->camera : "all");
+	row->n = r.n;
+	row->Q = r.Q, row->Q_lo = r.Q_lo, row->Q_hi = r.Q_hi;
+	row->j = r.j;
+	size_t np = 0;
+	for (size_t o = 0; o < d->n; o++)
+		if (match(d, &d->o[o], sl)) {
+			int seen = 0;
+			for (size_t q = 0; q < np && !seen; q++)
+				seen = bs->pids[q] == d->o[o].participant;
+			if (!seen)
+				bs->pids[np++] = d->o[o].participant;
+		}
+	for (uint32_t b = 0; b < bs->B; b++) {
+		memset(bs->use, 0, ((size_t)d->max_pid + 1) * sizeof *bs->use);
+		for (size_t q = 0; q < np; q++)
+			bs->use[bs->pids[gsl_rng_uniform_int(bs->rng, np)]]++;
+		row_stats rb;
+		bs->boot[b] = row_compute(d, sl, bs->use, &rb) ? NAN : -rb.j.jnd;
 	}
-	rc = TL_ERR_ARG;
-	json_t *jc = json_array(), *ja = json_array();
-	fprintf(fc, "method,T,period,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd\n");
-	fprintf(fa, "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
-	fprintf(fp, "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni\n");
-	fprintf(fj, "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants\n");
-	fprintf(ff, "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
-	char methods[1024] = "";
-	fprintf(fmd, "# Study results\n\n## Conditions\n\n| method | T | period | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
-		     "|---|---|---|---|---|---|---|---|---|\n");
-	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
-	gsl_rng_set(rng, (unsigned long)(td->seed ? td->seed : 1));
-	uint32_t B = td->bootstrap ? td->bootstrap : 1000;
-	int *use = calloc((size_t)d.max_pid + 1, sizeof *use);
-	int64_t *pids = calloc((size_t)d.max_pid + 1, sizeof *pids);
-	double *boot = calloc(B, sizeof *boot);
+	float *bf = malloc(bs->B * sizeof *bf);
+	if (!bf)
+		return TL_ERR_NOMEM;
+	size_t nb = 0;
+	for (uint32_t b = 0; b < bs->B; b++)
+		if (isfinite(bs->boot[b]))
+			bf[nb++] = (float)bs->boot[b];
+	row->jod = -r.j.jnd;
+	row->jod_lo = nb ? mtr_percentile(bf, nb, 2.5) : NAN;
+	row->jod_hi = nb ? mtr_percentile(bf, nb, 97.5) : NAN;
+	row->participants = np;
+	free(bf);
+	return 0;
+}
+
+/* The ANOVA of variant m (Camera (motion) x Scene, cell means per participant, complete participants only) and the
+ * post hoc paired t tests between levels of each factor (means over the other factor), appended to `res`. */
+static int anova_of(const data *d, const condk *mt, size_t m, sty_result *res)
+{
+	char sc_lv[32][64], mo_lv[32][64];
+	size_t nsc = levels(d, mt, 0, sc_lv, 32), nmo = levels(d, mt, 1, mo_lv, 32);
+	size_t cells = nsc * nmo;
+	int rc = TL_OK;
+	double *cell = calloc(((size_t)d->max_pid + 1) * cells, sizeof *cell);
+	int *complete = calloc((size_t)d->max_pid + 1, sizeof *complete);
+	double *pm = malloc(((size_t)d->max_pid + 1) * sizeof *pm);
+	int *has = malloc(((size_t)d->max_pid + 1) * sizeof *has);
+	double *y = malloc(((size_t)d->max_pid + 1) * cells * sizeof *y);
+	if (!cell || !complete || !pm || !has || !y) {
+		rc = TL_ERR_NOMEM;
+		goto done;
+	}
+	for (int64_t p = 0; p <= d->max_pid; p++)
+		complete[p] = 1;
+	for (size_t a = 0; a < nmo; a++)
+		for (size_t b = 0; b < nsc; b++) {
+			sel sl = {mt, sc_lv[b], NULL, mo_lv[a]};
+			participant_means(d, &sl, pm, has, NULL);
+			for (int64_t p = 0; p <= d->max_pid; p++) {
+				complete[p] &= has[p];
+				cell[(size_t)p * cells + a * nsc + b] = pm[p];
+			}
+		}
+	size_t n = 0;
+	for (int64_t p = 0; p <= d->max_pid; p++)
+		if (complete[p]) {
+			memcpy(y + n * cells, cell + (size_t)p * cells, cells * sizeof *y);
+			n++;
+		}
+	sty_anova_effect eff[3];
+	static const char *const enames[3] = {"camera", "scene", "camera:scene"};
+	if (n < 2 || sty_rm_anova2(y, n, nmo, nsc, eff))
+		goto done;
+	for (int e = 0; e < 3; e++) {
+		if (!(eff[e].df1 > 0))
+			continue; /* a factor with one level has no effect to test */
+		sty_anova_row *na = realloc(res->anova, (res->anova_count + 1) * sizeof *na);
+		if (!na) {
+			rc = TL_ERR_NOMEM;
+			goto done;
+		}
+		res->anova = na;
+		na[res->anova_count++] = (sty_anova_row){.variant = m, .effect = enames[e], .e = eff[e], .participants = n};
+	}
+	for (int f = 0; f < 2 && !rc; f++) {
+		size_t nl = f == 0 ? nmo : nsc;
+		double ncmp = (double)nl * (double)(nl - 1) / 2;
+		double *xl = calloc(n * nl, sizeof *xl), *u = malloc(n * sizeof *u), *v = malloc(n * sizeof *v);
+		if (!xl || !u || !v)
+			rc = TL_ERR_NOMEM;
+		for (size_t i = 0; !rc && i < n; i++)
+			for (size_t a = 0; a < nmo; a++)
+				for (size_t b = 0; b < nsc; b++)
+					xl[i * nl + (f == 0 ? a : b)] += y[i * cells + a * nsc + b] / (double)(f == 0 ? nsc : nmo);
+		for (size_t l1 = 0; !rc && l1 < nl; l1++)
+			for (size_t l2 = l1 + 1; !rc && l2 < nl; l2++) {
+				for (size_t i = 0; i < n; i++)
+					u[i] = xl[i * nl + l1], v[i] = xl[i * nl + l2];
+				sty_posthoc_row *np = realloc(res->posthoc, (res->posthoc_count + 1) * sizeof *np);
+				if (!np) {
+					rc = TL_ERR_NOMEM;
+					break;
+				}
+				res->posthoc = np;
+				sty_posthoc_row *ph = &np[res->posthoc_count++];
+				memset(ph, 0, sizeof *ph);
+				ph->variant = m;
+				ph->factor = f == 0 ? "camera" : "scene";
+				snprintf(ph->level_1, sizeof ph->level_1, "%s", f == 0 ? mo_lv[l1] : sc_lv[l1]);
+				snprintf(ph->level_2, sizeof ph->level_2, "%s", f == 0 ? mo_lv[l2] : sc_lv[l2]);
+				paired_t(u, v, n, &ph->t, &ph->df, &ph->p);
+				ph->p_bonferroni = fmin(1.0, ph->p * ncmp);
+			}
+		free(u);
+		free(v);
+		free(xl);
+	}
+done:
+	free(cell);
+	free(complete);
+	free(pm);
+	free(has);
+	free(y);
+	return rc;
+}
+
+int sty_tally_compute(sty *s, const sty_tally_desc *td, sty_result **out, char *err, size_t err_size)
+{
+	*out = NULL;
+	sty_result *res = calloc(1, sizeof *res);
+	if (!res)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	data d;
+	condk *mts = NULL;
+	size_t nmt = 0;
+	boot_state bs = {0};
+	int rc = load(s, td, &d, res, err, err_size);
+	if (rc)
+		goto done;
+	res->left_out = d.nflagged;
+	if ((rc = variants_of(&d, &mts, &nmt)))
+		goto nomem;
+	/* at most one row per condition and a pooled row per variant */
+	res->variants = calloc(nmt ? nmt : 1, sizeof *res->variants);
+	res->rows = calloc(d.nc + nmt, sizeof *res->rows);
+	bs.rng = gsl_rng_alloc(gsl_rng_mt19937);
+	bs.B = td->bootstrap ? td->bootstrap : 1000;
+	bs.use = calloc((size_t)d.max_pid + 1, sizeof *bs.use);
+	bs.pids = calloc((size_t)d.max_pid + 1, sizeof *bs.pids);
+	bs.boot = calloc(bs.B, sizeof *bs.boot);
+	if (!res->variants || !res->rows || !bs.rng || !bs.use || !bs.pids || !bs.boot)
+		goto nomem;
+	gsl_rng_set(bs.rng, (unsigned long)(td->seed ? td->seed : 1));
 	for (size_t m = 0; m < nmt; m++) {
-		/* cm: the method as a CSV cell (sty_csv_cell: no spreadsheet formulas); TP: the T and period cells. */
-		char Ts[32], Ps[16], TP[64], cm[80];
-		T_str(&mts[m], Ts, sizeof Ts);
-		period_str(&mts[m], Ps, sizeof Ps);
-		snprintf(TP, sizeof TP, "%s,%s", Ts, Ps);
-		sty_csv_cell(mts[m].method, cm, sizeof cm);
-		/* Rows: every (scene, camera) of this method/T, then pooled. */
+		sty_variant *v = &res->variants[res->variant_count++];
+		snprintf(v->method, sizeof v->method, "%s", mts[m].method);
+		v->T = mts[m].T;
+		v->period = mts[m].period;
+		/* Rows: every (scene, camera) of this variant, then pooled. */
 		for (size_t i = 0; i <= d.nc; i++) {
 			sel sl = {&mts[m], NULL, NULL, NULL};
 			if (i < d.nc) {
@@ -511,193 +615,43 @@ int sty_tally(sty *s, const sty_tally_desc *td, char *err, size_t err_size)
 				sl.scene = d.c[i].scene;
 				sl.camera = d.c[i].camera;
 			}
-			row_stats r;
-			if (row_compute(&d, &sl, NULL, &r))
-				continue;
-			const char *sc = sl.scene ? sl.scene : "all", *ca = sl.camera ? sl.camera : "all";
-			char csc[160], cca[160];
-			sty_csv_cell(sc, csc, sizeof csc);
-			sty_csv_cell(ca, cca, sizeof cca);
-			fprintf(fc, "%s,%s,%s,%s,%zu,", cm, TP, csc, cca, r.n);
-			csv_num(fc, r.Q, "%.6f"), fputc(',', fc);
-			csv_num(fc, r.Q_lo, "%.6f"), fputc(',', fc);
-			csv_num(fc, r.Q_hi, "%.6f"), fputc(',', fc);
-			fprintf(fc, "%.6f,%.6f,%.6f,%.6f\n", r.j.p, r.j.p_lo, r.j.p_hi, r.j.jnd);
-			if (i == d.nc && !isnan(mts[m].T)) { /* pooled row: one point of the Fig. 3 plot */
-				fprintf(ff, "%s,%s,%.6f,", cm, TP, r.Q);
-				csv_num(ff, r.Q_lo, "%.6f"), fputc(',', ff);
-				csv_num(ff, r.Q_hi, "%.6f");
-				fprintf(ff, ",%.4f,%.4f,%.4f\n", 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi);
-				if (!strstr(methods, mts[m].method) && strlen(methods) + strlen(mts[m].method) + 2 < sizeof methods)
-					strcat(strcat(methods, methods[0] ? " " : ""), mts[m].method);
-			}
-			fprintf(fmd, "| %s | %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", mts[m].method,
-				Ts, Ps, sc, ca, r.n, r.Q, r.Q_lo, r.Q_hi, 100 * r.j.p, 100 * r.j.p_lo, 100 * r.j.p_hi, r.j.jnd);
-			json_array_append_new(jc, json_pack("{s:s, s:o, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}",
-							    "method", mts[m].method, "T",
-							    isnan(mts[m].T) ? json_null() : json_real(mts[m].T), "period",
-							    period_json(&mts[m]), "scene", sc, "camera", ca, "n", (json_int_t)r.n, "Q", r.Q, "Q_lo",
-							    isfinite(r.Q_lo) ? json_real(r.Q_lo) : json_null(), "Q_hi",
-							    isfinite(r.Q_hi) ? json_real(r.Q_hi) : json_null(), "p_ref", r.j.p,
-							    "p_ref_lo", r.j.p_lo, "p_ref_hi", r.j.p_hi, "jnd", r.j.jnd));
-			/* JOD with a bootstrap over the participants of this row. */
-			size_t np = 0;
-			for (size_t o = 0; o < d.n; o++)
-				if (match(&d, &d.o[o], &sl)) {
-					int seen = 0;
-					for (size_t q = 0; q < np && !seen; q++)
-						seen = pids[q] == d.o[o].participant;
-					if (!seen)
-						pids[np++] = d.o[o].participant;
-				}
-			for (uint32_t b = 0; b < B; b++) {
-				memset(use, 0, ((size_t)d.max_pid + 1) * sizeof *use);
-				for (size_t q = 0; q < np; q++)
-					use[pids[gsl_rng_uniform_int(rng, np)]]++;
-				row_stats rb;
-				boot[b] = row_compute(&d, &sl, use, &rb) ? NAN : -rb.j.jnd;
-			}
-			float *bf = malloc(B * sizeof *bf);
-			size_t nb = 0;
-			for (uint32_t b = 0; b < B; b++)
-				if (isfinite(boot[b]))
-					bf[nb++] = (float)boot[b];
-			double lo = nb ? mtr_percentile(bf, nb, 2.5) : NAN, hi = nb ? mtr_percentile(bf, nb, 97.5) : NAN;
-			free(bf);
-			fprintf(fj, "%s,%s,%s,%s,%.6f,", cm, TP, csc, cca, -r.j.jnd);
-			csv_num(fj, lo, "%.6f"), fputc(',', fj);
-			csv_num(fj, hi, "%.6f");
-			fprintf(fj, ",%zu\n", np);
-			if (i == d.nc)
-				break;
+			int r = row_of(&d, &sl, m, &bs, &res->rows[res->row_count]);
+			if (r < 0)
+				goto nomem;
+			res->row_count += r == 0;
 		}
-		/* ANOVA: Camera (motion) x Scene, cell means per participant, complete participants only. */
-		char sc_lv[32][64], mo_lv[32][64];
-		size_t nsc = levels(&d, &mts[m], 0, sc_lv, 32), nmo = levels(&d, &mts[m], 1, mo_lv, 32);
-		size_t cells = nsc * nmo;
-		double *cell = calloc(((size_t)d.max_pid + 1) * cells, sizeof *cell);
-		int *complete = calloc((size_t)d.max_pid + 1, sizeof *complete);
-		double *pm = malloc(((size_t)d.max_pid + 1) * sizeof *pm);
-		int *has = malloc(((size_t)d.max_pid + 1) * sizeof *has);
-		for (int64_t p = 0; p <= d.max_pid; p++)
-			complete[p] = 1;
-		for (size_t a = 0; a < nmo; a++)
-			for (size_t b = 0; b < nsc; b++) {
-				sel sl = {&mts[m], sc_lv[b], NULL, mo_lv[a]};
-				participant_means(&d, &sl, pm, has, NULL);
-				for (int64_t p = 0; p <= d.max_pid; p++) {
-					complete[p] &= has[p];
-					cell[(size_t)p * cells + a * nsc + b] = pm[p];
-				}
-			}
-		size_t n = 0;
-		double *y = malloc(((size_t)d.max_pid + 1) * cells * sizeof *y);
-		for (int64_t p = 0; p <= d.max_pid; p++)
-			if (complete[p]) {
-				memcpy(y + n * cells, cell + (size_t)p * cells, cells * sizeof *y);
-				n++;
-			}
-		sty_anova_effect eff[3];
-		const char *enames[3] = {"camera", "scene", "camera:scene"};
-		if (n >= 2 && !sty_rm_anova2(y, n, nmo, nsc, eff)) {
-			for (int e = 0; e < 3; e++) {
-				if (!(eff[e].df1 > 0))
-					continue; /* a factor with one level has no effect to test */
-				fprintf(fa, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", cm, TP, enames[e], eff[e].df1, eff[e].df2,
-					eff[e].F, eff[e].p, eff[e].p_gg, eff[e].epsilon_gg);
-				json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}",
-								    "method", mts[m].method, "T",
-								    isnan(mts[m].T) ? json_null() : json_real(mts[m].T), "period",
-								    period_json(&mts[m]), "effect",
-								    enames[e], "df1", eff[e].df1, "df2", eff[e].df2, "F", eff[e].F, "p",
-								    eff[e].p, "p_gg", eff[e].p_gg, "epsilon_gg", eff[e].epsilon_gg,
-								    "participants", (json_int_t)n));
-			}
-			/* Post hoc: paired t tests between levels of each factor (means over the other factor). */
-			for (int f = 0; f < 2; f++) {
-				size_t nl = f == 0 ? nmo : nsc;
-				double ncmp = (double)nl * (double)(nl - 1) / 2;
-				double *xl = calloc(n * nl, sizeof *xl);
-				for (size_t i = 0; i < n; i++)
-					for (size_t a = 0; a < nmo; a++)
-						for (size_t b = 0; b < nsc; b++)
-							xl[i * nl + (f == 0 ? a : b)] += y[i * cells + a * nsc + b] / (double)(f == 0 ? nsc : nmo);
-				double *u = malloc(n * sizeof *u), *v = malloc(n * sizeof *v);
-				for (size_t l1 = 0; l1 < nl; l1++)
-					for (size_t l2 = l1 + 1; l2 < nl; l2++) {
-						for (size_t i = 0; i < n; i++)
-							u[i] = xl[i * nl + l1], v[i] = xl[i * nl + l2];
-						double t, df, p;
-						paired_t(u, v, n, &t, &df, &p);
-						char l1c[160], l2c[160];
-						fprintf(fp, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", cm, TP, f == 0 ? "camera" : "scene",
-							sty_csv_cell(f == 0 ? mo_lv[l1] : sc_lv[l1], l1c, sizeof l1c),
-							sty_csv_cell(f == 0 ? mo_lv[l2] : sc_lv[l2], l2c, sizeof l2c), t, df, p,
-							fmin(1.0, p * ncmp));
-					}
-				free(u);
-				free(v);
-				free(xl);
-			}
-		}
-		free(cell);
-		free(complete);
-		free(pm);
-		free(has);
-		free(y);
+		if (anova_of(&d, &mts[m], m, res))
+			goto nomem;
 	}
-	gsl_rng_free(rng);
-	free(use);
-	free(pids);
-	free(boot);
-	fprintf(fmd, "\nQ: mean reference-relative rating (+2 = reference much better); p_ref: share of answers preferring "
-		     "the reference (ties count half); JND = Phi^-1(p_ref)/Phi^-1(0.75).\n");
 	rc = TL_OK;
-	if (tl_json_dump(fcj, jc) || tl_json_dump(faj, ja))
-		rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write the JSON tables", td->out);
-	json_decref(jc);
-	json_decref(ja);
-close:
-	if (rc == TL_OK)
-		rc = tl_atomic_commit_set(outs, TALLY_SET, err, err_size);
-	/* A plot of an earlier tally must not stand beside these tables when this one is not drawn. */
-	snprintf(path, sizeof path, "%s/fig3.png", td->out);
-	if (rc == TL_OK)
-		unlink(path);
-	if (rc == TL_OK && !td->no_plot) {
-		/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). */
-		snprintf(path, sizeof path, "%s/fig3.gp", td->out);
-		mtr_plot plot;
-		char note[512];
-		FILE *g = mtr_plot_begin(&plot, path, note, sizeof note);
-		if (g) {
-			fprintf(g,
-				"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10' noenhanced\n"
-				"set output '%s/fig3.png'\nset grid\nset logscale x 2\nset xlabel 'threshold T'\n"
-				"set offsets graph 0.06, graph 0.06, 0, 0\nset key outside right top\n"
-				"set title 'Quality Q (+2 = reference much better) and preference for the reference, pooled over scenes and cameras'\n"
-				"set ylabel 'Q [95%% CI]'\nset y2label 'p_ref (%%)'\n"
-				"set yrange [-2:2]; set y2range [0:100]; set ytics nomirror; set y2tics\n"
-				"set arrow from graph 0, second 75 to graph 1, second 75 nohead dt 2\n"
-				"set label '1 JND (p_ref = 75%%)' at graph 0.02, second 77\n"
-				"methods = '%s'\n"
-				"plot for [m in methods] '%s/fig3.csv' using (strcol(1) eq m ? $2 : 1/0):4:5:6 every ::1 with yerrorlines "
-				"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):7 every ::1 axes x1y2 "
-				"with linespoints dt 3 title 'p_ref '.m\n",
-				td->out, methods, td->out);
-			if (mtr_plot_end(&plot, note, sizeof note))
-				fprintf(stderr, "taslab study: note: %s; fig3.png not drawn\n", note);
-		}
-	}
+	goto done;
+nomem:
+	rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 done:
-	if (rc) {
-		tl_atomic_abort_set(outs, TALLY_SET);
-		if (made_dir)
-			rmdir(td->out); /* only when empty: a folder made for this tally holds nothing now */
-	}
+	gsl_rng_free(bs.rng);
+	free(bs.use);
+	free(bs.pids);
+	free(bs.boot);
 	free(mts);
 	free(d.o);
 	free(d.c);
 	free(d.flagged);
+	if (rc)
+		sty_result_free(&res);
+	*out = res;
 	return rc;
+}
+
+void sty_result_free(sty_result **pr)
+{
+	if (!pr || !*pr)
+		return;
+	sty_result *r = *pr;
+	free(r->variants);
+	free(r->rows);
+	free(r->anova);
+	free(r->posthoc);
+	free(r->observers);
+	free(r);
+	*pr = NULL;
 }

@@ -160,7 +160,8 @@ int sty_import_long(sty *s, const char *path, size_t *rows, char *err, size_t er
 
 /* Statistics into DIR: conditions.csv, anova.csv (DESIGN section 7), posthoc.csv, observers.csv, jod.csv,
  * tables as JSON and Markdown, and a Fig. 3 style plot (gnuplot). Every CSV with a method column has T and
- * period columns right after it (DESIGN section 4); statistics are per method x T x period. */
+ * period columns right after it (DESIGN section 4); statistics are per method x T x period. The statistics as a
+ * value, without files, and the files from such a value: study_result.h. */
 typedef struct sty_tally_desc {
 	const char *out;
 	bool keep_flagged;        /* keep observers flagged by the catch-trial screening */

@@ -1,0 +1,93 @@
+/* study_report_internal.h (private) — what the sections of the sweep report (study_report.h) share. The report is
+ * split by section (issue 30.3): study_report.c gathers the groups and writes the files in order; the plots and
+ * images of a group (study_report_plots.c), the study joined per condition (study_report_study.c) and the page
+ * (study_report_page.c) each have their own file. */
+#ifndef TASLAB_STUDY_REPORT_INTERNAL_H
+#define TASLAB_STUDY_REPORT_INTERNAL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "taslab/metrics_sweep.h"
+#include "taslab/study_report.h"
+#include "taslab/sweep.h"
+
+#define STY_RPT_HEAT_MAX 32.0 /* heatmap colour scale: 0..32 code values (T = 8..16 differences stay visible) */
+
+/* A plot against T of one summary column. */
+typedef struct sty_rpt_plot {
+	const char *column, *name, *title, *ylabel;
+	bool logy;
+} sty_rpt_plot;
+
+#define STY_RPT_PLOT_COUNT 8
+extern const sty_rpt_plot sty_rpt_plots[STY_RPT_PLOT_COUNT];
+
+/* A run of a group with its variant. */
+typedef struct sty_rpt_row {
+	const mtr_sweep_row *r;
+	const sweep_variant *v;
+} sty_rpt_row;
+
+/* One scene x camera path: its runs sorted by method, T and period, the ref run, what was drawn. */
+typedef struct sty_rpt_group {
+	size_t scene, cam;
+	sty_rpt_row rows[SWEEP_MAX_VARIANTS];
+	size_t n;
+	const mtr_sweep_row *ref;
+	bool drawn[STY_RPT_PLOT_COUNT];
+	bool plots_ok;
+	bool coherence;
+} sty_rpt_group;
+
+/* One study condition as the tally states it in conditions.csv (6 decimals), with the JND interval. */
+typedef struct sty_rpt_cond {
+	char method[32], scene[64], camera[64];
+	double T;          /* NAN: none */
+	unsigned period;   /* 0: none */
+	double n, Q, Q_lo, Q_hi, p, p_lo, p_hi, jnd, jnd_lo, jnd_hi;
+} sty_rpt_cond;
+
+/* A study's conditions, from its tally. */
+typedef struct sty_rpt_study {
+	sty_rpt_cond *c;
+	size_t n;
+} sty_rpt_study;
+
+/* ---- study_report.c */
+/* File-name stem of a scene/camera group: SCENE--CAMERA. */
+void sty_rpt_stem(const sweep_spec *s, size_t scene, size_t cam, char *out, size_t n);
+
+/* ---- study_report_plots.c */
+/* Orders a group's runs by method, then T (none first), then period (qsort). */
+int sty_rpt_cmp_row(const void *a, const void *b);
+/* Writes report/data/<stem>.csv and its gnuplot script and draws the group's plots; `drawn[k]` says whether plot k
+ * has anything to draw. TL_ERR_UNSUPPORTED without gnuplot. */
+int sty_rpt_group_plots(const char *rdir, const char *stem, sty_rpt_row *g, size_t ng, bool drawn[], char *err,
+			size_t err_size);
+/* Fig. 4 from an analysis folder's coherence.csv. */
+int sty_rpt_coherence_plot(const char *csv, const char *svg, const char *gp, char *err, size_t err_size);
+/* Thumbnails of the ref (ref_png, may be NULL) and the run at frame f and their max-RGB difference heatmap
+ * (heat_png, may be NULL). */
+int sty_rpt_run_images(const char *run_dir, const char *ref_dir, uint32_t f, const char *ref_png, const char *run_png,
+		       const char *heat_png, char *err, size_t err_size);
+
+/* ---- study_report_study.c */
+/* Tallies the study `db` into `out` (the tally's files) and keeps its conditions. */
+int sty_rpt_study_load(const char *db, const char *out, sty_rpt_study *t, char *err, size_t err_size);
+void sty_rpt_study_free(sty_rpt_study *t);
+/* The study condition of a run: same method, T, period, scene and camera; NULL when none (or not one). */
+const sty_rpt_cond *sty_rpt_study_find(const sty_rpt_study *t, const sweep_spec *s, const mtr_sweep_row *r);
+/* report/data/study.csv (the study joined with the runs) and the JND plot against d->jnd_metric; *jnd_plot says
+ * whether the plot was drawn. */
+int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, const sty_rpt_study *t, bool *jnd_plot, char *err,
+			size_t err_size);
+
+/* ---- study_report_page.c */
+/* Writes report/index.html (the page) into `path`. */
+int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt_group *gi, size_t ng,
+		       const sty_rpt_study *study, bool gnuplot_note, bool jnd_plot, char *err, size_t err_size);
+
+#endif

@@ -1,0 +1,313 @@
+/* study_tally_write.c — the tally's files from its result (study_result.h sty_tally_write; study.h sty_tally): one
+ * writer per file — observers.csv, conditions.csv, anova.csv, posthoc.csv, jod.csv, tables.md, fig3.csv,
+ * conditions.json, anova.json — and the Fig. 3 plot (gnuplot). Every CSV has T and period right after method (DESIGN
+ * section 4; empty where the variant has none), and text cells are written with sty_csv_cell (no spreadsheet
+ * formulas). The files appear together or not at all (tl_atomic_commit_set). */
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "study_internal.h"
+#include "taslab/metrics.h"
+#include "taslab/study_result.h"
+#include "taslab/tl_fs.h"
+#include "taslab/tl_json.h"
+
+/* Every file a tally writes into its folder (fig3.png is gnuplot's, drawn from fig3.gp and fig3.csv). */
+static const char *const TALLY_FILES[] = {"observers.csv", "conditions.csv", "anova.csv", "posthoc.csv", "jod.csv",
+					  "tables.md", "fig3.csv", "conditions.json", "anova.json", "fig3.gp", "fig3.png"};
+#define TALLY_SET 9 /* the first nine are written as one set (tl_atomic_commit_set) */
+enum { F_OBSERVERS, F_CONDITIONS, F_ANOVA, F_POSTHOC, F_JOD, F_TABLES, F_FIG3, F_CONDITIONS_JSON, F_ANOVA_JSON };
+
+static void csv_num(FILE *f, double v, const char *fmt)
+{
+	if (isfinite(v))
+		fprintf(f, fmt, v);
+}
+
+/* A variant's cells: cm, the method as a CSV cell; Ts and Ps, T and period ("" for none); TP, "T,period". */
+typedef struct variant_cells {
+	char cm[80], Ts[32], Ps[16], TP[64];
+} variant_cells;
+
+static void cells_of(const sty_variant *v, variant_cells *c)
+{
+	sty_csv_cell(v->method, c->cm, sizeof c->cm);
+	if (isnan(v->T))
+		c->Ts[0] = 0;
+	else
+		snprintf(c->Ts, sizeof c->Ts, "%g", v->T);
+	if (!v->period)
+		c->Ps[0] = 0;
+	else
+		snprintf(c->Ps, sizeof c->Ps, "%u", v->period);
+	snprintf(c->TP, sizeof c->TP, "%s,%s", c->Ts, c->Ps);
+}
+
+static json_t *T_json(const sty_variant *v) { return isnan(v->T) ? json_null() : json_real(v->T); }
+static json_t *period_json(const sty_variant *v) { return v->period ? json_integer(v->period) : json_null(); }
+
+/* ------------------------------------------------------------------ one writer per file */
+
+static void write_observers(FILE *f, const sty_result *r)
+{
+	fprintf(f, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged\n");
+	for (size_t i = 0; i < r->observer_count; i++) {
+		const sty_observer *o = &r->observers[i];
+		char label[160];
+		fprintf(f, "%s,%d,", sty_csv_cell(o->label, label, sizeof label), o->catch_n);
+		if (o->catch_n)
+			fprintf(f, "%.4f", o->catch_mean_abs);
+		fprintf(f, ",%d,%d\n", o->catch_much_better, o->flagged);
+	}
+}
+
+static void write_conditions(FILE *f, const sty_result *r)
+{
+	fprintf(f, "method,T,period,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd\n");
+	for (size_t i = 0; i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		variant_cells vc;
+		char csc[160], cca[160];
+		cells_of(&r->variants[w->variant], &vc);
+		fprintf(f, "%s,%s,%s,%s,%zu,", vc.cm, vc.TP, sty_csv_cell(w->scene, csc, sizeof csc),
+			sty_csv_cell(w->camera, cca, sizeof cca), w->n);
+		csv_num(f, w->Q, "%.6f"), fputc(',', f);
+		csv_num(f, w->Q_lo, "%.6f"), fputc(',', f);
+		csv_num(f, w->Q_hi, "%.6f"), fputc(',', f);
+		fprintf(f, "%.6f,%.6f,%.6f,%.6f\n", w->j.p, w->j.p_lo, w->j.p_hi, w->j.jnd);
+	}
+}
+
+static void write_jod(FILE *f, const sty_result *r)
+{
+	fprintf(f, "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants\n");
+	for (size_t i = 0; i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		variant_cells vc;
+		char csc[160], cca[160];
+		cells_of(&r->variants[w->variant], &vc);
+		fprintf(f, "%s,%s,%s,%s,%.6f,", vc.cm, vc.TP, sty_csv_cell(w->scene, csc, sizeof csc),
+			sty_csv_cell(w->camera, cca, sizeof cca), w->jod);
+		csv_num(f, w->jod_lo, "%.6f"), fputc(',', f);
+		csv_num(f, w->jod_hi, "%.6f");
+		fprintf(f, ",%zu\n", w->participants);
+	}
+}
+
+/* Fig. 3's points: the pooled row of every variant with a threshold. */
+static void write_fig3(FILE *f, const sty_result *r)
+{
+	fprintf(f, "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
+	for (size_t i = 0; i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		if (!w->pooled || isnan(r->variants[w->variant].T))
+			continue;
+		variant_cells vc;
+		cells_of(&r->variants[w->variant], &vc);
+		fprintf(f, "%s,%s,%.6f,", vc.cm, vc.TP, w->Q);
+		csv_num(f, w->Q_lo, "%.6f"), fputc(',', f);
+		csv_num(f, w->Q_hi, "%.6f");
+		fprintf(f, ",%.4f,%.4f,%.4f\n", 100 * w->j.p, 100 * w->j.p_lo, 100 * w->j.p_hi);
+	}
+}
+
+static void write_tables(FILE *f, const sty_result *r)
+{
+	fprintf(f, "# Study results\n\n## Conditions\n\n| method | T | period | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
+		   "|---|---|---|---|---|---|---|---|---|\n");
+	for (size_t i = 0; i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		const sty_variant *v = &r->variants[w->variant];
+		variant_cells vc;
+		cells_of(v, &vc);
+		fprintf(f, "| %s | %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", v->method, vc.Ts,
+			vc.Ps, w->scene, w->camera, w->n, w->Q, w->Q_lo, w->Q_hi, 100 * w->j.p, 100 * w->j.p_lo, 100 * w->j.p_hi,
+			w->j.jnd);
+	}
+	fprintf(f, "\nQ: mean reference-relative rating (+2 = reference much better); p_ref: share of answers preferring "
+		   "the reference (ties count half); JND = Phi^-1(p_ref)/Phi^-1(0.75).\n");
+}
+
+static void write_anova(FILE *f, const sty_result *r)
+{
+	fprintf(f, "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
+	for (size_t i = 0; i < r->anova_count; i++) {
+		const sty_anova_row *a = &r->anova[i];
+		variant_cells vc;
+		cells_of(&r->variants[a->variant], &vc);
+		fprintf(f, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", vc.cm, vc.TP, a->effect, a->e.df1, a->e.df2, a->e.F, a->e.p,
+			a->e.p_gg, a->e.epsilon_gg);
+	}
+}
+
+static void write_posthoc(FILE *f, const sty_result *r)
+{
+	fprintf(f, "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni\n");
+	for (size_t i = 0; i < r->posthoc_count; i++) {
+		const sty_posthoc_row *h = &r->posthoc[i];
+		variant_cells vc;
+		char l1c[160], l2c[160];
+		cells_of(&r->variants[h->variant], &vc);
+		fprintf(f, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", vc.cm, vc.TP, h->factor,
+			sty_csv_cell(h->level_1, l1c, sizeof l1c), sty_csv_cell(h->level_2, l2c, sizeof l2c), h->t, h->df, h->p,
+			h->p_bonferroni);
+	}
+}
+
+static json_t *conditions_json(const sty_result *r)
+{
+	json_t *jc = json_array();
+	for (size_t i = 0; jc && i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		const sty_variant *v = &r->variants[w->variant];
+		json_array_append_new(jc, json_pack("{s:s, s:o, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}",
+						    "method", v->method, "T", T_json(v), "period", period_json(v), "scene",
+						    w->scene, "camera", w->camera, "n", (json_int_t)w->n, "Q", w->Q, "Q_lo",
+						    isfinite(w->Q_lo) ? json_real(w->Q_lo) : json_null(), "Q_hi",
+						    isfinite(w->Q_hi) ? json_real(w->Q_hi) : json_null(), "p_ref", w->j.p,
+						    "p_ref_lo", w->j.p_lo, "p_ref_hi", w->j.p_hi, "jnd", w->j.jnd));
+	}
+	return jc;
+}
+
+static json_t *anova_json(const sty_result *r)
+{
+	json_t *ja = json_array();
+	for (size_t i = 0; ja && i < r->anova_count; i++) {
+		const sty_anova_row *a = &r->anova[i];
+		const sty_variant *v = &r->variants[a->variant];
+		json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}", "method",
+						    v->method, "T", T_json(v), "period", period_json(v), "effect", a->effect,
+						    "df1", a->e.df1, "df2", a->e.df2, "F", a->e.F, "p", a->e.p, "p_gg", a->e.p_gg,
+						    "epsilon_gg", a->e.epsilon_gg, "participants", (json_int_t)a->participants));
+	}
+	return ja;
+}
+
+/* Fig. 3 style plot: pooled Q with its CI and p_ref against T per method, the 1-JND line (p = 75%). A plot of an
+ * earlier tally must not stand beside these tables when this one is not drawn, so fig3.png goes first. */
+static void write_plot(const sty_result *r, const sty_tally_desc *d)
+{
+	char path[4200], methods[1024] = "";
+	snprintf(path, sizeof path, "%s/fig3.png", d->out);
+	unlink(path);
+	if (d->no_plot)
+		return;
+	for (size_t i = 0; i < r->row_count; i++) { /* the methods with a point, in variant order */
+		const sty_variant *v = &r->variants[r->rows[i].variant];
+		if (r->rows[i].pooled && !isnan(v->T) && !strstr(methods, v->method) &&
+		    strlen(methods) + strlen(v->method) + 2 < sizeof methods)
+			strcat(strcat(methods, methods[0] ? " " : ""), v->method);
+	}
+	snprintf(path, sizeof path, "%s/fig3.gp", d->out);
+	mtr_plot plot;
+	char note[512];
+	FILE *g = mtr_plot_begin(&plot, path, note, sizeof note);
+	if (!g)
+		return;
+	fprintf(g,
+		"set datafile separator ','\nset terminal pngcairo size 960,540 font 'sans,10' noenhanced\n"
+		"set output '%s/fig3.png'\nset grid\nset logscale x 2\nset xlabel 'threshold T'\n"
+		"set offsets graph 0.06, graph 0.06, 0, 0\nset key outside right top\n"
+		"set title 'Quality Q (+2 = reference much better) and preference for the reference, pooled over scenes and cameras'\n"
+		"set ylabel 'Q [95%% CI]'\nset y2label 'p_ref (%%)'\n"
+		"set yrange [-2:2]; set y2range [0:100]; set ytics nomirror; set y2tics\n"
+		"set arrow from graph 0, second 75 to graph 1, second 75 nohead dt 2\n"
+		"set label '1 JND (p_ref = 75%%)' at graph 0.02, second 77\n"
+		"methods = '%s'\n"
+		"plot for [m in methods] '%s/fig3.csv' using (strcol(1) eq m ? $2 : 1/0):4:5:6 every ::1 with yerrorlines "
+		"title 'Q '.m, for [m in methods] '' using (strcol(1) eq m ? $2 : 1/0):7 every ::1 axes x1y2 "
+		"with linespoints dt 3 title 'p_ref '.m\n",
+		d->out, methods, d->out);
+	if (mtr_plot_end(&plot, note, sizeof note))
+		fprintf(stderr, "taslab study: note: %s; fig3.png not drawn\n", note);
+}
+
+/* ------------------------------------------------------------------ the set of files */
+
+/* Outputs over inputs: no file of the tally may be the study database or its journal (a --db kept in the --out
+ * folder under one of these names), checked before anything is written. Then the folder is made (*made_dir: by
+ * this tally, so removed again when it fails). */
+static int prepare(sty *s, const sty_tally_desc *d, bool *made_dir, char *err, size_t err_size)
+{
+	char path[4200];
+	int rc;
+	for (size_t k = 0; k < sizeof TALLY_FILES / sizeof *TALLY_FILES; k++) {
+		snprintf(path, sizeof path, "%s/%s", d->out, TALLY_FILES[k]);
+		if ((rc = sty_check_output(s, path, err, err_size)))
+			return rc;
+	}
+	*made_dir = !tl_is_dir(d->out);
+	if ((rc = tl_mkdirs(d->out, err, err_size)))
+		return rc;
+	tl_fs_clean_temps(d->out);
+	return TL_OK;
+}
+
+/* The files appear together or not at all: every one is written to its temporary file, and they are renamed into
+ * place only when all are complete (a full disk: the folder keeps what it had; a folder made for this tally is
+ * removed again). */
+static int write_files(const sty_result *r, const sty_tally_desc *d, bool made_dir, char *err, size_t err_size)
+{
+	char path[4200];
+	tl_atomic outs[TALLY_SET] = {0};
+	int rc = TL_OK;
+	for (int k = 0; k < TALLY_SET && !rc; k++) {
+		snprintf(path, sizeof path, "%s/%s", d->out, TALLY_FILES[k]);
+		rc = tl_atomic_open(&outs[k], path, err, err_size);
+	}
+	if (!rc) {
+		write_observers(outs[F_OBSERVERS].f, r);
+		write_conditions(outs[F_CONDITIONS].f, r);
+		write_anova(outs[F_ANOVA].f, r);
+		write_posthoc(outs[F_POSTHOC].f, r);
+		write_jod(outs[F_JOD].f, r);
+		write_tables(outs[F_TABLES].f, r);
+		write_fig3(outs[F_FIG3].f, r);
+		json_t *jc = conditions_json(r), *ja = anova_json(r);
+		if (tl_json_dump(outs[F_CONDITIONS_JSON].f, jc) || tl_json_dump(outs[F_ANOVA_JSON].f, ja))
+			rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write the JSON tables", d->out);
+		json_decref(jc);
+		json_decref(ja);
+	}
+	if (!rc)
+		rc = tl_atomic_commit_set(outs, TALLY_SET, err, err_size);
+	if (rc) {
+		tl_atomic_abort_set(outs, TALLY_SET);
+		if (made_dir)
+			rmdir(d->out); /* only when empty: a folder made for this tally holds nothing now */
+		return rc;
+	}
+	write_plot(r, d);
+	return TL_OK;
+}
+
+int sty_tally_write(sty *s, const sty_result *r, const sty_tally_desc *d, char *err, size_t err_size)
+{
+	bool made_dir = false;
+	int rc = prepare(s, d, &made_dir, err, err_size);
+	return rc ? rc : write_files(r, d, made_dir, err, err_size);
+}
+
+int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size)
+{
+	bool made_dir = false;
+	sty_result *r = NULL;
+	/* The outputs are checked and the folder made before the statistics, as they always were: a bad --out is
+	 * reported before an empty study. */
+	int rc = prepare(s, d, &made_dir, err, err_size);
+	if (rc)
+		return rc;
+	if ((rc = sty_tally_compute(s, d, &r, err, err_size))) {
+		if (made_dir)
+			rmdir(d->out);
+		return rc;
+	}
+	rc = write_files(r, d, made_dir, err, err_size);
+	sty_result_free(&r);
+	return rc;
+}
