@@ -3,7 +3,8 @@
 # cannot enforce by itself: device/ includes nothing above it; frame/ not passes/ or methods/; passes/ not
 # methods/ or analysis/; only render.c and run_render.c (the composition root) see everything. Across
 # libraries the build enforces the rules (include paths, the poisoned vulkan.h); this also checks that no
-# library includes the CLI header and no library calls exit().
+# library includes the CLI header and no library calls exit(); no method name in study/ or metrics/ (30.1) and no
+# source or test file above 1,000 lines (30.6).
 set -u
 cd "$(dirname "$0")/.."
 bad=0
@@ -34,5 +35,11 @@ for lib in study/src study/include metrics/src metrics/include; do
   hits=$(grep -rnE "\"($names)(-[a-z]+)?\"" "$lib" --include=*.c --include=*.h 2>/dev/null | grep -v "not a method name")
   if [ -n "$hits" ]; then echo "layer rule broken (a method name in $lib: read method_facts instead):"; echo "$hits" | sed 's/^/  /'; bad=1; fi
 done
+# Issue 30.6: no source or test file above 1,000 lines (CONVENTIONS: a file is one concern a reader can hold; split
+# by concern before it grows past this). Generated files and third-party data are not in git's source list.
+long=$(git ls-files -- '*.c' '*.h' '*.cpp' '*.glsl' '*.in' '*.js' '*.sh' '*.py' 2>/dev/null | xargs -r wc -l 2>/dev/null |
+	awk '$2 != "total" && $1 > 1000 {print "  " $2 ": " $1 " lines"}')
+if [ -z "$(git ls-files -- CMakeLists.txt 2>/dev/null)" ]; then echo "layer rule broken: not a git checkout (the line-limit rule needs git ls-files)"; bad=1; fi
+if [ -n "$long" ]; then echo "layer rule broken (a file above 1,000 lines: split it by concern):"; echo "$long"; bad=1; fi
 [ $bad = 0 ] && echo "layers: all rules hold"
 exit $bad
