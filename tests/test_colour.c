@@ -327,6 +327,8 @@ static void test_lut_nonfinite(void **state)
 		 * refused before OCIO reads the file: outside the Cube spec, or more entries than the file can hold */
 		{"grade.cube", 2, "LUT_3D_SIZE 600", "grade.cube: LUT_3D_SIZE must be 2 to 256", "Cube LUT Specification"},
 		{"grade.cube", 2, "LUT_3D_SIZE 200", "grade.cube: declares 8000000 entries", "bytes can hold"},
+		/* the fuzzer's case: OCIO reads the keyword in any case */
+		{"grade.cube", 2, "lut_3d_SIZe 600", "grade.cube: LUT_3D_SIZE must be 2 to 256", "Cube LUT Specification"},
 		{"grade.cube", 2, "LUT_1D_SIZE 4000000000", "grade.cube: LUT_1D_SIZE must be 2 to 65536", "Cube LUT"},
 	};
 	for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {

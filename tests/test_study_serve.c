@@ -653,7 +653,15 @@ static void test_connection_limit(void **state)
 	}
 	clock_gettime(CLOCK_MONOTONIC, &t1);
 	assert_true(t1.tv_sec - t0.tv_sec <= 6);
-	assert_int_equal(raw_http(port, NULL, req, strlen(req), resp, sizeof resp), 200);
+	/* The client is served again once the server has released the closed connections: libmicrohttpd counts a
+	 * connection against the per-client limit until its cleanup, which can come a little after the socket is closed
+	 * (under load it did: "Server reached connection limit"), so allow that a bounded 2 s. */
+	int st = -1;
+	for (int tries = 0; tries < 20 && st != 200; tries++) {
+		if ((st = raw_http(port, NULL, req, strlen(req), resp, sizeof resp)) != 200)
+			usleep(100 * 1000);
+	}
+	assert_int_equal(st, 200);
 	sty_server_stop(&sv);
 	sty_close(&s);
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <strings.h>
 #include <string>
 #include <vector>
 
@@ -265,10 +266,15 @@ static std::string lut_declared_size_problem(const char *path)
 	std::rewind(f);
 	char line[256];
 	std::string why;
-	for (int n = 0; why.empty() && n < 4096 && std::fgets(line, sizeof line, f); n++) {
+	bool at_start = true; /* this chunk begins a line (fgets splits lines longer than the buffer) */
+	while (why.empty() && std::fgets(line, sizeof line, f)) {
+		bool starts = at_start;
+		at_start = std::strchr(line, '\n') != nullptr;
 		const char *p = line + std::strspn(line, " \t");
-		bool three = !std::strncmp(p, "LUT_3D_SIZE", 11), one = !std::strncmp(p, "LUT_1D_SIZE", 11);
-		if (!three && !one)
+		/* OCIO matches the keywords without regard to case (its reader lower-cases the line's first token): a
+		 * fuzzed "LUT_3D_SIZe 600" was read as a 600^3 grid. The whole file: a keyword may follow the data. */
+		bool three = !strncasecmp(p, "LUT_3D_SIZE", 11), one = !strncasecmp(p, "LUT_1D_SIZE", 11);
+		if (!starts || (!three && !one) || !std::strchr(" \t", p[11]) || !p[11])
 			continue;
 		char *end;
 		unsigned long long v = std::strtoull(p + 11, &end, 10);
