@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "taslab/anim.h"
+#include "taslab/tl_error.h"
 #include "test_util.h"
 
 #define EPS 1e-5f
@@ -88,13 +89,13 @@ static void test_validate(void **state)
 	float bad_times[3] = {0, 2, 1};
 	float v[9] = {0};
 	anim_track t = track(ANIM_PATH_TRANSLATION, ANIM_INTERP_LINEAR, bad_times, 3, v);
-	assert_int_not_equal(anim_track_validate(&t, why, sizeof why), 0);
+	assert_int_equal(anim_track_validate(&t, why, sizeof why), TL_ERR_INPUT); /* issue 30.5: was a bare -1 */
 	assert_non_null(strstr(why, "increasing"));
 	float nan_v[9] = {0, 0, 0, NAN, 0, 0, 0, 0, 0};
 	anim_track t2 = track(ANIM_PATH_TRANSLATION, ANIM_INTERP_LINEAR, T3, 3, nan_v);
-	assert_int_not_equal(anim_track_validate(&t2, why, sizeof why), 0);
+	assert_int_equal(anim_track_validate(&t2, why, sizeof why), TL_ERR_INPUT);
 	anim_track t3 = track(ANIM_PATH_TRANSLATION, ANIM_INTERP_LINEAR, T3, 3, v);
-	assert_int_equal(anim_track_validate(&t3, why, sizeof why), 0);
+	assert_int_equal(anim_track_validate(&t3, why, sizeof why), TL_OK);
 	assert_int_equal(anim_interp_from_string("CUBICSPLINE"), ANIM_INTERP_CUBICSPLINE);
 	assert_int_equal(anim_interp_from_string("linear"), ANIM_INTERP_INVALID); /* glTF names are upper case */
 }

@@ -4,7 +4,7 @@
 # methods/ or analysis/; only render.c and run_render.c (the composition root) see everything. Across
 # libraries the build enforces the rules (include paths, the poisoned vulkan.h); this also checks that no
 # library includes the CLI header and no library calls exit(); no method name in study/ or metrics/ (30.1) and no
-# source or test file above 1,000 lines (30.6).
+# source or test file above 1,000 lines (30.6); no bare negative return in a library (30.5).
 set -u
 cd "$(dirname "$0")/.."
 bad=0
@@ -25,6 +25,12 @@ done
 check scenes '#include "taslab/(render|vkdev|run|metrics|study)' "scenes/ sees only base"
 check renderer/output '#include "taslab/(render|vkdev|scene|metrics|study|method)' "output/ sees only base"
 check metrics/src '#include "taslab/(render|vkdev|analyze|method|study)' "metrics/ sees only output and base"
+# Issue 30.5: one error enum. A library function returns TL_OK or a tl_err code (tl_error.h), never a bare negative
+# number; a helper whose -1 is an index or "not found" (turned into a code by its caller) says "local sentinel" there.
+for lib in scenes renderer/base renderer/output renderer/src metrics/src study/src; do
+  hits=$(grep -rnE 'return -[0-9]+;' "$lib" --include=*.c --include=*.h --include=*.cpp 2>/dev/null | grep -v "local sentinel")
+  if [ -n "$hits" ]; then echo "layer rule broken (a bare negative return in $lib: return a tl_err code):"; echo "$hits" | sed 's/^/  /'; bad=1; fi
+done
 # Issue 30.1: knowledge about methods lives only in the method registry. The study and metrics libraries read what
 # they need from manifest.json and pairs.json (method_facts), so no method name of the registry's METHODS list (or a
 # -FLAG form of one, tarc-oracle) appears there as a string literal; a line using such a word for something else

@@ -353,6 +353,11 @@ static void test_diff_files(void **state)
 	assert_float_equal(json_real_value(json_object_get(js, "maxrgb_max")), 50, 0);
 	assert_float_equal(json_real_value(json_object_get(js, "exceed_32")), 1.0 / (20 * 16) / 3, 1e-12);
 	json_decref(js);
+	/* Issue 30.5: a reference that is no folder is an input error (was a bare -1, read as a bad argument). */
+	d.ref = "/nonexistent/ref";
+	assert_int_equal(mtr_diff_run(&d, &r, err, sizeof err), TL_ERR_INPUT);
+	assert_non_null(strstr(err, "not a folder"));
+	d.ref = a;
 	/* Different frame counts, a size mismatch, an unreadable frame, NaN in an EXR. */
 	d.test = c;
 	assert_int_not_equal(mtr_diff_run(&d, &r, err, sizeof err), 0);

@@ -22,6 +22,10 @@ static void test_import_export(void **state)
 	snprintf(exp, sizeof exp, "%s/export.csv", dir);
 	sty *s = created(db);
 	size_t rows;
+	/* Issue 30.5: a file that is not there is an input error (was TL_ERR_ARG, "fix your command line"). */
+	snprintf(bad, sizeof bad, "%s/no_such.csv", dir);
+	assert_int_equal(sty_import_long(s, bad, &rows, err, sizeof err), TL_ERR_INPUT);
+	assert_non_null(strstr(err, "no_such.csv: No such file or directory"));
 	/* A bad row anywhere rejects the whole file, naming the line; nothing is imported. */
 	snprintf(bad, sizeof bad, "%s/bad.csv", dir);
 	char *src = tu_read_file(REF_DIR "/study_ratings.csv", NULL);
@@ -44,7 +48,7 @@ static void test_import_export(void **state)
 		FILE *f = fopen(bad, "w");
 		fprintf(f, "%.*s%s%s", (int)(at - copy), copy, row, lineend);
 		fclose(f);
-		assert_int_not_equal(sty_import_long(s, bad, &rows, err, sizeof err), 0);
+		assert_int_equal(sty_import_long(s, bad, &rows, err, sizeof err), TL_ERR_INPUT); /* a malformed file */
 		char want[64];
 		snprintf(want, sizeof want, "bad.csv:%zu:", line);
 		if (!strstr(err, want) || !strstr(err, cases[i][1]) || !strstr(err, "nothing imported"))

@@ -142,7 +142,7 @@ static void test_import_described(void **state)
 	snprintf(db, sizeof db, "%s/a.db", dir);
 	sty *s = created(db);
 	size_t n;
-	assert_int_equal(sty_import_long(s, csv, &n, err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(sty_import_long(s, csv, &n, err, sizeof err), TL_ERR_INPUT);
 	assert_non_null(strstr(err, "method 'warp' is not one of"));
 	sty_close(&s);
 	/* Described by the caller (as `taslab study` describes its registry): imported, and the rule applies. */
@@ -168,7 +168,7 @@ static void test_import_described(void **state)
 	snprintf(db, sizeof db, "%s/c.db", dir);
 	s = created(db);
 	assert_int_equal(sty_describe_method(s, "warp", &warp, err, sizeof err), TL_OK);
-	assert_int_equal(sty_import_long(s, csv, &n, err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(sty_import_long(s, csv, &n, err, sizeof err), TL_ERR_INPUT);
 	assert_non_null(strstr(err, "method warp needs a threshold"));
 	sty_close(&s);
 }

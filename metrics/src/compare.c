@@ -38,7 +38,7 @@ int mtr_metric_find(const char *name)
 	for (int i = 0; mtr_metric_registry[i]; i++)
 		if (!strcmp(mtr_metric_registry[i]->name, name))
 			return i;
-	return -1;
+	return -1; /* local sentinel: no such metric (an index, not an error) */
 }
 
 const char *mtr_metric_list(char *buf, size_t buf_size)

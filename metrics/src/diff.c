@@ -50,10 +50,8 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 	memset(s, 0, sizeof *s);
 	char frames[4096];
 	snprintf(frames, sizeof frames, "%s/frames", path);
-	if (!is_dir(path)) {
-		snprintf(err, err_size, "%s: not a folder (give a run folder or a folder of images)", path);
-		return -1;
-	}
+	if (!is_dir(path))
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: not a folder (give a run folder or a folder of images)", path);
 	/* A run folder (DESIGN section 5) holds exactly the frames of its manifest: an incomplete run (no manifest.json),
 	 * frames outside the manifest's range (a stale longer run), missing ones (a --no-png run) and frames of another
 	 * size are refused here or when decoded, instead of being compared. */
@@ -84,8 +82,7 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 				if (nn)
 					s->names = nn;
 				closedir(d);
-				snprintf(err, err_size, "out of memory");
-				return -1;
+				return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 			}
 			s->names = nn;
 			s->names[s->n++] = dup;
@@ -93,10 +90,8 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 	}
 	if (d)
 		closedir(d);
-	if (s->n == 0) {
-		snprintf(err, err_size, "%s: no %s frames", s->dir, ext);
-		return -1;
-	}
+	if (s->n == 0)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: no %s frames", s->dir, ext);
 	qsort(s->names, s->n, sizeof *s->names, cmp_str);
 	return 0;
 }
@@ -118,9 +113,10 @@ static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, si
 	*rgb = NULL;
 	if (d->format == MTR_FORMAT_PNG) {
 		uint8_t *px = NULL;
-		if (imageio_read_rgb8_as(path, IMAGEIO_FORMAT_PNG, w, h, &px, err, err_size)) {
+		int rc = imageio_read_rgb8_as(path, IMAGEIO_FORMAT_PNG, w, h, &px, err, err_size);
+		if (rc) {
 			free(reuse);
-			return -1;
+			return rc;
 		}
 		size_t n = (size_t)*w * *h * 3;
 		if (reuse && reuse_n >= n)
@@ -134,8 +130,9 @@ static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, si
 	} else {
 		float *px = NULL;
 		free(reuse);
-		if (imageio_read_rgba_float_as(path, IMAGEIO_FORMAT_EXR, w, h, &px, 1, err, err_size))
-			return -1;
+		int rc = imageio_read_rgba_float_as(path, IMAGEIO_FORMAT_EXR, w, h, &px, 1, err, err_size);
+		if (rc)
+			return rc;
 		size_t n = (size_t)*w * *h;
 		colour_apply(d->colour, px, n, 4);
 		*rgb = malloc(n * 3 * sizeof **rgb);
@@ -147,11 +144,9 @@ static int load_frame(const mtr_diff_desc *d, const char *path, float *reuse, si
 				}
 		free(px);
 	}
-	if (!*rgb) {
-		snprintf(err, err_size, "out of memory");
-		return -1;
-	}
-	return 0;
+	if (!*rgb)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	return TL_OK;
 }
 
 typedef struct loader {
@@ -188,8 +183,7 @@ static void load_pair(loader *l)
 	if (!j) {
 		free(l->reuse[0]);
 		free(l->reuse[1]);
-		o->rc = -1;
-		snprintf(o->err, sizeof o->err, "out of memory");
+		o->rc = tl_error(o->err, sizeof o->err, TL_ERR_NOMEM, "out of memory");
 		return;
 	}
 	j[0].d = j[1].d = l->d;
@@ -209,20 +203,20 @@ static void load_pair(loader *l)
 	o->h = j[0].h;
 	o->wb = j[1].w;
 	o->hb = j[1].h;
-	o->rc = j[0].rc || j[1].rc;
+	o->rc = j[0].rc ? j[0].rc : j[1].rc; /* the reader's code */
 	if (o->rc)
 		snprintf(o->err, sizeof o->err, "%s", j[0].rc ? j[0].err : j[1].err);
 	else if (j[1].w != o->w || j[1].h != o->h) {
 		snprintf(o->err, sizeof o->err, "%s is %ux%u but %s is %ux%u: compare frames of the same size", j[0].path,
 			 o->w, o->h, j[1].path, j[1].w, j[1].h);
-		o->rc = -1;
+		o->rc = TL_ERR_INPUT;
 	}
 	for (int k = 0; k < 2 && !o->rc; k++) {
 		const sequence *sq = k ? l->rb : l->ra;
 		if (sq->w && (j[k].w != sq->w || j[k].h != sq->h)) {
 			snprintf(o->err, sizeof o->err, "%s: size %ux%u differs from the run's %ux%u (manifest.json); render the run "
 				 "again", j[k].path, j[k].w, j[k].h, sq->w, sq->h);
-			o->rc = -1;
+			o->rc = TL_ERR_INPUT;
 		}
 	}
 	free(j);
@@ -307,10 +301,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	char path[4096];
 	memset(res, 0, sizeof *res);
 	memset(&rb, 0, sizeof rb);
-	if (d->format == MTR_FORMAT_EXR && !d->colour) {
-		snprintf(err, err_size, "EXR comparison needs a display transform");
-		return -1;
-	}
+	if (d->format == MTR_FORMAT_EXR && !d->colour)
+		return tl_error(err, err_size, TL_ERR_ARG, "EXR comparison needs a display transform");
 	/* An old summary must not look like this comparison's result, also when the runs are refused below (a frame
 	 * missing or of another size than the manifest's, issue 31.8). */
 	snprintf(path, sizeof path, "%s/summary.json", d->out);
@@ -325,9 +317,9 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		mtr_comparer_destroy(&cmp);
 		return rc;
 	}
-	rc = TL_ERR_INPUT;
-	if (sequence_open(d->test, ext, &rb, err, err_size))
+	if ((rc = sequence_open(d->test, ext, &rb, err, err_size)))
 		goto done;
+	rc = TL_ERR_INPUT;
 	if (ra.n != rb.n) {
 		snprintf(err, err_size, "%s has %zu frames but %s has %zu: compare runs of the same frames", ra.dir, ra.n,
 			 rb.dir, rb.n);
@@ -368,6 +360,7 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	for (size_t i = 0; i < ra.n; i++) {
 		if (cur.rc) {
 			snprintf(err, err_size, "%s", cur.err);
+			rc = cur.rc;
 			goto done;
 		}
 		/* Overlap: decode pair i+1 on helper threads while pair i is measured. */
@@ -384,7 +377,7 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		size_t npx = (size_t)cur.w * cur.h;
 		if (d->heatmaps && ((!map && !(map = malloc(npx * sizeof *map))) ||
 				    (want_flip && !flip_map && !(flip_map = malloc(npx * sizeof *flip_map))))) {
-			snprintf(err, err_size, "out of memory");
+			rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 			if (threaded)
 				pthread_join(th, NULL);
 			goto done;

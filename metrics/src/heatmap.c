@@ -6,6 +6,7 @@
 
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
+#include "taslab/tl_error.h"
 
 #define MTR_PI 3.14159265358979323846
 
@@ -67,10 +68,8 @@ int mtr_heatmap_write(const char *path, const float *map, uint32_t width, uint32
 	uint32_t bar = 10 * scale, pad = 4 * scale, text = 5 * scale;
 	uint32_t H = height + pad + bar + pad + text + pad;
 	uint8_t *img = calloc((size_t)width * H, 3);
-	if (!img) {
-		snprintf(err, err_size, "out of memory");
-		return -1;
-	}
+	if (!img)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	if (!(vmax > 0))
 		vmax = 1;
 	/* The colour map through a table of 4096 steps (finer than 8-bit output can show): mtr_colormap per pixel

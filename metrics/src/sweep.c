@@ -3,6 +3,7 @@
 
 #include <jansson.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,15 +37,15 @@ int mtr_sweep_metrics(const sweep_spec *s, const char *dir, const sweep_run *r, 
 	return mtr_diff_run(&d, &res, err, err_size);
 }
 
-/* The frame with the largest maxrgb_p99 in DIR/frames.csv (the metrics module's own file). */
-static int worst_frame(const char *dir, uint32_t *frame)
+/* The frame with the largest maxrgb_p99 in DIR/frames.csv (the metrics module's own file); false when there is none. */
+static bool worst_frame(const char *dir, uint32_t *frame)
 {
 	char path[TL_PATH_MAX], line[4096], err[256];
 	snprintf(path, sizeof path, "%s/frames.csv", dir);
 	char *text = NULL;
 	size_t len;
 	if (tl_read_file(path, 64u << 20, &text, &len, err, sizeof err))
-		return -1;
+		return false;
 	int col = -1, found = -1;
 	double best = -1;
 	char *save = NULL;
@@ -77,7 +78,7 @@ static int worst_frame(const char *dir, uint32_t *frame)
 			best = v, *frame = (uint32_t)f;
 	}
 	free(text);
-	return best >= 0 ? 0 : -1;
+	return best >= 0;
 }
 
 static int read_metrics(const char *dir, mtr_sweep_row *row, char *err, size_t err_size)
@@ -154,7 +155,7 @@ static int metric_index(const char *name)
 	for (int c = 0; c < MTR_SWEEP_MAX_COLUMNS && mtr_column_name(c); c++)
 		if (!strcmp(mtr_column_name(c), name))
 			return c;
-	return -1;
+	return -1; /* local sentinel: no such column (an index, not an error) */
 }
 
 double mtr_sweep_value(const mtr_sweep_row *row, const char *column)

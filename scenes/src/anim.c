@@ -1,5 +1,6 @@
 /* anim.c — keyframe and scripted animation (see anim.h; glTF 2.0 spec Appendix C). */
 #include "taslab/anim.h"
+#include "taslab/tl_error.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -35,20 +36,20 @@ int anim_track_validate(const anim_track *track, char *why, size_t why_size)
 {
 	if (track->path <= ANIM_PATH_INVALID || track->path >= ANIM_PATH_COUNT) {
 		snprintf(why, why_size, "unknown animation path");
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	if (track->interp <= ANIM_INTERP_INVALID || track->interp >= ANIM_INTERP_COUNT) {
 		snprintf(why, why_size, "unknown interpolation (use STEP, LINEAR or CUBICSPLINE)");
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	if (track->key_count < 1 || !track->times || !track->values) {
 		snprintf(why, why_size, "a track needs at least one key");
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	for (size_t i = 0; i < track->key_count; i++) {
 		if (!isfinite(track->times[i]) || (i > 0 && !(track->times[i] > track->times[i - 1]))) {
 			snprintf(why, why_size, "key times must be finite and strictly increasing (key %zu)", i);
-			return -1;
+			return TL_ERR_INPUT;
 		}
 	}
 	size_t n = track->key_count * (size_t)anim_path_components(track->path) *
@@ -56,7 +57,7 @@ int anim_track_validate(const anim_track *track, char *why, size_t why_size)
 	for (size_t i = 0; i < n; i++) {
 		if (!isfinite(track->values[i])) {
 			snprintf(why, why_size, "key values must be finite (value %zu)", i);
-			return -1;
+			return TL_ERR_INPUT;
 		}
 	}
 	/* Rotation keys are unit quaternions (glTF 2.0 §3.11); a zero one has no direction to normalise to
@@ -67,7 +68,7 @@ int anim_track_validate(const anim_track *track, char *why, size_t why_size)
 			const float *q = track->values + (cubic ? i * 3 + 1 : i) * 4;
 			if (!(sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) >= 1e-6f)) {
 				snprintf(why, why_size, "rotation key %zu is a zero quaternion (rotations are unit quaternions)", i);
-				return -1;
+				return TL_ERR_INPUT;
 			}
 		}
 	}

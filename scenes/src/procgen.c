@@ -1,6 +1,7 @@
 /* procgen.c — procedural meshes (parametric surfaces) and textures (see procgen.h). */
 #include "procgen.h"
 #include "taslab/texture.h"
+#include "taslab/tl_error.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -179,13 +180,13 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 	float uvs = d->uv_scale > 0.0f ? d->uv_scale : 1.0f;
 	if (seg > 1024 || rings > 1024) {
 		snprintf(why, why_size, "segments and rings must be at most 1024");
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	if (!strcmp(d->kind, "plane")) {
 		/* Plane in XZ facing +Y, centred at the origin. */
 		if (!(d->size.x > 0 && d->size.z > 0)) {
 			snprintf(why, why_size, "plane size must be positive [x, y, z] (y unused)");
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		int nsub = d->segments > 0 ? d->segments : 8;
 		quad_ctx q = {{-0.5f * d->size.x, 0, -0.5f * d->size.z}, {d->size.x, 0, 0}, {0, 0, d->size.z}, {0, 1, 0}};
@@ -194,7 +195,7 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 		tlm_vec3 s = d->size;
 		if (!(s.x > 0 && s.y > 0 && s.z > 0)) {
 			snprintf(why, why_size, "box size must be three positive numbers");
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		tlm_vec3 h = tlm_v3_scale(s, 0.5f);
 		/* Each face: origin at its corner, edges eu, ev spanning it, outward normal. */
@@ -218,14 +219,14 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 	} else if (!strcmp(d->kind, "sphere")) {
 		if (!(d->radius > 0)) {
 			snprintf(why, why_size, "sphere radius must be positive");
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		sphere_ctx s = {d->radius};
 		b_patch(&b, sphere_fn, &s, seg, rings, 2.0f * uvs, uvs);
 	} else if (!strcmp(d->kind, "cylinder")) {
 		if (!(d->radius > 0 && d->height > 0)) {
 			snprintf(why, why_size, "cylinder radius and height must be positive");
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		cyl_ctx c = {d->radius, d->height};
 		b_patch(&b, cyl_fn, &c, seg, 1, 2.0f * uvs, uvs);
@@ -238,19 +239,19 @@ int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t 
 	} else if (!strcmp(d->kind, "torus")) {
 		if (!(d->radius > 0 && d->tube_radius > 0 && d->tube_radius < d->radius)) {
 			snprintf(why, why_size, "torus needs 0 < tube_radius < radius");
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		torus_ctx t = {d->radius, d->tube_radius};
 		b_patch(&b, torus_fn, &t, seg, rings, 4.0f * uvs, uvs);
 	} else {
 		snprintf(why, why_size, "unknown mesh type '%s' (use one of: %s)", d->kind, procgen_mesh_kinds());
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	if (b.oom) {
 		free(b.v);
 		free(b.idx);
 		snprintf(why, why_size, "out of memory");
-		return -2;
+		return TL_ERR_NOMEM;
 	}
 	out->vertices = b.v;
 	out->vertex_count = b.nv;
@@ -365,7 +366,7 @@ int procgen_texture(const procgen_texture_desc *d, uint32_t size, uint8_t *rgba)
 	if (d->output == PROCGEN_OUTPUT_NORMAL) {
 		h = malloc((size_t)size * size * sizeof *h);
 		if (!h)
-			return -2;
+			return TL_ERR_NOMEM;
 	}
 	for (uint32_t y = 0; y < size; y++)
 		for (uint32_t x = 0; x < size; x++) {

@@ -14,7 +14,7 @@ typedef struct procgen_mesh_desc {
 	float uv_scale;        /* texture repeats per metre (plane/box) or per mesh (others) */
 } procgen_mesh_desc;
 
-/* Returns 0, or -1 (unknown kind / bad parameter: `why` says which) / -2 (out of memory). */
+/* Returns TL_OK, TL_ERR_INPUT (unknown kind / bad parameter: `why` says which) or TL_ERR_NOMEM. */
 int procgen_mesh(const procgen_mesh_desc *d, scene_mesh *out, char *why, size_t why_size);
 /* Kinds accepted by procgen_mesh, comma separated, for messages. */
 const char *procgen_mesh_kinds(void);
@@ -50,7 +50,7 @@ typedef struct procgen_texture_desc {
 procgen_pattern procgen_pattern_from_string(const char *s);
 procgen_output procgen_output_from_string(const char *s);
 /* Fills size*size*4 bytes. Deterministic for a given description and size.
- * Returns 0, or -2 when out of memory. */
+ * Returns TL_OK, or TL_ERR_NOMEM when out of memory. */
 int procgen_texture(const procgen_texture_desc *d, uint32_t size, uint8_t *rgba);
 
 #endif

@@ -15,7 +15,7 @@ int scene_find_named(const char *names, size_t stride, size_t n, const char *nam
 	for (size_t i = 0; i < n; i++)
 		if (!strcmp(names + i * stride, name))
 			return (int)i;
-	return -1;
+	return -1; /* local sentinel: not found (an index, not an error) */
 }
 
 int scene_load(const char *path, scene **out, char *err, size_t err_size)

@@ -393,8 +393,8 @@ static int parse_meshes(jp *c, scene *s, json_t *root)
 		md.rings = (int)rings;
 		char why[200];
 		int rc = procgen_mesh(&md, m, why, sizeof why);
-		if (rc == -2)
-			return TL_ERR_NOMEM;
+		if (rc == TL_ERR_NOMEM)
+			return rc;
 		if (rc)
 			return jfail(c, p, "%s", why);
 		s->mesh_count++;

@@ -204,17 +204,18 @@ static int split(char *line, char **f, int max)
 	return n;
 }
 
-static int parse_long(const char *s, long lo, long hi, long *out)
+/* A whole number in [lo, hi] into *out; false when `s` is not one. */
+static bool parse_long(const char *s, long lo, long hi, long *out)
 {
 	char *e;
 	if (!(isdigit((unsigned char)s[0]) || (s[0] == '-' && isdigit((unsigned char)s[1])))) /* no blanks or '+' */
-		return -1;
+		return false;
 	errno = 0;
 	long v = strtol(s, &e, 10);
 	if (*e || errno || v < lo || v > hi)
-		return -1;
+		return false;
 	*out = v;
-	return 0;
+	return true;
 }
 
 /* A plain text cell: non-empty, fits, no quotes or control characters, and nothing a spreadsheet would run
@@ -231,7 +232,8 @@ static int safe_name(const char *s, size_t max)
 }
 
 /* One data row; `with_period`: the file has the period column (LONG_HEADER), else the DESIGN section 7 layout
- * without it. A file without period reads as if it had the column, empty. */
+ * without it. A file without period reads as if it had the column, empty. TL_OK, or TL_ERR_INPUT with the reason
+ * in `why`. */
 static int parse_row(const sty *s, char *line, bool with_period, row *r, char *why, size_t why_size)
 {
 	static char none[1] = "";
@@ -240,7 +242,7 @@ static int parse_row(const sty *s, char *line, bool with_period, row *r, char *w
 	int n = split(line, c, cols);
 	if (n != cols) {
 		snprintf(why, why_size, "expected %d columns, found %d", cols, n > cols ? cols + 1 : n);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	/* f: the cells in the period layout (f[7] = period, "" when the file has none). */
 	for (int i = 0; i < 12; i++)
@@ -250,20 +252,20 @@ static int parse_row(const sty *s, char *line, bool with_period, row *r, char *w
 	    !safe_name(f[3], sizeof r->camera) || !safe_name(f[5], sizeof r->method)) {
 		snprintf(why, why_size, "participant, scene, camera and method must be non-empty plain text (no quotes, control "
 			 "characters, or a leading = + - @ that a spreadsheet would run as a formula)");
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	snprintf(r->participant, sizeof r->participant, "%s", f[0]);
 	snprintf(r->scene, sizeof r->scene, "%s", f[2]);
 	snprintf(r->camera, sizeof r->camera, "%s", f[3]);
 	snprintf(r->method, sizeof r->method, "%s", f[5]);
-	if (parse_long(f[1], 0, 1000000, &v)) {
+	if (!parse_long(f[1], 0, 1000000, &v)) {
 		snprintf(why, why_size, "trial '%s' is not a whole number >= 0", f[1]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	r->trial = v;
 	if (strcmp(f[4], "stationary") && strcmp(f[4], "moving")) {
 		snprintf(why, why_size, "camera_motion '%s' is not stationary or moving", f[4]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	snprintf(r->motion, sizeof r->motion, "%s", f[4]);
 	const run_method_facts *facts = sty_method_facts(s, r->method); /* described by the caller (issue 30.1) */
@@ -276,46 +278,46 @@ static int parse_row(const sty *s, char *line, bool with_period, row *r, char *w
 		r->T = strtod(f[6], &e);
 		if (*e || errno || !isfinite(r->T) || !(r->T > 0 && r->T <= 255) || isspace((unsigned char)f[6][0])) {
 			snprintf(why, why_size, "T '%s' is not a number in (0, 255]", f[6]);
-			return -1;
+			return TL_ERR_INPUT;
 		}
 	}
 	r->period = 0;
-	if (f[7][0] && (parse_long(f[7], 1, 8, &r->period) || !sty_period_valid(r->period))) {
+	if (f[7][0] && (!parse_long(f[7], 1, 8, &r->period) || !sty_period_valid(r->period))) {
 		snprintf(why, why_size, "period '%s' is not 1, 2, 4 or 8", f[7]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	/* T and period exactly as the method has them (the rule design applies to pairs.json). */
 	if (sty_condition_rule(facts, r->method, r->T, r->period, why, why_size))
-		return -1;
-	if (parse_long(f[8], 0, 1, &v)) {
+		return TL_ERR_INPUT;
+	if (!parse_long(f[8], 0, 1, &v)) {
 		snprintf(why, why_size, "ref_first '%s' is not 0 or 1", f[8]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	r->ref_first = (int)v;
-	if (parse_long(f[9], -2, 2, &v)) {
+	if (!parse_long(f[9], -2, 2, &v)) {
 		snprintf(why, why_size, "answer '%s' is not an integer from -2 to 2", f[9]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	r->answer = (int)v;
-	if (parse_long(f[10], -2, 2, &v)) {
+	if (!parse_long(f[10], -2, 2, &v)) {
 		snprintf(why, why_size, "rating '%s' is not an integer from -2 to 2", f[10]);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	r->rating = (int)v;
 	if (r->rating != (r->ref_first ? -r->answer : r->answer)) {
 		snprintf(why, why_size, "rating %d contradicts answer %d with ref_first %d (rating = ref_first ? -answer : answer)",
 			 r->rating, r->answer, r->ref_first);
-		return -1;
+		return TL_ERR_INPUT;
 	}
 	r->rt_ms = -1;
 	if (f[11][0]) {
-		if (parse_long(f[11], 0, STY_RT_MS_MAX, &v)) {
+		if (!parse_long(f[11], 0, STY_RT_MS_MAX, &v)) {
 			snprintf(why, why_size, "rt_ms '%s' is not a whole number of milliseconds", f[11]);
-			return -1;
+			return TL_ERR_INPUT;
 		}
 		r->rt_ms = v;
 	}
-	return 0;
+	return TL_OK;
 }
 
 /* Whether `line` is exactly `header` (then a line end or the end of the file). */
@@ -329,10 +331,8 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 {
 	*rows_out = 0;
 	FILE *f = fopen(path, "r");
-	if (!f) {
-		snprintf(err, err_size, "%s: %s", path, strerror(errno));
-		return TL_ERR_ARG;
-	}
+	if (!f)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: %s", path, strerror(errno));
 	sqlite3_stmt *st;
 	sqlite3_prepare_v2(s->db, "SELECT count(*) FROM participants", -1, &st, NULL);
 	int used = sqlite3_step(st) == SQLITE_ROW && sqlite3_column_int(st, 0) > 0;
@@ -345,7 +345,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	char line[4096], why[256];
 	row *rows = NULL;
 	size_t n = 0, lineno = 1;
-	int rc = TL_ERR_ARG;
+	int rc = TL_ERR_INPUT; /* until the rows are stored: a malformed file */
 	bool have = fgets(line, sizeof line, f) != NULL, with_period = have && header_is(line, LONG_HEADER);
 	if (!with_period && !(have && header_is(line, LONG_HEADER_NO_PERIOD))) {
 		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or, from before the period column, the same "
@@ -363,11 +363,13 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			continue;
 		row *nr = realloc(rows, (n + 1) * sizeof *nr);
 		if (!nr) {
-			snprintf(err, err_size, "out of memory");
+			rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 			goto done;
 		}
 		rows = nr;
-		if (parse_row(s, line, with_period, &rows[n], why, sizeof why)) {
+		int prc = parse_row(s, line, with_period, &rows[n], why, sizeof why);
+		if (prc) {
+			rc = prc;
 			snprintf(err, err_size, "%s:%zu: %s; nothing imported", path, lineno, why);
 			goto done;
 		}

@@ -38,40 +38,41 @@ int sty_db_fail(sty *s, char *err, size_t err_size, const char *what)
 	return tl_error(err, err_size, TL_ERR_DB, "%s: %s: %s", s->path, what, s->db ? sqlite3_errmsg(s->db) : "not open");
 }
 
-static int meta_get(sty *s, const char *key, char *val, size_t size)
+/* The value of `key` in the meta table into `val` ("" and false when there is none or it cannot be read). */
+static bool meta_get(sty *s, const char *key, char *val, size_t size)
 {
 	sqlite3_stmt *st;
 	val[0] = 0;
 	if (sqlite3_prepare_v2(s->db, "SELECT value FROM meta WHERE key = ?", -1, &st, NULL))
-		return -1;
+		return false;
 	sqlite3_bind_text(st, 1, key, -1, SQLITE_STATIC);
-	int found = sqlite3_step(st) == SQLITE_ROW;
+	bool found = sqlite3_step(st) == SQLITE_ROW;
 	if (found)
 		snprintf(val, size, "%s", (const char *)sqlite3_column_text(st, 0));
 	sqlite3_finalize(st);
-	return found ? 0 : -1;
+	return found;
 }
 
 int sty_meta_set(sty *s, const char *key, const char *val)
 {
 	sqlite3_stmt *st;
 	if (sqlite3_prepare_v2(s->db, "INSERT OR REPLACE INTO meta(key, value) VALUES(?, ?)", -1, &st, NULL))
-		return -1;
+		return TL_ERR_DB;
 	sqlite3_bind_text(st, 1, key, -1, SQLITE_STATIC);
 	sqlite3_bind_text(st, 2, val, -1, SQLITE_STATIC);
-	int rc = sqlite3_step(st) == SQLITE_DONE ? 0 : -1;
+	int rc = sqlite3_step(st) == SQLITE_DONE ? TL_OK : TL_ERR_DB;
 	sqlite3_finalize(st);
 	return rc;
 }
 
-int sty_random_hex(char out[33])
+bool sty_random_hex(char out[33])
 {
 	uint8_t b[16];
 	if (getrandom(b, sizeof b, 0) != (ssize_t)sizeof b)
-		return -1;
+		return false;
 	for (int i = 0; i < 16; i++)
 		snprintf(out + 2 * i, 3, "%02x", b[i]);
-	return 0;
+	return true;
 }
 
 /* Names SQLite does not treat as a file: "" (a temporary database), ":memory:", "file:" URIs. */
@@ -153,7 +154,7 @@ static int db_connect(sty *s, const char *file, bool init, char *err, size_t err
 						  &st, NULL) == SQLITE_OK &&
 			       sqlite3_step(st) == SQLITE_ROW;
 		sqlite3_finalize(st);
-		if (!has_meta || meta_get(s, "taslab_study", mark, sizeof mark))
+		if (!has_meta || !meta_get(s, "taslab_study", mark, sizeof mark))
 			return tl_error(err, err_size, TL_ERR_INPUT, "%s: not a taslab study database (made by 'taslab study design')",
 					s->path);
 	}
@@ -167,10 +168,10 @@ static int db_connect(sty *s, const char *file, bool init, char *err, size_t err
 		if (rc)
 			return rc;
 	}
-	if (init && (sty_random_hex(s->token) || sty_meta_set(s, "admin_token", s->token) ||
+	if (init && (!sty_random_hex(s->token) || sty_meta_set(s, "admin_token", s->token) ||
 		     sty_meta_set(s, "taslab_study", "1")))
 		return tl_error(err, err_size, TL_ERR_DB, "%s: cannot initialise the study", s->path);
-	if (meta_get(s, "admin_token", s->token, sizeof s->token) || strlen(s->token) != 32)
+	if (!meta_get(s, "admin_token", s->token, sizeof s->token) || strlen(s->token) != 32)
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: the study has no admin token (damaged?)", s->path);
 	meta_get(s, "stimuli", s->stimuli, sizeof s->stimuli);
 	meta_get(s, "served_url", s->served_url, sizeof s->served_url);

@@ -68,8 +68,8 @@ int sty_condition_rule(const run_method_facts *f, const char *method, double T, 
 	else if (has_N && !sty_period_valid(period))
 		snprintf(why, why_size, "period %ld of method %s is not 1, 2, 4 or 8", period, method);
 	else
-		return 0;
-	return -1;
+		return TL_OK;
+	return TL_ERR_INPUT;
 }
 
 /* ------------------------------------------------------------------ design */
@@ -292,7 +292,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	uint32_t breaks = 0;
 	for (uint32_t pi = 0; ok && pi < d->participants; pi++) {
 		char code[33], label[32];
-		if (sty_random_hex(code)) {
+		if (!sty_random_hex(code)) {
 			ok = 0;
 			break;
 		}

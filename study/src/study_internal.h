@@ -30,18 +30,19 @@ struct sty {
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);
 
 /* Stores a value in the study's meta table (study_db.c; the design stores the stimulus folder and seed there).
- * Returns 0, or -1 when SQLite fails (sty_db_fail says why). */
+ * Returns TL_OK, or TL_ERR_DB when SQLite fails (sty_db_fail says why). */
 int sty_meta_set(sty *s, const char *key, const char *val);
 
 /* The DESIGN section 4 rule for a condition, shared by design (pairs.json) and import: a described method (`f`: its
  * facts from pairs.json or sty_method_facts; NULL or not known: an unknown method), T (NAN: none) exactly when the
  * method takes a threshold, period (0: none) exactly when it takes one, 1/2/4/8.
- * Returns 0, or -1 with the reason in `why` ("method rrc needs a period (1, 2, 4 or 8)"). */
+ * Returns 0, or TL_ERR_INPUT with the reason in `why` ("method rrc needs a period (1, 2, 4 or 8)"). */
 int sty_condition_rule(const run_method_facts *f, const char *method, double T, long period, char *why,
 		       size_t why_size);
 
-/* 128 random bits from the kernel as 32 lowercase hex digits (codes, tokens, clip names must be unguessable). */
-int sty_random_hex(char out[33]);
+/* 128 random bits from the kernel as 32 lowercase hex digits (codes, tokens, clip names must be unguessable);
+ * false when the kernel gives none (the caller reports it). */
+bool sty_random_hex(char out[33]);
 
 /* A text cell for a CSV file a spreadsheet may open (OWASP CSV injection; RFC 4180): a leading = + - @ TAB or
  * CR gets a ' in front; a cell holding , " CR or LF is quoted with "" for ". Returns buf (truncated to n). */

@@ -16,7 +16,7 @@ int64_t sty_select_participant(sty *s, const char *code)
 	sqlite3_stmt *st;
 	int64_t id = -1;
 	if (sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE code = ?", -1, &st, NULL))
-		return -1;
+		return -1; /* local sentinel: no id (study_select.h) */
 	sqlite3_bind_text(st, 1, code, -1, SQLITE_STATIC);
 	if (sqlite3_step(st) == SQLITE_ROW)
 		id = sqlite3_column_int64(st, 0);
@@ -137,13 +137,13 @@ static const char *clip_ext(const char *path)
 }
 
 /* The opaque name of side `slot` of trial (pid, idx), made (random, stored) when missing. Caller holds the lock
- * and an open transaction. */
-static int clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n)
+ * and an open transaction. false when SQLite or the kernel's random bits fail (the caller reports TL_ERR_DB). */
+static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n)
 {
 	sqlite3_stmt *st;
 	if (sqlite3_prepare_v2(s->db, "SELECT name FROM clip_names WHERE participant = ? AND idx = ? AND slot = ?", -1, &st,
 			       NULL))
-		return -1;
+		return false;
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
 	sqlite3_bind_int(st, 3, slot);
@@ -152,22 +152,22 @@ static int clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *pat
 		snprintf(out, n, "%s", (const char *)sqlite3_column_text(st, 0));
 	sqlite3_finalize(st);
 	if (r == SQLITE_ROW)
-		return 0;
+		return true;
 	if (r != SQLITE_DONE)
-		return -1;
+		return false;
 	char hex[33];
-	if (sty_random_hex(hex))
-		return -1;
+	if (!sty_random_hex(hex))
+		return false;
 	snprintf(out, n, "%s%s", hex, clip_ext(path));
 	if (sqlite3_prepare_v2(s->db, "INSERT INTO clip_names(name, participant, idx, slot) VALUES(?, ?, ?, ?)", -1, &st, NULL))
-		return -1;
+		return false;
 	sqlite3_bind_text(st, 1, out, -1, SQLITE_STATIC);
 	sqlite3_bind_int64(st, 2, pid);
 	sqlite3_bind_int64(st, 3, idx);
 	sqlite3_bind_int(st, 4, slot);
 	r = sqlite3_step(st);
 	sqlite3_finalize(st);
-	return r == SQLITE_DONE ? 0 : -1;
+	return r == SQLITE_DONE;
 }
 
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size)
@@ -196,8 +196,8 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 		t->index = p.index;
 		snprintf(t->kind, sizeof t->kind, "%s", p.kind);
 		t->break_before = p.break_before;
-		if (clip_name(s, pid, t->index, 0, p.ref_first ? p.ref_clip : p.test_clip, t->clip_a, sizeof t->clip_a) ||
-		    clip_name(s, pid, t->index, 1, p.ref_first ? p.test_clip : p.ref_clip, t->clip_b, sizeof t->clip_b))
+		if (!clip_name(s, pid, t->index, 0, p.ref_first ? p.ref_clip : p.test_clip, t->clip_a, sizeof t->clip_a) ||
+		    !clip_name(s, pid, t->index, 1, p.ref_first ? p.test_clip : p.ref_clip, t->clip_b, sizeof t->clip_b))
 			rc = sty_db_fail(s, err, err_size, "naming the clips");
 	}
 done:

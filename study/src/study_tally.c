@@ -88,8 +88,11 @@ int sty_rm_anova2(const double *y, size_t n, size_t a, size_t b, sty_anova_effec
 	size_t ma = a - 1, mb = b - 1;
 	double *M[3];
 	size_t m[3] = {ma, mb, ma * mb};
-	if (!ca || !cb)
-		return TL_ERR_ARG;
+	if (!ca || !cb) {
+		free(ca);
+		free(cb);
+		return TL_ERR_NOMEM;
+	}
 	helmert(a, ca);
 	helmert(b, cb);
 	/* Cell contrast matrices: A = C_A (x) 1_b/sqrt(b), B = 1_a/sqrt(a) (x) C_B, AB = C_A (x) C_B. */
@@ -172,7 +175,7 @@ static int find_cond(data *d, const condk *k)
 			return (int)i;
 	condk *nc = realloc(d->c, (d->nc + 1) * sizeof *nc);
 	if (!nc)
-		return -1;
+		return -1; /* local sentinel: out of memory (an index otherwise; the caller reports TL_ERR_NOMEM) */
 	d->c = nc;
 	d->c[d->nc] = *k;
 	return (int)d->nc++;
@@ -248,8 +251,7 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 		obs *no = realloc(d->o, (d->n + 1) * sizeof *no);
 		if (ci < 0 || !no) {
 			sqlite3_finalize(st);
-			snprintf(err, err_size, "out of memory");
-			return TL_ERR_ARG;
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 		}
 		d->o = no;
 		int answer = sqlite3_column_int(st, 7);
@@ -318,7 +320,7 @@ static int row_compute(const data *d, const sel *s, const int *use, row_stats *r
 			n_tie += d->o[i].rating == 0 ? w : 0;
 		}
 	if (n == 0)
-		return -1;
+		return -1; /* local sentinel: no rating in the selection (row_of: no row) */
 	r->n = (size_t)n;
 	double *pm = malloc(((size_t)d->max_pid + 1) * sizeof *pm);
 	int *has = malloc(((size_t)d->max_pid + 1) * sizeof *has);

@@ -142,7 +142,8 @@ int mtr_jnd_from_counts(double n_ref, double n_tie, double n, double confidence,
  * Colour map: a ramp in Oklab with lightness rising linearly from 0.27 to 0.93 and hue turning from blue
  * through teal and green to yellow (equal perceived steps, readable in greyscale), 8-bit sRGB. */
 void mtr_colormap(double u, uint8_t rgb[3]);
-/* Writes `map` (width*height, values 0..vmax) as a PNG with a legend bar and tick labels drawn below. */
+/* Writes `map` (width*height, values 0..vmax) as a PNG with a legend bar and tick labels drawn below. Returns
+ * TL_OK, TL_ERR_NOMEM, or the PNG writer's code (TL_ERR_OUTPUT when PATH cannot be written). */
 int mtr_heatmap_write(const char *path, const float *map, uint32_t width, uint32_t height, double vmax, char *err,
 		      size_t err_size);
 

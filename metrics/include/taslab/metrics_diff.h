@@ -38,6 +38,9 @@ typedef struct mtr_diff_result {
 	double compute_seconds; /* time in statistics (excluding decoding) */
 } mtr_diff_result;
 
+/* Returns TL_OK or a tl_err code, among them TL_ERR_ARG (EXR without `colour`, a bad metric or option),
+ * TL_ERR_INPUT (a run or folder that is missing, incomplete or unlike the other; for a frame, the image reader's
+ * code), TL_ERR_OUTPUT (OUT cannot be written) and TL_ERR_NOMEM. */
 int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size);
 
 #ifdef __cplusplus

@@ -1,16 +1,17 @@
 /* buf.c — the growing text buffer of tl_buf.h. */
 #include "taslab/tl_buf.h"
+#include "taslab/tl_error.h"
 
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Room for n more bytes and the NUL. */
+/* Room for n more bytes and the NUL: TL_OK or TL_ERR_NOMEM. */
 static int reserve(tl_buf *b, size_t n)
 {
 	if (b->failed)
-		return -1;
+		return TL_ERR_NOMEM;
 	if (b->len + n + 1 <= b->cap)
 		return 0;
 	size_t cap = b->cap ? b->cap : 4096;
@@ -19,7 +20,7 @@ static int reserve(tl_buf *b, size_t n)
 	char *t = realloc(b->s, cap);
 	if (!t) {
 		b->failed = 1;
-		return -1;
+		return TL_ERR_NOMEM;
 	}
 	b->s = t;
 	b->cap = cap;
@@ -29,7 +30,7 @@ static int reserve(tl_buf *b, size_t n)
 int tl_buf_append(tl_buf *b, const char *s, size_t n)
 {
 	if (reserve(b, n))
-		return -1;
+		return TL_ERR_NOMEM;
 	memcpy(b->s + b->len, s, n);
 	b->len += n;
 	b->s[b->len] = 0;
@@ -45,7 +46,7 @@ int tl_buf_printf(tl_buf *b, const char *fmt, ...)
 	if (n < 0)
 		b->failed = 1;
 	if (n < 0 || reserve(b, (size_t)n))
-		return -1;
+		return TL_ERR_NOMEM;
 	va_start(ap, fmt);
 	vsnprintf(b->s + b->len, b->cap - b->len, fmt, ap);
 	va_end(ap);

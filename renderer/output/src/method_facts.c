@@ -1,5 +1,6 @@
 /* method_facts.c — run_method_facts as JSON (method_facts.h). */
 #include "method_facts.h"
+#include "taslab/tl_error.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -21,7 +22,7 @@ int method_facts_read(const json_t *o, run_method_facts *f)
 	const json_t *N = json_object_get(o, "takes_period");
 	if (!json_is_object(o) || !family || !baseline || strlen(family) >= sizeof f->family ||
 	    strlen(baseline) >= sizeof f->baseline || !json_is_boolean(ref) || !json_is_boolean(T) || !json_is_boolean(N))
-		return -1;
+		return TL_ERR_INPUT;
 	snprintf(f->family, sizeof f->family, "%s", family);
 	snprintf(f->baseline, sizeof f->baseline, "%s", baseline);
 	f->reference = json_is_true(ref);

@@ -10,7 +10,7 @@
 /* {"family", "baseline", "reference", "takes_threshold", "takes_period"} (a new reference). */
 json_t *method_facts_json(const run_method_facts *f);
 /* Reads the object `o` into *f. No object (a file made before the facts were recorded): 0 with f->known false.
- * -1 when `o` is there but is not such an object (a field missing or of the wrong type). */
+ * TL_ERR_INPUT when `o` is there but is not such an object (a field missing or of the wrong type). */
 int method_facts_read(const json_t *o, run_method_facts *f);
 
 #endif

@@ -57,7 +57,7 @@ static int get_str(json_t *o, const char *key, char *dst, size_t n, int path_lik
 {
 	const char *v = json_string_value(json_object_get(o, key));
 	if (!v || strlen(v) >= n || (path_like && !safe_rel(v)))
-		return -1;
+		return -1; /* local sentinel: missing or bad; pairs_read says which key, as TL_ERR_INPUT */
 	snprintf(dst, n, "%s", v);
 	return 0;
 }

@@ -89,7 +89,7 @@ static long frame_number(const char *name, const char *ext)
 	while (name[d] >= '0' && name[d] <= '9')
 		d++;
 	if (d < 6 || d > 10 || name[d] != '.' || strcmp(name + d + 1, ext) || strlen(name) != d + 1 + el)
-		return -1;
+		return -1; /* local sentinel: not a frame file's name */
 	return strtol(name, NULL, 10);
 }
 
@@ -98,9 +98,9 @@ static int32_t le32(const unsigned char *p) { return (int32_t)((uint32_t)p[0] | 
 
 /* The pixel size a frame file declares, from its header alone (cheap enough for every frame of a run): a PNG's IHDR
  * (PNG spec 11.2.2: the first chunk, width and height big-endian), an OpenEXR's dataWindow attribute (OpenEXR file
- * layout: magic 76 2f 31 01, version, then name\0 type\0 int32 size, value ...; box2i = xMin yMin xMax yMax). 0 when
- * it declares one, -1 when the header cannot be read. */
-static int frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h)
+ * layout: magic 76 2f 31 01, version, then name\0 type\0 int32 size, value ...; box2i = xMin yMin xMax yMax). true
+ * when it declares one, false when the header cannot be read. */
+static bool frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h)
 {
 	unsigned char b[4096];
 	int fd;
@@ -109,42 +109,42 @@ static int frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h)
 	/* regular files only: opening a FIFO would wait for a writer (issue 31.6); anything else is left to the image
 	 * reader, whose message says what the path is */
 	if (tl_open_regular(path, UINT64_MAX, &fd, &fsize, e, sizeof e))
-		return -1;
+		return false;
 	ssize_t got = read(fd, b, sizeof b);
 	close(fd);
 	if (got < 0)
-		return -1;
+		return false;
 	size_t n = (size_t)got;
 	if (!exr) {
 		static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 		if (n < 24 || memcmp(b, sig, 8) || memcmp(b + 12, "IHDR", 4))
-			return -1;
+			return false;
 		*w = be32(b + 16), *h = be32(b + 20);
-		return 0;
+		return true;
 	}
 	if (n < 8 || b[0] != 0x76 || b[1] != 0x2f || b[2] != 0x31 || b[3] != 0x01)
-		return -1;
+		return false;
 	for (size_t i = 8; i < n && b[i];) {
 		const unsigned char *name = b + i, *nul = memchr(name, 0, n - i);
 		if (!nul)
-			return -1;
+			return false;
 		const unsigned char *type = nul + 1, *tnul = type < b + n ? memchr(type, 0, (size_t)(b + n - type)) : NULL;
 		if (!tnul || tnul + 5 > b + n)
-			return -1;
+			return false;
 		int32_t size = le32(tnul + 1);
 		const unsigned char *value = tnul + 5;
 		if (size < 0 || value + size > b + n)
-			return -1;
+			return false;
 		if (!strcmp((const char *)name, "dataWindow") && !strcmp((const char *)type, "box2i") && size == 16) {
 			int64_t x0 = le32(value), y0 = le32(value + 4), x1 = le32(value + 8), y1 = le32(value + 12);
 			if (x1 < x0 || y1 < y0)
-				return -1;
+				return false;
 			*w = (uint32_t)(x1 - x0 + 1), *h = (uint32_t)(y1 - y0 + 1);
-			return 0;
+			return true;
 		}
 		i = (size_t)(value + size - b);
 	}
-	return -1;
+	return false;
 }
 
 int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size)
@@ -186,7 +186,7 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 		uint32_t w = 0, h = 0;
 		snprintf(f, sizeof f, "%s/%06zu.%s", path, m->first_frame + i, ext);
 		/* (a header that does not parse is left to the image reader, whose message says what is wrong with it) */
-		if (!frame_file_size(f, !strcmp(ext, "exr"), &w, &h) && (w != m->width || h != m->height))
+		if (frame_file_size(f, !strcmp(ext, "exr"), &w, &h) && (w != m->width || h != m->height))
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: size %ux%u differs from the run's %ux%u; render the run again",
 				      f, w, h, m->width, m->height);
 	}
@@ -208,7 +208,7 @@ int run_stats_col(const run_stats *s, const char *name)
 	for (size_t i = 0; i < s->cols; i++)
 		if (!strcmp(s->names[i], name))
 			return (int)i;
-	return -1;
+	return -1; /* local sentinel: no such column (an index, not an error) */
 }
 
 double run_stats_get(const run_stats *s, size_t row, const char *name)

@@ -83,7 +83,7 @@ int run_decision_code(const uint8_t rgb[3])
 	for (int c = 0; c < FRAME_DECISION_COUNT; c++)
 		if (!memcmp(rgb, decision_rgb[c], 3))
 			return c;
-	return -1;
+	return -1; /* local sentinel: no decision colour (a code, not an error) */
 }
 
 static int write_decisions(const char *path, const frame_image *img, char *err, size_t err_size)

@@ -224,11 +224,12 @@ static const char *const SRC_MAIN =
 
 int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *err, size_t err_size)
 {
-	int rc = -1;
 	VkResult vr;
 	colour_device *cd = NULL;
-	if (colour_device_create(dev, c, &cd, err, err_size))
-		return -1;
+	int rc = colour_device_create(dev, c, &cd, err, err_size);
+	if (rc)
+		return rc;
+	rc = TL_ERR_INTERNAL; /* until a step says otherwise: our own shader that does not compile is a bug */
 	const char *fn = colour_device_glsl(cd), *ext = colour_device_extensions(cd);
 	size_t len = strlen(SRC_HEAD) + strlen(ext) + strlen(fn) + strlen(SRC_MAIN) + 1;
 	char *src = malloc(len);
@@ -242,6 +243,7 @@ int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *e
 	VkDescriptorPool pool = VK_NULL_HANDLE;
 	if (!src || n == 0 || n > (1u << 26)) {
 		snprintf(err, err_size, n ? "out of memory" : "no pixels");
+		rc = n ? TL_ERR_NOMEM : TL_ERR_ARG;
 		goto done;
 	}
 	snprintf(src, len, "%s%s%s%s", SRC_HEAD, ext, fn, SRC_MAIN);
@@ -299,10 +301,10 @@ int colour_apply_gpu(vkdev *dev, const colour *c, float *rgba, size_t n, char *e
 	if ((vr = vkdev_cmd_submit_wait(dev, cmd)))
 		goto vkfail;
 	memcpy(rgba, buf.mapped, n * 16);
-	rc = 0;
+	rc = TL_OK;
 	goto done;
 vkfail:
-	snprintf(err, err_size, "colour_apply_gpu: Vulkan error %s", vkdev_result_string(vr));
+	rc = tl_error(err, err_size, TL_ERR_VULKAN, "colour_apply_gpu: Vulkan error %s", vkdev_result_string(vr));
 done:
 	if (pool)
 		vkDestroyDescriptorPool(dev->device, pool, NULL);
@@ -341,7 +343,7 @@ int colour_check_gpu(vkdev *dev, const colour *c, double *worst, char *err, size
 	memcpy(cpu, in, n * 16);
 	memcpy(gpu, in, n * 16);
 	colour_apply(c, cpu, n, 4);
-	int rc = colour_apply_gpu(dev, c, gpu, n, err, err_size) ? TL_ERR_VULKAN : TL_OK;
+	int rc = colour_apply_gpu(dev, c, gpu, n, err, err_size); /* its code, not always TL_ERR_VULKAN */
 	double most = 0;
 	size_t at = 0;
 	for (size_t i = 0; !rc && i < n * 4; i++) {

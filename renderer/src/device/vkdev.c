@@ -369,7 +369,7 @@ static int find_memory(const vkdev *dev, uint32_t bits, VkMemoryPropertyFlags wa
 	for (uint32_t i = 0; i < dev->mem_props.memoryTypeCount; i++)
 		if ((bits & (1u << i)) && (dev->mem_props.memoryTypes[i].propertyFlags & want) == want)
 			return (int)i;
-	return -1;
+	return -1; /* local sentinel: no such memory type (an index; allocate() makes it a VkResult) */
 }
 
 static VkResult allocate(vkdev *dev, VkMemoryRequirements req, VkMemoryPropertyFlags want, bool addressable,

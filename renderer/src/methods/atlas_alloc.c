@@ -258,18 +258,19 @@ typedef struct buddy {
 	uint8_t *tree; /* 2^(order + 1) - 1 nodes, root 0, children 2i + 1, 2i + 2 */
 } buddy;
 
-static int buddy_init(buddy *b, uint32_t order)
+/* false when out of memory */
+static bool buddy_init(buddy *b, uint32_t order)
 {
 	b->order = order;
 	size_t n = ((size_t)2 << order) - 1;
 	if (!(b->tree = malloc(n)))
-		return -1;
+		return false;
 	for (size_t i = 0, d = 0, next = 1; i < n; i++) {
 		if (i == next)
 			d++, next = next * 2 + 1;
 		b->tree[i] = (uint8_t)(order - d + 1);
 	}
-	return 0;
+	return true;
 }
 
 static void buddy_update_up(buddy *b, size_t i, uint32_t node_order)
@@ -336,7 +337,7 @@ int atlas_alloc_create(uint32_t width, uint32_t height, atlas_alloc **out, char 
 	if (width < 2 || height < 2 || (width & (width - 1)) || (height & (height - 1)) || width > 65536 || height > 65536)
 		return tl_error(err, err_size, TL_ERR_ARG, "atlas %ux%u: sides must be powers of two in 2..65536", width, height);
 	atlas_alloc *a = calloc(1, sizeof *a);
-	if (!a || buddy_init(&a->rows, log2u(height))) {
+	if (!a || !buddy_init(&a->rows, log2u(height))) {
 		free(a);
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
@@ -382,7 +383,7 @@ bool atlas_alloc_block(atlas_alloc *a, uint32_t lw, uint32_t lh, uint32_t *x, ui
 		a->shelves = n, a->cap = cap;
 	}
 	shelf s = {.y = sy, .lh = lh};
-	if (buddy_init(&s.cols, a->lw_atlas)) {
+	if (!buddy_init(&s.cols, a->lw_atlas)) {
 		buddy_free(&a->rows, sy, lh);
 		return false;
 	}

@@ -54,8 +54,8 @@ int anim_path_components(anim_path path);
 anim_interp anim_interp_from_string(const char *s);
 const char *anim_interp_name(anim_interp interp);
 
-/* Checks key count, strictly increasing times, finite values and non-zero rotation keys; returns 0 or a
- * negative error and, on error, writes a one-line reason into `why`. */
+/* Checks key count, strictly increasing times, finite values and non-zero rotation keys; returns TL_OK, or
+ * TL_ERR_INPUT with a one-line reason in `why`. */
 int anim_track_validate(const anim_track *track, char *why, size_t why_size);
 /* Samples the track at time t into out[0..components-1]. Rotations come back normalised. */
 void anim_track_sample(const anim_track *track, float t, float out[4]);

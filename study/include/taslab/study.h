@@ -155,7 +155,8 @@ int sty_check_output(const sty *s, const char *path, char *err, size_t err_size)
  * given exactly for methods with a threshold (tfr, tarc, tasa and -oracle forms; 0 < T <= 255) and empty for
  * the others; period is given exactly for rrc and sau (1, 2, 4 or 8) and empty for the others; text cells
  * (participant, scene, camera, method) may not start with = + - @ (spreadsheet formulas) nor hold quotes or
- * control characters. */
+ * control characters. Returns TL_OK; TL_ERR_INPUT when the file cannot be read or is malformed; TL_ERR_ARG when
+ * the study already holds participants; TL_ERR_DB; TL_ERR_NOMEM. */
 int sty_import_long(sty *s, const char *path, size_t *rows, char *err, size_t err_size);
 
 /* Statistics into DIR: conditions.csv, anova.csv (DESIGN section 7), posthoc.csv, observers.csv, jod.csv,
@@ -173,7 +174,8 @@ typedef struct sty_tally_desc {
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size);
 
 /* Repeated-measures ANOVA on a complete n x (a x b) table of cell means (subject-major, factor A major):
- * effects A, B and A:B with F, dfs, p, and Greenhouse-Geisser epsilon and corrected p. Exposed for tests. */
+ * effects A, B and A:B with F, dfs, p, and Greenhouse-Geisser epsilon and corrected p. Exposed for tests. Returns
+ * TL_OK, TL_ERR_ARG (fewer than 2 subjects or an empty factor) or TL_ERR_NOMEM. */
 typedef struct sty_anova_effect {
 	double df1, df2, F, p, epsilon_gg, p_gg;
 } sty_anova_effect;

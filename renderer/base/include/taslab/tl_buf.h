@@ -16,9 +16,10 @@ typedef struct tl_buf {
 	int failed; /* an allocation failed: the text is incomplete */
 } tl_buf;
 
-/* Appends n bytes of s. Returns 0, or -1 once the buffer has failed. */
+/* Appends n bytes of s. Returns TL_OK, or TL_ERR_NOMEM once the buffer has failed. */
 int tl_buf_append(tl_buf *b, const char *s, size_t n);
-/* Appends printf-style text. Returns 0, or -1 once the buffer has failed. */
+/* Appends printf-style text. Returns TL_OK, or TL_ERR_NOMEM once the buffer has failed (also after a format
+ * vsnprintf cannot expand). */
 int tl_buf_printf(tl_buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 #ifdef __cplusplus
