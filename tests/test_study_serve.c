@@ -582,6 +582,8 @@ static void test_framing(void **state)
 		"Content-Length: 2\r\nContent-Length: %zu\r\n",
 		"Content-Length: %zu, 3\r\n",                              /* a conflicting list */
 		"Content-Length: %zu\r\nTransfer-Encoding: chunked\r\n",    /* both */
+		"Content-Length: -1\r\n",                                  /* malformed: refused by libmicrohttpd itself, */
+		"Content-Length: abc\r\n",                                 /* before our handler (README: its 400 twice) */
 	};
 	for (size_t i = 0; i < sizeof heads / sizeof *heads; i++) {
 		char h[256];
