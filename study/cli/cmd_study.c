@@ -59,6 +59,24 @@ static const cli_opt serve_options[] = {
 	{.name = "threads", .arg = "N",
 	 .help = "server threads (1..64, default 4)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, threads), .lo = 1, .hi = 64},
+	{.name = "max-connections", .arg = "N",
+	 .help = "connections in all (16..100000, default 1024)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, max_connections), .lo = 16, .hi = 100000},
+	{.name = "max-per-client", .arg = "N",
+	 .help = "connections per client address (1..100000; default: no cap, a lab behind one NAT or proxy is one address)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, max_per_client), .lo = 1, .hi = 100000},
+	{.name = "max-reading", .arg = "N",
+	 .help = "connections reading a request at once; a new one beyond closes the one reading longest (default: half of --max-connections)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, max_reading), .lo = 1, .hi = 100000},
+	{.name = "idle-timeout", .arg = "S",
+	 .help = "seconds before an idle connection is closed (1..3600, default 15)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, idle_timeout), .lo = 1, .hi = 3600},
+	{.name = "head-timeout", .arg = "S",
+	 .help = "seconds a request head may take, however slowly it trickles (1..3600, default 10)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, head_timeout), .lo = 1, .hi = 3600},
+	{.name = "body-timeout", .arg = "S",
+	 .help = "seconds a request body may take after its head (1..3600, default 10)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, body_timeout), .lo = 1, .hi = 3600},
 	{0},
 };
 
@@ -181,7 +199,10 @@ static int study_main(void *opts, cli_ctx *ctx)
 		}
 	} else if (!strcmp(sub, "serve")) {
 		sty_server *sv = NULL;
-		sty_server_desc sd = {.bind = ov.bind, .port = (uint16_t)ov.port, .threads = ov.threads};
+		sty_server_desc sd = {.bind = ov.bind, .port = (uint16_t)ov.port, .threads = ov.threads,
+				      .max_connections = ov.max_connections, .max_per_client = ov.max_per_client,
+				      .max_reading = ov.max_reading, .timeout_s = ov.idle_timeout,
+				      .head_timeout_s = ov.head_timeout, .body_timeout_s = ov.body_timeout};
 		if (!(rc = sty_server_start(s, &sd, &sv, err, err_size))) {
 			printf("listening on %s\nadmin token %s (send it as the header 'Authorization: Bearer TOKEN' to "
 			       "/admin/export.csv and /admin/export-pwcmp.csv)\n", sty_served_url(s), sty_admin_token(s));
@@ -233,7 +254,7 @@ static const cli_command study_links = {
 static const cli_command study_serve = {
 	.name = "study serve",
 	.summary = "run the study in the browser (prints the admin token; Ctrl-C stops it)",
-	.synopsis = "taslab study serve --db STUDY.db [--port P] [--bind ADDR] [--threads N]",
+	.synopsis = "taslab study serve --db STUDY.db [--port P] [--bind ADDR] [--threads N] [--max-connections N] ...",
 	.options = serve_options,
 	STUDY_SUB,
 };

@@ -186,6 +186,7 @@ static sty *sty_alloc(const char *path)
 	snprintf(s->path, sizeof s->path, "%s", path);
 	snprintf(s->open_path, sizeof s->open_path, "%s", path);
 	pthread_mutex_init(&s->lock, NULL);
+	sty_batch_init(s);
 	return s;
 }
 
@@ -312,6 +313,7 @@ void sty_close(sty **ps)
 		tl_atomic_abort(&s->pending);
 	}
 	pthread_mutex_destroy(&s->lock);
+	sty_batch_destroy(s);
 	free(s);
 	*ps = NULL;
 }

@@ -10,6 +10,8 @@
 #include "taslab/study.h"
 #include "taslab/tl_fs.h"
 
+#define STY_BATCH_RESULTS 64 /* results of the last batches kept for members that wake late (study_commit.c) */
+
 struct sty {
 	sqlite3 *db;
 	char path[TL_PATH_MAX];      /* the study's name (messages, exports' self-check) */
@@ -19,12 +21,34 @@ struct sty {
 	char token[33];
 	char served_url[256];
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
+	struct sty_batch {    /* group commit of the server's writes (study_commit.c), under lock */
+		bool open, leading;   /* a transaction is open; a request is gathering it before its commit */
+		unsigned members;     /* requests whose change is in the open batch, waiting for its commit */
+		unsigned coming;      /* requests waiting for the lock (atomic) */
+		uint64_t epoch;       /* batches committed (or failed) so far */
+		int results[STY_BATCH_RESULTS];
+		char why[256];        /* SQLite's message of the last failed commit */
+		pthread_cond_t joined, done;
+	} batch;
 	struct sty_method {   /* the caller's method descriptions (sty_describe_method, issue 30.1) */
 		char name[32];
 		run_method_facts facts;
 	} methods[STY_MAX_METHODS];
 	size_t method_count;
 };
+
+/* Group commit (study_commit.c, issue 32.3). A server request that writes:
+ *   sty_batch_lock(s);                          // instead of pthread_mutex_lock(&s->lock)
+ *   rc = sty_batch_join(s, err, n);             // into the open transaction, inside a savepoint
+ *   if (!rc) rc = ...its reads and writes...;
+ *   rc = sty_batch_leave(s, rc, wrote, err, n); // undone on error; else returns once committed (fsync) with others
+ *   pthread_mutex_unlock(&s->lock);
+ * sty_batch_leave returns rc, or TL_ERR_DB when the commit failed (then nothing of the batch was stored). */
+void sty_batch_init(sty *s);
+void sty_batch_destroy(sty *s);
+void sty_batch_lock(sty *s);
+int sty_batch_join(sty *s, char *err, size_t err_size);
+int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size);
 
 /* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);

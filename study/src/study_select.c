@@ -99,8 +99,8 @@ int sty_select_answer(sty *s, int64_t pid, uint32_t trial, int64_t answer, int64
 	}
 	sqlite3_finalize(st);
 	st = NULL;
-	/* A single autocommit INSERT: when sqlite3_step returns DONE the row is committed (and, with
-	 * synchronous=FULL, on disk); only then is the answer acknowledged. */
+	/* Inside the caller's transaction (a group commit, study_commit.c): the answer is acknowledged only after
+	 * that transaction's COMMIT has returned (with synchronous=FULL: on disk). */
 	if (sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at)"
 				      " VALUES(?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))", -1, &st, NULL)) {
 		rc = sty_db_fail(s, err, err_size, "storing the answer");
@@ -137,8 +137,8 @@ static const char *clip_ext(const char *path)
 }
 
 /* The opaque name of side `slot` of trial (pid, idx), made (random, stored) when missing. Caller holds the lock
- * and an open transaction. false when SQLite or the kernel's random bits fail (the caller reports TL_ERR_DB). */
-static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n)
+ * and an open transaction; *made is set when a name was stored. false when SQLite or the kernel's random bits fail (the caller reports TL_ERR_DB). */
+static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n, bool *made)
 {
 	sqlite3_stmt *st;
 	if (sqlite3_prepare_v2(s->db, "SELECT name FROM clip_names WHERE participant = ? AND idx = ? AND slot = ?", -1, &st,
@@ -167,45 +167,39 @@ static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *pa
 	sqlite3_bind_int(st, 4, slot);
 	r = sqlite3_step(st);
 	sqlite3_finalize(st);
+	*made = true;
 	return r == SQLITE_DONE;
 }
 
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size)
 {
 	memset(t, 0, sizeof *t);
-	pthread_mutex_lock(&s->lock);
-	int rc = TL_OK, in_tx = 0;
+	sty_batch_lock(s);
 	int64_t pid = sty_select_participant(s, code);
+	int rc = pid < 0 ? tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant") : TL_OK;
+	bool named = false;
 	sty_pick p;
-	if (pid < 0) {
-		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant");
-		goto done;
+	/* The clip names made for a trial shown for the first time are committed (with other requests' writes, one
+	 * fsync: study_commit.c) before the trial is sent. */
+	if (!rc)
+		rc = sty_batch_join(s, err, err_size);
+	if (!rc)
+		rc = sty_select_current(s, pid, &p, err, err_size);
+	if (!rc) {
+		t->total = p.total;
+		t->answered = p.answered;
+		t->done = p.done;
 	}
-	/* One transaction: the clip names made for a trial shown for the first time are committed together. */
-	if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
-		rc = sty_db_fail(s, err, err_size, "next trial");
-		goto done;
-	}
-	in_tx = 1;
-	if ((rc = sty_select_current(s, pid, &p, err, err_size)))
-		goto done;
-	t->total = p.total;
-	t->answered = p.answered;
-	t->done = p.done;
-	if (!p.done) {
+	if (!rc && !p.done) {
 		t->index = p.index;
 		snprintf(t->kind, sizeof t->kind, "%s", p.kind);
 		t->break_before = p.break_before;
-		if (!clip_name(s, pid, t->index, 0, p.ref_first ? p.ref_clip : p.test_clip, t->clip_a, sizeof t->clip_a) ||
-		    !clip_name(s, pid, t->index, 1, p.ref_first ? p.test_clip : p.ref_clip, t->clip_b, sizeof t->clip_b))
+		if (!clip_name(s, pid, t->index, 0, p.ref_first ? p.ref_clip : p.test_clip, t->clip_a, sizeof t->clip_a, &named) ||
+		    !clip_name(s, pid, t->index, 1, p.ref_first ? p.test_clip : p.ref_clip, t->clip_b, sizeof t->clip_b, &named))
 			rc = sty_db_fail(s, err, err_size, "naming the clips");
 	}
-done:
-	if (in_tx && (rc || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK)) {
-		if (!rc)
-			rc = sty_db_fail(s, err, err_size, "next trial");
-		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
-	}
+	if (pid >= 0)
+		rc = sty_batch_leave(s, rc, named, err, err_size);
 	if (rc)
 		memset(t, 0, sizeof *t);
 	pthread_mutex_unlock(&s->lock);
@@ -246,10 +240,14 @@ int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t
 	if (rt_ms < -1 || rt_ms > STY_RT_MS_MAX)
 		return tl_error(err, err_size, TL_ERR_ARG, "rt_ms must be a whole number of milliseconds from 0 to %d",
 				STY_RT_MS_MAX);
-	pthread_mutex_lock(&s->lock);
+	sty_batch_lock(s);
 	int64_t pid = sty_select_participant(s, code);
-	int rc = pid < 0 ? tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant")
-			 : sty_select_answer(s, pid, trial, answer, rt_ms, err, err_size);
+	int rc = pid < 0 ? tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant") : sty_batch_join(s, err, err_size);
+	if (pid >= 0) {
+		if (!rc)
+			rc = sty_select_answer(s, pid, trial, answer, rt_ms, err, err_size);
+		rc = sty_batch_leave(s, rc, true, err, err_size); /* acknowledged only once committed */
+	}
 	pthread_mutex_unlock(&s->lock);
 	return rc;
 }

@@ -33,7 +33,8 @@ int64_t sty_select_participant(sty *s, const char *code);
 /* The participant's current trial: the lowest-index unanswered one (the page answers in order). Reads only. */
 int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_size);
 
-/* Stores the answer to trial `trial` durably (one autocommit INSERT: committed when it returns TL_OK). Only the
+/* Stores the answer to trial `trial` in the caller's transaction (sty_answer's group commit makes it durable before
+ * it is acknowledged; study_commit.c). Only the
  * current trial can be answered: TL_ERR_ARG for a later one, TL_ERR_CONFLICT for one answered already,
  * TL_ERR_NOTFOUND for a trial the plan does not have. `answer` (-2..2) and `rt_ms` (-1: not measured) are the
  * caller's to check (sty_answer does). */

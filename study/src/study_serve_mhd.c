@@ -116,7 +116,7 @@ static unsigned head_timeout_s(const struct sty_server *sv) { return sv->desc.he
 static unsigned body_timeout_s(const struct sty_server *sv) { return sv->desc.body_timeout_s ? sv->desc.body_timeout_s : 10u; }
 static unsigned max_reading(const struct sty_server *sv)
 {
-	unsigned all = sv->desc.max_connections ? sv->desc.max_connections : 256u;
+	unsigned all = sv->desc.max_connections ? sv->desc.max_connections : 1024u;
 	return sv->desc.max_reading ? sv->desc.max_reading : (all / 2 ? all / 2 : 1);
 }
 
@@ -355,8 +355,8 @@ int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char
 				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_NOTIFY_CONNECTION, on_connection, sv,
 				   MHD_OPTION_CONNECTION_TIMEOUT,
 				   d->timeout_s ? d->timeout_s : 15u, MHD_OPTION_CONNECTION_LIMIT,
-				   d->max_connections ? d->max_connections : 256u, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
-				   d->max_per_client ? d->max_per_client : 32u, MHD_OPTION_END);
+				   d->max_connections ? d->max_connections : 1024u, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+				   d->max_per_client, MHD_OPTION_END);
 	pthread_mutex_lock(&sv->log_lock);
 	sv->starting = 0;
 	pthread_mutex_unlock(&sv->log_lock);

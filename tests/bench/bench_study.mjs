@@ -2,9 +2,8 @@
 // their trials concurrently (GET next trial, POST answer), then the answers are counted through the export.
 // Prints answers/s, p50/p99 POST latency and whether every acknowledged answer is stored exactly once.
 //   node bench_study.mjs BASE_URL ADMIN_TOKEN CODE...
-// Each participant connects from its own loopback address (127.0.0.2, .3, ...), as real participants come from their
-// own machines: the server caps connections per client address (issue 12.4), and 50 participants behind one address
-// would be refused by that cap, not measure the server.
+// By default every participant connects from 127.0.0.1, as a lab behind one NAT or reverse proxy does (issue 32.3);
+// BENCH_ADDRESSES=many gives each its own loopback address (127.0.0.2, .3, ...), as participants at home have.
 import http from 'node:http';
 const [base, token, ...codes] = process.argv.slice(2);
 function request(agent, path, method = 'GET', body = null, headers = {}) {
@@ -20,14 +19,22 @@ function request(agent, path, method = 'GET', body = null, headers = {}) {
     req.end();
   });
 }
+// BENCH_THINK_MS: mean pause of a participant before each answer (watching the clips; uniform in 0..2x the mean,
+// from a seeded generator); 0 (default): answer at once, the server's saturation.
+const thinkMs = Number(process.env.BENCH_THINK_MS || 0);
+let seed = 12345;
+const rand = () => ((seed = (Math.imul(seed, 1103515245) + 12345) >>> 0) / 4294967296);
+const sleep = ms => new Promise(r => setTimeout(r, ms));
 const lat = [];
 let acked = 0;
 const t0 = performance.now();
 await Promise.all(codes.map(async (code, p) => {
-  const agent = new http.Agent({ keepAlive: true, localAddress: `127.0.${1 + Math.floor((p + 2) / 256)}.${(p + 2) % 256}` });
+  const many = process.env.BENCH_ADDRESSES === 'many';
+  const agent = new http.Agent({ keepAlive: true, ...(many ? { localAddress: `127.0.${1 + Math.floor((p + 2) / 256)}.${(p + 2) % 256}` } : {}) });
   for (let i = 0; i < 1000; i++) {                       // bounded: at most 1000 trials per participant
     const t = JSON.parse((await request(agent, `/api/${code}/trial`)).text);
     if (t.done) break;
+    if (thinkMs > 0) await sleep(2 * thinkMs * rand());
     const s = performance.now();
     const body = JSON.stringify({ trial: t.index, answer: ((p + i) % 5) - 2, rt_ms: 1000 });
     const r = await request(agent, `/api/${code}/answer`, 'POST', body,

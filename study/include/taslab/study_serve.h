@@ -18,8 +18,8 @@
  * Framing: conflicting duplicate Content-Length, or Content-Length with Transfer-Encoding -> 400 (RFC 7230
  * section 3.3.3); any Transfer-Encoding -> 400 (chunked not last), 501 (another coding) or 411 (chunked: bodies
  * need a Content-Length), at the head. Errors are JSON {"error": "..."}; a 500 says only "internal error" (the details, which may
- * name server paths, go to the log). Each client address may hold at most max_per_client connections, an
- * idle connection is closed after timeout_s, a request must arrive within deadlines however slowly it trickles,
+ * name server paths, go to the log). A client address may hold at most max_per_client connections (no cap by
+ * default), an idle connection is closed after timeout_s, a request must arrive within deadlines however slowly it trickles,
  * and the connections still reading a request are capped, so slow clients cannot lock the others out. */
 #ifndef TASLAB_STUDY_SERVE_H
 #define TASLAB_STUDY_SERVE_H
@@ -43,8 +43,10 @@ typedef struct sty_server_desc {
 	const char *bind;         /* IPv4 address to listen on [127.0.0.1] */
 	uint16_t port;            /* 0: any free port (see sty_server_port) */
 	unsigned threads;         /* worker threads [4] */
-	unsigned max_connections; /* connections in all [256] */
-	unsigned max_per_client;  /* connections per client address [32; a browser opens at most 6 per host] */
+	unsigned max_connections; /* connections in all [1024] */
+	/* connections per client address [none: a lab behind one NAT or reverse proxy is one address, issue 32.3;
+	 * one client's idle connections are bounded by the deadlines and max_reading below, whatever its address] */
+	unsigned max_per_client;
 	unsigned timeout_s;       /* an idle connection is closed after this many seconds [15] */
 	/* Deadlines that a trickle of bytes does not reset (the idle timeout does not fire on one byte a second): a
 	 * request head must be complete head_timeout_s after the connection opened or its previous reply was sent

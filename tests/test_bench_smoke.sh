@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# test_bench_smoke.sh — every scripts/bench-* in a smoke mode (issue 32.4): tiny sizes, few frames, one round, against
+# the test build (TASLAB_BUILD) and a private results folder (TASLAB_BENCH_RUNS), with the Khronos validation layer
+# on. No time is asserted — the figures mean nothing at these sizes; what fails is a benchmark that no longer runs
+# (exit status) or no longer prints its table (the line checked per benchmark below), so a change that breaks one
+# fails CI instead of rotting until someone measures again.
+# Usage: test_bench_smoke.sh BUILD_DIR WORK_DIR [BENCH...]     (default: every benchmark)
+set -euo pipefail
+build="$(cd "$1" && pwd)" work="$2"
+shift 2
+cd "$(dirname "$0")/.."
+source tests/require.sh
+source tests/lsan_env.sh
+export TASLAB_BUILD="$build" TASLAB_BENCH_RUNS="$work" TASLAB_VALIDATION=1
+rm -rf "$work" && mkdir -p "$work"
+# name | arguments | a line its output must have
+smokes=(
+  "bench-render|--frames 2 --sizes 64x36|64x36 *[0-9]"
+  "bench-scenes|--blocks 1 --block-frames 2 --size 64x36|^calm "
+  "bench-clip|--frames 2 --size 64x36|clip encode:"
+  "bench-tfr|--frames 2 --size 64x36 --no-analysis|tfr"
+  "bench-methods|--size 64x36 --frames 0:3 --paths calm:walk|calm/walk"
+  "bench-methods|--set table1 --size 64x36 --frames 0:3 --paths calm:walk|calm / walk"
+  "bench-metrics|--pairs 2 --runs 1 --compute-runs 1|metrics speed"
+  "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"
+  "bench-study|--participants 3|: 60 test ratings in the database (expected 60)"
+)
+failed=0
+for s in "${smokes[@]}"; do
+  IFS='|' read -r name args want <<<"$s"
+  if [ $# -gt 0 ] && [[ " $* " != *" $name "* ]]; then continue; fi
+  log="$work/$name-$(echo "$args" | tr -c 'a-z0-9' _).log"
+  t0=$(date +%s)
+  # shellcheck disable=SC2086
+  if ! scripts/$name $args >"$log" 2>&1; then
+    echo "FAIL: scripts/$name $args exited non-zero; its output:"; tail -30 "$log"; failed=1; continue
+  fi
+  if ! grep -q "$want" "$log"; then
+    echo "FAIL: scripts/$name $args printed no line with '$want'; its output:"; tail -30 "$log"; failed=1; continue
+  fi
+  echo "ok: scripts/$name $args ($(( $(date +%s) - t0 )) s)"
+done
+exit $failed
