@@ -10,7 +10,8 @@
  *  D4  the shaded count of ads equals a CPU replay of its decisions on the frame's own values at 64x64 (raw display,
  *      so disp() is known on the CPU); the shaded count does not increase with S and never drops below the covered
  *      pixels of level 0;
- *  determinism (same inputs, same frames) and every built-in scene with every method of the path. */
+ *  determinism (same inputs, same frames) and every built-in scene with every method of the path (VRS: 2 frames, the
+ *  second runs the rate pass on the first's history). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,7 +95,8 @@ static void test_vref_vs_ref(void **state)
 
 /* ---- determinism; every built-in scene with every method ---- */
 
-static const char *const path_methods[] = {"vref", "ads", "ads@0", "ads@8", "ads-edge-guard"};
+static const char *const path_methods[] = {"vref",     "ads",     "ads@0", "ads@8", "ads-edge-guard",
+					    "casedge", "castexel", "mas",   "fovea", "taas"};
 
 static void test_builtin_every_method(void **state)
 {
