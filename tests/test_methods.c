@@ -68,6 +68,13 @@ static void test_variants(void **state)
 	expect_variant("sau/8", "sau/8", "sau", "sau-N8", NAN, 8);
 	expect_variant("tasa@16", "tasa@16", "tasa", "tasa-T16", 16, 0);
 	expect_variant("tasa-oracle@8", "tasa-oracle@8", "tasa-oracle", "tasa-oracle-T8", 8, 0);
+	/* the compacted sample path (BASELINES.md): ads's S with '@' (default 2), the VRS methods without variant values */
+	expect_variant("vref", "vref", "vref", "vref", NAN, 0);
+	expect_variant("ads", "ads", "ads", "ads", 2, 0);
+	expect_variant("ads@8", "ads@8", "ads", "ads-T8", 8, 0);
+	expect_variant("ads@-1", "ads@-1", "ads", "ads-T-1", -1, 0);
+	expect_variant("casedge", "casedge", "casedge", "casedge", NAN, 0);
+	expect_variant("taas", "taas", "taas", "taas", NAN, 0);
 	char err[256];
 	method_config c;
 	struct {
@@ -85,6 +92,9 @@ static void test_variants(void **state)
 		{"rrc/16", "one of 1, 2, 4, 8"},	  {"rrc-oracle/4", "no '-oracle' form"},
 		{"tarc", "tarc@8"},		  {"tarc@0", "T > 0"},
 		{"tarc@256", "out of range"},	  {"rrc@8", "takes no '@'"},
+		{"ads@300", "out of range"},	  {"ads@-2", "out of range"},
+		{"casedge@8", "takes no '@'"},	  {"fovea/4", "takes no '/'"},
+		{"vref-oracle", "no '-oracle' form"}, {"mas-oracle", "no '-oracle' form"},
 	};
 	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		int rc = method_config_parse_variant(&c, bad[i].token, err, sizeof err);
@@ -100,6 +110,15 @@ static void test_options(void **state)
 	(void)state;
 	char err[256];
 	method_config c;
+	/* options of the sample-path methods: ads's step from its list, fovea's radii ordered */
+	assert_int_equal(method_config_init(&c, "ads", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_set(&c, "step", "3", err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "one of 2, 4, 8, 16"));
+	assert_int_equal(method_config_init(&c, "fovea", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_set(&c, "inner", "30", err, sizeof err), TL_OK);
+	assert_int_equal(method_config_check(&c, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "below --inner"));
+	assert_int_equal(method_config_set(&c, "gaze-x", "1.5", err, sizeof err), TL_ERR_ARG);
 	assert_int_equal(method_config_init(&c, "tfr", err, sizeof err), TL_OK);
 	assert_true(method_config_threshold(&c) == 8);		   /* the table's default */
 	assert_true(method_config_number(&c, "max-age") == 119); /* K */

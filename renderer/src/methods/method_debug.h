@@ -27,4 +27,12 @@ int atlas_debug_facing(render *r, uint32_t pid);
  * render_desc.decisions, else NULL. */
 const uint32_t *reproj_debug_state(render *r);
 
+/* The compacted sample path (vbuf_family.c, vrs.c): the tile rates the last frame's select read (w | h << 8 per 16x16
+ * tile, row-major). VRS methods: per tile (P', r, sr, target tile) of the last rate pass (fovea: eccentricity, index,
+ * index, tile; -1 as target when the tile centre left the image), and the palette indices S of the last frame. */
+const uint32_t *vbuf_debug_rates(render *r);
+/* The last frame's ids image (passes/ids.h: width x height x 4 words) copied out. */
+int vbuf_debug_ids(render *r, uint32_t *ids, char *err, size_t err_size);
+const float *vrs_debug_tiles(render *r, const int32_t **index, uint32_t *tiles_x, uint32_t *tiles_y);
+
 #endif

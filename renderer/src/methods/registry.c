@@ -17,7 +17,14 @@
 	X(tarc)                                                                                                        \
 	X(sa)                                                                                                          \
 	X(sau)                                                                                                         \
-	X(tasa)
+	X(tasa)                                                                                                        \
+	X(vref)                                                                                                        \
+	X(ads)                                                                                                         \
+	X(casedge)                                                                                                     \
+	X(castexel)                                                                                                    \
+	X(mas)                                                                                                         \
+	X(fovea)                                                                                                       \
+	X(taas)
 
 #define DECLARE(name) extern const render_method render_method_##name;
 METHODS(DECLARE)

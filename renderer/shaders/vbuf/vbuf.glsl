@@ -1,0 +1,141 @@
+// vbuf.glsl - resources and helpers of the compacted sample path (renderer/src/passes/vbuf.c; BASELINES.md
+// section 0): decide per pixel, append the samples to shade to a list (select), shade the listed samples only with
+// an indirect dispatch (shade), then copy or interpolate per pixel (resolve). Needs common/common.glsl first.
+//
+// A sample is (location, object, triangle, footprint w x h): it lives at its *leader* pixel p (the first pixel of
+// its coarse pixel, in raster order, covered by the same object and triangle), and its location is the centre of
+// the coarse pixel ([V] sec. 3, Fig. 3.2: the plane is extrapolated where that centre leaves the triangle). Its
+// shaded value is stored at p in `svals`, so every value has one writer and the frame does not depend on the
+// order of the list (atomic appends).
+#ifndef TASLAB_VBUF_GLSL
+#define TASLAB_VBUF_GLSL
+
+layout(std430, set = 1, binding = 0) readonly buffer Vertices { float vtx[]; };   // the scene's (vertex_pull.glsl)
+layout(std430, set = 1, binding = 1) readonly buffer Indices { uint indices[]; };
+layout(std430, set = 1, binding = 2) readonly buffer ObjInfo { uvec4 obj_info[]; }; // per object: first index, vertex offset
+layout(std430, set = 1, binding = 3) buffer List { uvec2 list[]; };                 // samples: x | y << 16, w | h << 8
+// 0 appended this round, 1 listed this round (shade's bound), 2-4 the VkDispatchIndirectCommand of the shade,
+// 5 samples shaded (counted by the shading), 6 pixels interpolated (ads), 7 pixels filled by a copy (resolve),
+// 8 late pixels (--truth), 9 samples listed in the frame (all rounds), 10-15 method counters
+layout(std430, set = 1, binding = 4) buffer Counters { uint count[16]; };
+layout(std430, set = 1, binding = 5) buffer Rates { uint rate[]; };                 // per 16x16 tile: w | h << 8
+layout(set = 1, binding = 6, rgba32ui) uniform readonly uimage2D ids;              // passes/ids.h
+layout(set = 1, binding = 7, rgba16f) uniform image2D svals;                       // shaded (and ads: interpolated) values
+layout(set = 1, binding = 8, rgba16f) uniform image2D hdr;
+
+#include "common/vertex_pull.glsl"
+
+const uint VBUF_TILE = 16u;
+
+// Barycentrics of the point q (pixels, NDC from `size`) on the plane of the triangle whose clip-space (x, y, w) are
+// va, vb, vc, from the 2-D homogeneous edge functions: lambda_i proportional to dot((x, y, 1), e_i), e_i the cross
+// product of the other two vertices' (x, y, w). Perspective-correct; outside the triangle the plane is extrapolated.
+vec3 vbuf_lambda(vec3 va, vec3 vb, vec3 vc, vec2 q, vec2 size)
+{
+	vec3 P = vec3(q / size * 2.0 - 1.0, 1.0);
+	vec3 f = vec3(dot(P, cross(vb, vc)), dot(P, cross(vc, va)), dot(P, cross(va, vb)));
+	return f / (f.x + f.y + f.z);
+}
+
+// Barycentrics w of the sample at q (pixels) of footprint r on the triangle A, B, C of `object` at `slot`, and its
+// texture gradients: the differences of uv between the centres of the coarse pixels of its 2x2 coarse quad, in x
+// and y from the quad's first one (as the rasterizer's quad derivatives at this rate, so vref's texture LOD is
+// ref's). VBUF_ANALYTIC_GRADIENTS (TASLAB_VBUF_GRADIENTS=analytic, a diagnostic): the analytic derivatives at q
+// times the footprint instead.
+vec3 vbuf_bary(Vertex A, Vertex B, Vertex C, uint slot, uint object, vec2 q, vec2 size, uvec2 r, out vec2 duv_dx,
+	       out vec2 duv_dy)
+{
+	mat4 m = states[slot].view_proj * object_at(slot, object).world;
+	vec4 ca = m * vec4(A.p, 1.0), cb = m * vec4(B.p, 1.0), cc = m * vec4(C.p, 1.0);
+	vec3 va = vec3(ca.x, ca.y, ca.w), vb = vec3(cb.x, cb.y, cb.w), vc = vec3(cc.x, cc.y, cc.w);
+	vec3 w = vbuf_lambda(va, vb, vc, q, size);
+#ifdef VBUF_ANALYTIC_GRADIENTS
+	vec3 ea = cross(vb, vc), eb = cross(vc, va), ec = cross(va, vb);
+	vec3 P = vec3(q / size * 2.0 - 1.0, 1.0);
+	vec3 f = vec3(dot(P, ea), dot(P, eb), dot(P, ec));
+	float S = f.x + f.y + f.z;
+	vec3 fx = vec3(ea.x, eb.x, ec.x), fy = vec3(ea.y, eb.y, ec.y);
+	vec3 dwx = (fx * S - f * (fx.x + fx.y + fx.z)) / (S * S) * (2.0 / size.x * float(r.x));
+	vec3 dwy = (fy * S - f * (fy.x + fy.y + fy.z)) / (S * S) * (2.0 / size.y * float(r.y));
+#else
+	vec2 rf = vec2(r);
+	vec2 cq = floor(q / rf);                  // the coarse pixel
+	vec2 c0 = (cq - mod(cq, 2.0) + 0.5) * rf; // centre of its quad's first coarse pixel
+	vec3 w0 = vbuf_lambda(va, vb, vc, c0, size);
+	vec3 dwx = vbuf_lambda(va, vb, vc, c0 + vec2(rf.x, 0.0), size) - w0;
+	vec3 dwy = vbuf_lambda(va, vb, vc, c0 + vec2(0.0, rf.y), size) - w0;
+#endif
+	duv_dx = A.uv * dwx.x + B.uv * dwx.y + C.uv * dwx.z;
+	duv_dy = A.uv * dwy.x + B.uv * dwy.y + C.uv * dwy.z;
+	return w;
+}
+
+// The vertices of triangle `tri` of `object` (object info: first index, vertex offset of its mesh).
+void vbuf_triangle(uint object, uint tri, out Vertex A, out Vertex B, out Vertex C)
+{
+	uvec4 oi = obj_info[object];
+	uint k = oi.x + 3u * tri;
+	A = vertex_at(indices[k] + oi.y);
+	B = vertex_at(indices[k + 1u] + oi.y);
+	C = vertex_at(indices[k + 2u] + oi.y);
+}
+
+// The rate (footprint) of the tile holding pixel p.
+uvec2 vbuf_rate(ivec2 p, ivec2 size)
+{
+	uint tiles_x = (uint(size.x) + VBUF_TILE - 1u) / VBUF_TILE;
+	uint code = rate[(uint(p.y) / VBUF_TILE) * tiles_x + uint(p.x) / VBUF_TILE];
+	return uvec2(code & 0xFFu, (code >> 8) & 0xFFu);
+}
+
+// The leader of pixel p (object + 1 and triangle `id`) in its coarse pixel of footprint r: the first pixel in raster
+// order with the same object and triangle. Rates are powers of two dividing the tile, so coarse pixels are aligned.
+ivec2 vbuf_leader(ivec2 p, uvec2 id, ivec2 size, uvec2 r)
+{
+	ivec2 o = p - (p % ivec2(r));
+	for (int y = o.y; y <= p.y; y++)
+		for (int x = o.x; x < o.x + int(r.x); x++) {
+			if (y == p.y && x >= p.x)
+				return p;
+			if (x < size.x && y < size.y && imageLoad(ids, ivec2(x, y)).xy == id)
+				return ivec2(x, y);
+		}
+	return p;
+}
+
+// Appends sample (p, footprint r) to the list; every invocation of the workgroup calls it (uniform control flow),
+// `want` says whether it has a sample. One global atomic per workgroup.
+shared uint vbuf_wg_count, vbuf_wg_base;
+void vbuf_append(bool want, ivec2 p, uvec2 r)
+{
+	if (gl_LocalInvocationIndex == 0u)
+		vbuf_wg_count = 0u;
+	barrier();
+	uint slot = 0u;
+	if (want)
+		slot = atomicAdd(vbuf_wg_count, 1u);
+	barrier();
+	if (gl_LocalInvocationIndex == 0u && vbuf_wg_count > 0u) {
+		vbuf_wg_base = atomicAdd(count[0], vbuf_wg_count);
+		atomicAdd(count[9], vbuf_wg_count);
+	}
+	barrier();
+	if (want)
+		list[vbuf_wg_base + slot] = uvec2(uint(p.x) | uint(p.y) << 16, r.x | r.y << 8);
+}
+
+// Adds a per-invocation 0/1 to counter k with one atomic per workgroup (uniform control flow).
+shared uint vbuf_wg_sum;
+void vbuf_count(bool yes, uint k)
+{
+	if (gl_LocalInvocationIndex == 0u)
+		vbuf_wg_sum = 0u;
+	barrier();
+	if (yes)
+		atomicAdd(vbuf_wg_sum, 1u);
+	barrier();
+	if (gl_LocalInvocationIndex == 0u && vbuf_wg_sum > 0u)
+		atomicAdd(count[k], vbuf_wg_sum);
+}
+
+#endif

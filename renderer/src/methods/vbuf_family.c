@@ -1,0 +1,144 @@
+/* vbuf_family.c — the frame of vref, the VRS rate methods and ads on the compacted sample path (vbuf_family.h). */
+#include "vbuf_family.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const vbuf_rate_passes[9] = {"shadow", "ids", "rate", "select", "shade", "resolve", "blend", "display",
+					 "readback"};
+const char *const vbuf_vrs_passes[10] = {"shadow", "ids", "rate", "select", "shade", "history", "resolve", "blend",
+					"display", "readback"};
+const char *const vbuf_ads_passes[7] = {"shadow", "ids", "shade", "resolve", "blend", "display", "readback"};
+
+typedef struct vbuf_state {
+	vbuf_variant v;
+	vbuf_pass p;
+} vbuf_state;
+
+static vbuf_state *state_of(render *r) { return r->method_state; }
+
+vbuf_pass *vbuf_family_pass(render *r) { return &state_of(r)->p; }
+void *vbuf_family_user(render *r) { return state_of(r)->v.user; }
+
+int vbuf_family_init(render *r, const vbuf_variant *v, char *err, size_t err_size)
+{
+	vbuf_state *s = calloc(1, sizeof *s);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	r->method_state = s;
+	s->v = *v;
+	int rc = vbuf_init(r, &s->p, v->ads, err, err_size);
+	if (!rc && v->rate_init && !v->force)
+		rc = v->rate_init(r, &s->p, v->user, err, err_size);
+	return rc;
+}
+
+int vbuf_family_prepare(render *r, uint32_t frame, char *err, size_t err_size)
+{
+	vbuf_state *s = state_of(r);
+	render_update_state(r, 0, (double)frame / (double)r->desc.fps);
+	/* slot 1: the previous frame's state, for the screen motion of the VRS history (the same at frame 0) */
+	if (r->state_ring > 1)
+		render_update_state(r, 1, (double)(frame ? frame - 1 : 0) / (double)r->desc.fps);
+	if (s->v.rate_prepare && !s->v.force)
+		s->v.rate_prepare(r, &s->p, s->v.user, frame);
+	return render_shadow_plan(r, 0, err, err_size);
+}
+
+void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
+{
+	vbuf_state *s = state_of(r);
+	vbuf_pass *p = &s->p;
+	vbuf_record_begin(r, p, cmd);
+	render_ts(r, cmd);
+	render_pass_shadows(r, cmd, 0);
+	render_ts(r, cmd);
+	ids_pass_record(r, &p->ids, cmd, 0);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	if (!s->v.ads) {
+		if (s->v.rate_record && !s->v.force)
+			s->v.rate_record(r, p, s->v.user, cmd, frame);
+		vbuf_barrier(cmd);
+		render_ts(r, cmd);
+		vbuf_record_select(r, p, cmd);
+		render_ts(r, cmd);
+		vbuf_record_shade(r, p, cmd, 0);
+		if (s->v.rate_after) { /* its own interval ("history"; vbuf_vrs_passes) */
+			render_ts(r, cmd);
+			if (!s->v.force)
+				s->v.rate_after(r, p, s->v.user, cmd, frame);
+			vbuf_barrier(cmd);
+		}
+	} else {
+		/* level 0, then per step s = s0 .. 2 its diamond and square sub-steps, each a select and a shade */
+		float S = s->v.force ? -1.0f : s->v.S;
+		vbuf_record_ads_step(r, p, cmd, s->v.step, 0, S, s->v.edge_guard);
+		vbuf_record_shade(r, p, cmd, 0);
+		for (uint32_t step = s->v.step; step >= 2; step /= 2)
+			for (uint32_t kind = 1; kind <= 2; kind++) {
+				vbuf_record_ads_step(r, p, cmd, step, kind, S, s->v.edge_guard);
+				vbuf_record_shade(r, p, cmd, 0);
+			}
+	}
+	render_ts(r, cmd);
+	vbuf_record_resolve(r, p, cmd);
+	render_ts(r, cmd);
+	if (r->blend_count)
+		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
+	render_ts(r, cmd);
+	render_pass_display(r, cmd);
+	render_ts(r, cmd);
+	render_pass_readback(r, cmd);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+}
+
+static void put_extra(frame_stats *st, const char *name, double v)
+{
+	if (st->extra_count < FRAME_MAX_EXTRA) {
+		st->extra_names[st->extra_count] = name;
+		st->extra[st->extra_count++] = v;
+	}
+}
+
+void vbuf_family_collect(render *r, frame_stats *st)
+{
+	vbuf_state *s = state_of(r);
+	const uint32_t *c = s->p.counters.mapped;
+	st->shaded_samples = c[VBUF_C_SHADED];
+	st->reused_samples = st->visible_samples >= 0 ? st->visible_samples - st->shaded_samples : -1;
+	st->visible_units = st->visible_samples;
+	st->shaded_units = st->shaded_samples;
+	st->new_units = -1;
+	put_extra(st, "interpolated_samples", s->v.ads ? (double)c[VBUF_C_INTERPOLATED] : 0.0);
+	put_extra(st, "filled_samples", (double)c[VBUF_C_FILLED]);
+	/* the tile-rate histogram of the rates the select read (rate methods; empty for ads) */
+	double hist[4] = {NAN, NAN, NAN, NAN};
+	if (!s->v.ads) {
+		hist[0] = hist[1] = hist[2] = hist[3] = 0;
+		const uint32_t *rates = s->p.rates.mapped;
+		for (uint32_t t = 0; t < s->p.tiles_x * s->p.tiles_y; t++) {
+			uint32_t code = rates[t];
+			hist[code == VBUF_RATE(1, 1) ? 0 : code == VBUF_RATE(2, 2) ? 1 : code == VBUF_RATE(4, 4) ? 2 : 3] += 1;
+		}
+	}
+	put_extra(st, "tiles_1x1", hist[0]);
+	put_extra(st, "tiles_2x2", hist[1]);
+	put_extra(st, "tiles_4x4", hist[2]);
+	put_extra(st, "tiles_other", hist[3]);
+	put_extra(st, "listed_samples", (double)c[VBUF_C_LISTED]);
+}
+
+void vbuf_family_finish(render *r)
+{
+	vbuf_state *s = state_of(r);
+	if (!s)
+		return;
+	if (s->v.rate_finish)
+		s->v.rate_finish(r, &s->p, s->v.user);
+	vbuf_finish(r, &s->p);
+	free(s);
+	r->method_state = NULL;
+}

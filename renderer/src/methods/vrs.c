@@ -1,0 +1,316 @@
+/* vrs.c — the VRS rate-selection methods of the variable-rate shading thesis (BASELINES.md A7; [V] chapter 4) on the
+ * compacted sample path (lavapipe has no hardware VRS, so a coarse pixel is one listed sample whose value the resolve
+ * copies into all its pixels, [V] sec. 3): `casedge` (content-adaptive by edges, Alg. 4.2), `castexel` (by texel
+ * density, Alg. 4.4), `mas` (motion-adaptive, Alg. 4.7), `fovea` (foveated, fixed gaze), `taas` (TAA-error-adaptive,
+ * Alg. 4.10). One rate per 16x16 tile, chosen on frame t-1's outputs and stabilised over time (shaders/vbuf/rate.comp.in);
+ * frame 0 (and a jump in frames) starts at index 10 (1x1). Passes added to the path: rate + finalize before the
+ * select, history after the shade. */
+#include "vbuf_family.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "method_debug.h"
+
+typedef enum vrs_kind { VRS_CASEDGE, VRS_CASTEXEL, VRS_MAS, VRS_FOVEA, VRS_TAAS } vrs_kind;
+static const char *const kind_define[] = {"CASEDGE", "CASTEXEL", "MAS", "FOVEA", "TAAS"};
+
+typedef struct vrs_state {
+	vrs_kind kind;
+	float gaze[2], inner, outer; /* fovea */
+	vkdev_buffer index, dbg;
+	vkdev_image hc, hc2, hpos, haux;
+	VkDescriptorSetLayout set_layout;
+	VkDescriptorSet set;
+	VkPipelineLayout layout;
+	VkPipeline rate, finalize, history;
+	int64_t last_frame;
+	uint32_t run;       /* frames since the (re)start */
+	uint32_t cur;       /* the current half of S this frame */
+} vrs_state;
+
+/* The options of every VRS method (one struct; each method's table lists the ones it has). */
+typedef struct vrs_options {
+	bool force_reshade;
+	float gaze_x, gaze_y, inner, outer;
+} vrs_options;
+
+#define VRS_FORCE                                                                                                  \
+	{.name = "force-reshade", .help = "debug: every tile 1x1 (the path's overhead; equals vref)",                    \
+	 .type = METHOD_OPT_BOOL, .offset = offsetof(vrs_options, force_reshade)}
+
+static const method_option common_table[] = {VRS_FORCE};
+static const method_option fovea_table[] = {
+	{.name = "gaze-x", .arg = "X", .help = "gaze point, fraction of the width from the left",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, gaze_x), .def = 0.5, .min = 0, .max = 1},
+	{.name = "gaze-y", .arg = "Y", .help = "gaze point, fraction of the height from the top",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, gaze_y), .def = 0.5, .min = 0, .max = 1},
+	{.name = "inner", .arg = "DEG", .help = "eccentricity up to which tiles shade at 1x1 (degrees)",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, inner), .def = 10, .min = 0, .max = 180},
+	{.name = "outer", .arg = "DEG", .help = "eccentricity up to which tiles shade at 2x2, beyond at 4x4 (degrees)",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, outer), .def = 20, .min = 0, .max = 180},
+	VRS_FORCE,
+};
+
+static int fovea_check(const void *options, char *err, size_t err_size)
+{
+	const vrs_options *o = options;
+	if (o->outer < o->inner)
+		return tl_error(err, err_size, TL_ERR_ARG, "fovea: --outer %g is below --inner %g", (double)o->outer,
+				(double)o->inner);
+	return TL_OK;
+}
+
+enum { VRS_BINDINGS = 6 };
+
+static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *out, char *err, size_t err_size)
+{
+	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, fmt,
+					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
+					  false, name, out);
+	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
+}
+
+static int make_compute(render *r, vrs_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
+{
+	char defs[64];
+	snprintf(defs, sizeof defs, "#define %s 1\n", kind_define[s->kind]);
+	uint32_t *spv = NULL;
+	size_t n = 0;
+	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
+	if (rc)
+		return rc;
+	VkResult res = render_make_compute(r, spv, n, s->layout, out);
+	free(spv);
+	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+}
+
+static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t err_size)
+{
+	vrs_state *s = user;
+	VkDevice d = r->dev->device;
+	uint32_t tiles = p->tiles_x * p->tiles_y;
+	VkResult res;
+	if ((res = vkdev_buffer_create(r->dev, (VkDeviceSize)tiles * 2 * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+				       "vrs index", &s->index)) ||
+	    (res = vkdev_buffer_create(r->dev, (VkDeviceSize)tiles * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+				       "vrs tile debug", &s->dbg)))
+		return render_vk_error(err, err_size, "vrs buffers", res);
+	int rc;
+	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vrs history colour", &s->hc, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vrs history colour t-2", &s->hc2, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, "vrs history position", &s->hpos, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, "vrs history motion", &s->haux, err, err_size)))
+		return rc;
+	VkDescriptorSetLayoutBinding b[VRS_BINDINGS];
+	for (uint32_t i = 0; i < VRS_BINDINGS; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 0 || i == 5 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+									  : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+						      1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
+	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+					      .bindingCount = VRS_BINDINGS, .pBindings = b};
+	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
+		return render_vk_error(err, err_size, "vrs: descriptor set layout", res);
+	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
+	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
+		return render_vk_error(err, err_size, "vrs: descriptor set", res);
+	const vkdev_image *imgs[VRS_BINDINGS] = {NULL, &s->hc, &s->hc2, &s->hpos, &s->haux, NULL};
+	const vkdev_buffer *bufs[VRS_BINDINGS] = {&s->index, NULL, NULL, NULL, NULL, &s->dbg};
+	VkDescriptorBufferInfo bi[VRS_BINDINGS];
+	VkDescriptorImageInfo ii[VRS_BINDINGS];
+	VkWriteDescriptorSet w[VRS_BINDINGS];
+	for (uint32_t i = 0; i < VRS_BINDINGS; i++) {
+		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set, .dstBinding = i,
+					      .descriptorCount = 1};
+		if (imgs[i]) {
+			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
+			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+			w[i].pImageInfo = &ii[i];
+		} else {
+			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
+			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+			w[i].pBufferInfo = &bi[i];
+		}
+	}
+	vkUpdateDescriptorSets(d, VRS_BINDINGS, w, 0, NULL);
+	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, p->set_layout, s->set_layout};
+	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
+	VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 3,
+					  .pSetLayouts = sets, .pushConstantRangeCount = 1, .pPushConstantRanges = &pcr};
+	if ((res = vkCreatePipelineLayout(d, &pli, NULL, &s->layout)))
+		return render_vk_error(err, err_size, "vrs: pipeline layout", res);
+	if ((rc = make_compute(r, s, "vbuf/rate.comp.in", &s->rate, err, err_size)) ||
+	    (rc = make_compute(r, s, "vbuf/finalize.comp.in", &s->finalize, err, err_size)) ||
+	    (rc = make_compute(r, s, "vbuf/history.comp.in", &s->history, err, err_size)))
+		return rc;
+	VkCommandBuffer cmd;
+	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
+		return render_vk_error(err, err_size, "command buffer", res);
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	const vkdev_image *im[4] = {&s->hc, &s->hc2, &s->hpos, &s->haux};
+	for (int i = 0; i < 4; i++) {
+		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	}
+	vbuf_barrier(cmd);
+	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
+		return render_vk_error(err, err_size, "vrs setup", res);
+	s->last_frame = -1;
+	return TL_OK;
+}
+
+static void vrs_rate_prepare(render *r, vbuf_pass *p, void *user, uint32_t frame)
+{
+	vrs_state *s = user;
+	(void)r;
+	if (!(s->last_frame >= 0 && (int64_t)frame == s->last_frame + 1)) {
+		/* frame 0 or a jump: S = 10 (1x1 everywhere), no history */
+		s->run = 0;
+		uint32_t tiles = p->tiles_x * p->tiles_y;
+		int32_t *S = s->index.mapped;
+		uint32_t *rates = p->rates.mapped;
+		for (uint32_t t = 0; t < tiles; t++) {
+			S[t] = 10;
+			S[tiles + t] = -1;
+			rates[t] = VBUF_RATE(1, 1);
+		}
+	} else {
+		s->run++;
+	}
+	s->cur = s->run % 2;
+	s->last_frame = frame;
+}
+
+static void bind(render *r, vbuf_pass *p, vrs_state *s, VkCommandBuffer cmd, VkPipeline pipe, const uint32_t aux[4])
+{
+	VkDescriptorSet sets[3] = {r->scene_set, p->set, s->set};
+	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
+	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->layout, 0, 3, sets, 0, NULL);
+	gpu_push pc = {0, 0, (uint32_t)r->scene->object_count, 0, {aux[0], aux[1], aux[2], aux[3]}};
+	vkCmdPushConstants(cmd, s->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+}
+
+static void vrs_rate_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame)
+{
+	vrs_state *s = user;
+	(void)frame;
+	/* the foveated rates need no history; the others start from the previous frame's outputs */
+	if (s->kind != VRS_FOVEA && s->run == 0)
+		return;
+	uint32_t aux[4] = {s->cur, s->run >= 1, s->run >= 2, 0};
+	if (s->kind == VRS_FOVEA) {
+		uint32_t gx = (uint32_t)lroundf(s->gaze[0] * (float)r->desc.width);
+		uint32_t gy = (uint32_t)lroundf(s->gaze[1] * (float)r->desc.height);
+		aux[1] = (uint32_t)lroundf(s->inner * 64.0f) | (uint32_t)lroundf(s->outer * 64.0f) << 16;
+		aux[3] = gx | gy << 16;
+	}
+	bind(r, p, s, cmd, s->rate, aux);
+	vkCmdDispatch(cmd, p->tiles_x, p->tiles_y, 1);
+	vbuf_barrier(cmd);
+	bind(r, p, s, cmd, s->finalize, aux);
+	vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 63) / 64, 1, 1);
+}
+
+static void vrs_rate_after(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame)
+{
+	vrs_state *s = user;
+	(void)frame;
+	if (s->kind == VRS_FOVEA)
+		return;
+	uint32_t aux[4] = {s->cur, 0, 0, 0};
+	bind(r, p, s, cmd, s->history, aux);
+	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+}
+
+static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)
+{
+	vrs_state *s = user;
+	(void)p;
+	VkDevice d = r->dev->device;
+	VkPipeline pp[3] = {s->rate, s->finalize, s->history};
+	for (int i = 0; i < 3; i++)
+		if (pp[i])
+			vkDestroyPipeline(d, pp[i], NULL);
+	if (s->layout)
+		vkDestroyPipelineLayout(d, s->layout, NULL);
+	if (s->set_layout)
+		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
+	vkdev_buffer_destroy(r->dev, &s->index);
+	vkdev_buffer_destroy(r->dev, &s->dbg);
+	vkdev_image *im[4] = {&s->hc, &s->hc2, &s->hpos, &s->haux};
+	for (int i = 0; i < 4; i++)
+		vkdev_image_destroy(r->dev, im[i]);
+	free(s);
+}
+
+static int vrs_init(render *r, vrs_kind kind, char *err, size_t err_size)
+{
+	const vrs_options *o = (const vrs_options *)r->config.values.bytes;
+	vrs_state *s = calloc(1, sizeof *s);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	s->kind = kind;
+	if (kind == VRS_FOVEA) {
+		s->gaze[0] = o->gaze_x, s->gaze[1] = o->gaze_y, s->inner = o->inner, s->outer = o->outer;
+	}
+	vbuf_variant v = {.force = o->force_reshade, .rate_init = vrs_rate_init, .rate_prepare = vrs_rate_prepare,
+			  .rate_record = vrs_rate_record, .rate_after = vrs_rate_after, .rate_finish = vrs_rate_finish,
+			  .user = s};
+	return vbuf_family_init(r, &v, err, err_size);
+}
+
+const float *vrs_debug_tiles(render *r, const int32_t **index, uint32_t *tiles_x, uint32_t *tiles_y)
+{
+	vbuf_pass *p = vbuf_family_pass(r);
+	vrs_state *s = vbuf_family_user(r);
+	*tiles_x = p->tiles_x, *tiles_y = p->tiles_y;
+	if (index)
+		*index = s->index.mapped ? (const int32_t *)s->index.mapped + (size_t)s->cur * p->tiles_x * p->tiles_y : NULL;
+	return s->dbg.mapped;
+}
+
+const uint32_t *vbuf_debug_rates(render *r)
+{
+	return vbuf_family_pass(r)->rates.mapped;
+}
+
+int vbuf_debug_ids(render *r, uint32_t *ids, char *err, size_t err_size)
+{
+	return ids_pass_copy(r, &vbuf_family_pass(r)->ids, ids, false, err, err_size);
+}
+
+#define VRS_METHOD(NAME, KIND, SUMMARY, TABLE, CHECK)                                                            \
+	static int NAME##_init(render *r, char *err, size_t err_size) { return vrs_init(r, KIND, err, err_size); }     \
+	const render_method render_method_##NAME = {                                                               \
+		.info = {.name = #NAME,                                                                            \
+			 .summary = SUMMARY,                                                                        \
+			 .available = true,                                                                         \
+			 .family = "rate",                                                                          \
+			 .baseline = "vref",                                                                        \
+			 .options = TABLE,                                                                          \
+			 .option_count = sizeof TABLE / sizeof TABLE[0],                                            \
+			 .options_size = sizeof(vrs_options),                                                       \
+			 .check = CHECK},                                                                           \
+		.pass_names = vbuf_vrs_passes,                                                                     \
+		.pass_count = sizeof vbuf_vrs_passes / sizeof vbuf_vrs_passes[0],                                  \
+		.state_ring = 2,                                                                                   \
+		.init = NAME##_init,                                                                               \
+		VBUF_FRAME_OPS,                                                                                    \
+	};
+
+VRS_METHOD(casedge, VRS_CASEDGE, "VRS, content-adaptive by edges: FXAA edge density per 16x16 tile ([V] Alg. 4.2)",
+	   common_table, NULL)
+VRS_METHOD(castexel, VRS_CASTEXEL, "VRS, content-adaptive by texel density per 16x16 tile ([V] Alg. 4.4)",
+	   common_table, NULL)
+VRS_METHOD(mas, VRS_MAS, "VRS, motion-adaptive: object and camera motion per 16x16 tile ([V] Alg. 4.7)", common_table,
+	   NULL)
+VRS_METHOD(fovea, VRS_FOVEA, "VRS, foveated: rate by eccentricity from a fixed gaze point ([V] sec. 4.4)", fovea_table,
+	   fovea_check)
+VRS_METHOD(taas, VRS_TAAS, "VRS, TAA-error-adaptive: history distance to the neighbourhood ([V] Alg. 4.10)",
+	   common_table, NULL)

@@ -1,0 +1,65 @@
+/* vbuf.h (private) — the compacted sample path of BASELINES.md section 0, shared by vref, the VRS methods
+ * (casedge, castexel, mas, fovea, taas) and ads: per frame the ids pass (ids.h), then
+ *   select   compute: decides per pixel and appends the samples to shade to a list (atomicAdd, one global atomic per
+ *            workgroup), then a one-invocation pass writes the VkDispatchIndirectCommand of the list;
+ *   shade    compute, indirect, workgroups of 64: the listed samples only (work is never launched for a sample not
+ *            shaded), ref's shading at the sample's location with analytic texture gradients times its footprint;
+ *   resolve  compute: per covered pixel the value of its sample (rate methods: a copy from the leader of its coarse
+ *            pixel; ads: its own, shaded or interpolated) into the HDR target cleared to the sky;
+ * then BLEND, display and readback as every method (the caller records those).
+ * The rate methods read one rate per 16x16 tile from `rates` (w | h << 8), which the method fills (vref: 1x1 on
+ * the host; VRS: on the GPU before the select). ads records select + shade once per refinement step.
+ * Counters (host visible, zeroed by vbuf_record_begin): VBUF_C_*. */
+#ifndef TASLAB_VBUF_H
+#define TASLAB_VBUF_H
+
+#include "ids.h"
+
+enum {
+	VBUF_C_SHADED = 5,       /* samples shaded, counted by the shade pass */
+	VBUF_C_INTERPOLATED = 6, /* ads: pixels interpolated */
+	VBUF_C_FILLED = 7,       /* pixels whose value is copied from another pixel's sample (resolve) */
+	VBUF_C_LATE = 8,         /* --truth: covered pixels more than T from vref's shading */
+	VBUF_C_LISTED = 9,       /* samples appended by the select passes of the frame */
+	VBUF_C_METHOD = 10,      /* 10-15: free for the method's own shaders */
+};
+
+#define VBUF_TILE 16u
+#define VBUF_RATE(w, h) ((uint32_t)(w) | (uint32_t)(h) << 8)
+
+typedef struct vbuf_pass {
+	bool ads;
+	ids_pass ids;
+	vkdev_buffer objinfo, list, counters, rates;
+	vkdev_image svals;           /* RGBA16F: shaded values at leader pixels (ads: and the interpolated ones) */
+	uint32_t tiles_x, tiles_y;
+	VkDescriptorSetLayout set_layout;
+	VkDescriptorSet set;
+	VkPipelineLayout layout;     /* sets 0 (scene) and 1 (this), push constants gpu_push */
+	VkPipeline select, args, shade, resolve, ads_select;
+} vbuf_pass;
+
+/* `ads`: the ads select pass instead of the rate select; `shade_defs`: extra #defines of the shade pass. */
+int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size);
+void vbuf_finish(render *r, vbuf_pass *v);
+/* Compiles a compute template against the path's set and layout (for methods adding passes that see it). */
+int vbuf_make_compute(render *r, vbuf_pass *v, const char *path, const char *defs, VkPipeline *out, char *err,
+		      size_t err_size);
+/* Binds a compute pipeline of the path with push constants (slot, aux). */
+void vbuf_bind(render *r, const vbuf_pass *v, VkCommandBuffer cmd, VkPipeline p, uint32_t slot, const uint32_t aux[4]);
+/* A barrier between any compute, graphics, transfer and host accesses (between the path's passes). */
+void vbuf_barrier(VkCommandBuffer cmd);
+
+/* Zeroes the counters, makes the HDR target GENERAL (the resolve writes it as a storage image). */
+void vbuf_record_begin(render *r, vbuf_pass *v, VkCommandBuffer cmd);
+/* The rate select (vref, VRS) and its dispatch arguments. */
+void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd);
+/* One ads select step (ads_select.comp.in: s, kind 0 level 0 / 1 diamond / 2 square), threshold S, edge guard,
+ * and its dispatch arguments. */
+void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard);
+/* The indirect shade of the list the last select built. */
+void vbuf_record_shade(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t slot);
+/* The HDR target cleared to the sky, the resolve, and the target made a colour attachment again (for BLEND). */
+void vbuf_record_resolve(render *r, vbuf_pass *v, VkCommandBuffer cmd);
+
+#endif
