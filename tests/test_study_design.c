@@ -136,10 +136,11 @@ static void test_create_refuses(void **state)
 	assert_true(tu_file_exists(db));
 	char *before = plan_dump(db);
 	snprintf(cmd, sizeof cmd, "%s study design --db %s --stimuli %s --participants 3 --seed 9", TASLAB_BINARY, db, stim);
-	assert_int_equal(tu_run(cmd, out, sizeof out), 1); /* TL_ERR_CONFLICT */
+	assert_int_equal(tu_run(cmd, out, sizeof out), 2); /* bad input (issue 27.7: was 1), naming 'study add' */
 	assert_non_null(strstr(out, "never overwritten"));
+	assert_non_null(strstr(out, "study add"));
 	snprintf(cmd, sizeof cmd, "%s study import --db %s %s/study_ratings.csv", TASLAB_BINARY, db, REF_DIR);
-	assert_int_equal(tu_run(cmd, out, sizeof out), 1);
+	assert_int_equal(tu_run(cmd, out, sizeof out), 2);
 	char *after = plan_dump(db);
 	assert_string_equal(before, after);
 	free(before);

@@ -68,15 +68,17 @@ static void make_period_stimuli(const char *root)
 }
 
 /* Lines of `text` containing `needle`. */
-static int count_lines_with(const char *text, const char *needle)
+static int count_lines_with2(const char *text, const char *needle, const char *also)
 {
 	int n = 0;
 	for (const char *l = text; l && *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : NULL) {
-		const char *e = strchr(l, '\n'), *hit = strstr(l, needle);
-		n += hit && (!e || hit < e);
+		const char *e = strchr(l, '\n'), *hit = strstr(l, needle), *hit2 = also ? strstr(l, also) : l;
+		n += hit && (!e || hit < e) && hit2 && (!e || hit2 < e);
 	}
 	return n;
 }
+
+static int count_lines_with(const char *text, const char *needle) { return count_lines_with2(text, needle, NULL); }
 
 /* The first line of a file. */
 static void first_line(const char *path, char *line, size_t n)
@@ -200,12 +202,18 @@ static void test_period_conditions(void **state)
 	assert_int_equal(sty_export_long(s, exp, err, sizeof err), 0);
 	assert_int_equal(sty_export_pwcmp(s, pw, err, sizeof err), 0);
 	char *csv = tu_read_file(exp, NULL);
-	const char *head = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n";
+	const char *head = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms,"
+			   "trial_type,answered_at,completed\n";
 	assert_int_equal(strncmp(csv, head, strlen(head)), 0);
-	assert_int_equal(tu_count_lines(csv), 1 + 4 * 6);
-	assert_int_equal(count_lines_with(csv, ",rrc,,4,"), 8);
-	assert_int_equal(count_lines_with(csv, ",rrc,,8,"), 8);
-	assert_int_equal(count_lines_with(csv, ",tarc,8,,"), 8);
+	/* every answered trial (issue 27.9): 6 test, 2 catch and 1 training trial per participant, all completed */
+	assert_int_equal(tu_count_lines(csv), 1 + 4 * 9);
+	assert_int_equal(count_lines_with(csv, ",test,"), 4 * 6);
+	assert_int_equal(count_lines_with(csv, ",catch,"), 4 * 2);
+	assert_int_equal(count_lines_with(csv, ",training,"), 4);
+	assert_int_equal(count_lines_with(csv, "Z,1\n"), 4 * 9);
+	assert_int_equal(count_lines_with2(csv, ",rrc,,4,", ",test,"), 8);
+	assert_int_equal(count_lines_with2(csv, ",rrc,,8,", ",test,"), 8);
+	assert_int_equal(count_lines_with2(csv, ",tarc,8,,", ",test,"), 8);
 	free(csv);
 	char *pwc = tu_read_file(pw, NULL);
 	assert_true(count_lines_with(pwc, ",rrc_N4,") + count_lines_with(pwc, ",rrc_N4\n") >= 8);
@@ -224,9 +232,11 @@ static void test_period_conditions(void **state)
 	size_t rows;
 	if (sty_import_long(s, exp, &rows, err, sizeof err))
 		fail_msg("%s", err);
-	assert_int_equal(rows, 24);
+	assert_int_equal(rows, 36);
 	commit(s);
-	assert_int_equal(db_count(db2, "SELECT count(*) FROM conditions"), 6);
+	assert_int_equal(db_count(db2, "SELECT count(*) FROM conditions"), 8); /* with the two catch pairs */
+	assert_int_equal(db_count(db2, "SELECT count(*) FROM trials WHERE kind = 'catch'"), 8);
+	assert_int_equal(db_count(db2, "SELECT count(*) FROM answers WHERE at LIKE '20%Z'"), 36);
 	assert_int_equal(db_count(db2, "SELECT count(DISTINCT ifnull(period, 0)) FROM conditions WHERE method = 'rrc'"), 2);
 	snprintf(exp2, sizeof exp2, "%s/ratings2.csv", dir);
 	assert_int_equal(sty_export_long(s, exp2, err, sizeof err), 0);
@@ -239,8 +249,9 @@ static void test_period_conditions(void **state)
 		fail_msg("%s", err);
 	sty_close(&s);
 	check_period_tally(res2);
-	const char *same[2] = {"conditions.csv", "anova.csv"};
-	for (int i = 0; i < 2; i++) {
+	/* the screening too: the catch trials came along (issue 27.9) */
+	const char *same[3] = {"conditions.csv", "anova.csv", "observers.csv"};
+	for (int i = 0; i < 3; i++) {
 		char pa[4300], pb[4300];
 		snprintf(pa, sizeof pa, "%s/%s", res, same[i]);
 		snprintf(pb, sizeof pb, "%s/%s", res2, same[i]);

@@ -31,6 +31,7 @@
 #include "test_study_util.h"
 
 static char out[1 << 16];
+static size_t raw_len; /* bytes of the last raw_http response */
 
 /* Sends `req` (len bytes) as is to 127.0.0.1:port from source address `from` (NULL: 127.0.0.1); returns the
  * status code or -1; the whole response (head and body) in resp. */
@@ -60,6 +61,7 @@ static int raw_http(int port, const char *from, const char *req, size_t len, cha
 		got += (size_t)r;
 	close(fd);
 	resp[got] = 0;
+	raw_len = got;
 	int status = -1;
 	sscanf(resp, "HTTP/1.%*d %d", &status);
 	return status;
@@ -183,7 +185,12 @@ static void test_server(void **state)
 	assert_int_equal(tu_http(port, "GET", "/admin/export.csv", "Authorization: Bearer 00\r\n", NULL, out, sizeof out), 401);
 	snprintf(auth, sizeof auth, "Authorization: Bearer %s\r\n", sty_admin_token(s));
 	assert_int_equal(tu_http(port, "GET", "/admin/export.csv", auth, NULL, out, sizeof out), 200);
-	assert_int_equal(tu_count_lines(out), 1 + 8); /* header + the 8 test trials (training and catch excluded) */
+	/* header + every answered trial (issue 27.9): the 8 test trials, training and catch ones, typed */
+	assert_int_equal(tu_count_lines(out), 1 + (int)sm.trials_per_participant);
+	int tests = 0;
+	for (const char *l = strstr(out, ",test,"); l; l = strstr(l + 1, ",test,"))
+		tests++;
+	assert_int_equal(tests, 8);
 	sty_server_stop(&sv);
 	free_codes(codes, n);
 	sty_close(&s);
@@ -494,10 +501,11 @@ static void test_range(void **state)
 	assert_int_equal(tu_http(port, "GET", path, NULL, NULL, out, sizeof out), 200);
 	json_str(out, "clip_a", clip, sizeof clip);
 	assert_int_equal(get_full(port, clip, NULL, resp, sizeof resp), 200);
+	/* the representation: the file and its padding (issue 27.6; bytes, not a string) */
 	char whole[256];
-	snprintf(whole, sizeof whole, "%s", body_of(resp));
-	size_t size = strlen(whole);
-	assert_true(size > 40);
+	size_t size = raw_len - (size_t)(body_of(resp) - resp);
+	assert_true(size > 40 && size < sizeof whole);
+	memcpy(whole, body_of(resp), size);
 	struct {
 		const char *range;
 		int status;
@@ -541,21 +549,23 @@ static void test_range(void **state)
 		}
 		long first = cases[i].first < -1 ? (long)size + cases[i].first : cases[i].first;
 		long last = cases[i].last == -2 ? (long)size - 1 : cases[i].last;
+		size_t blen = raw_len - (size_t)(b - resp);
 		if (st == 200) {
-			assert_string_equal(b, whole);
+			assert_int_equal(blen, size);
+			assert_memory_equal(b, whole, size);
 			assert_null(strstr(resp, "Content-Range"));
 		} else {
-			char want[256], cr[96];
-			snprintf(want, sizeof want, "%.*s", (int)(last - first + 1), whole + first);
-			if (strcmp(b, want))
-				fail_msg("Range: %s -> '%s', expected '%s'", cases[i].range, b, want);
+			char cr[96];
+			if (blen != (size_t)(last - first + 1) || memcmp(b, whole + first, blen))
+				fail_msg("Range: %s -> %zu bytes, expected [%ld, %ld]", cases[i].range, blen, first, last);
 			snprintf(cr, sizeof cr, "Content-Range: bytes %ld-%ld/%zu", first, last, size);
 			assert_non_null(strstr(resp, cr));
 		}
 	}
 	/* If-Range (we send no validators, so it cannot match) and HEAD: Range ignored. */
 	assert_int_equal(get_full(port, clip, "Range: bytes=5-7\r\nIf-Range: \"x\"\r\n", resp, sizeof resp), 200);
-	assert_string_equal(body_of(resp), whole);
+	assert_int_equal(raw_len - (size_t)(body_of(resp) - resp), size);
+	assert_memory_equal(body_of(resp), whole, size);
 	sty_server_stop(&sv);
 	free_codes(codes, n);
 	sty_close(&s);
@@ -706,7 +716,9 @@ static void test_serve_messages(void **state)
 	make_stimuli(stim);
 	sty_design_summary sm;
 	sty *s = designed(dir, "s.db", 5, 1, &sm);
+	sty *o = designed(dir, "other.db", 5, 1, &sm); /* another study: this one is served already (test_study_live) */
 	sty_server *sv = served(s, NULL);
+	snprintf(db, sizeof db, "%s/other.db", dir);
 	snprintf(cmd, sizeof cmd, "%s study serve --db %s --port %u", TASLAB_BINARY, db, (unsigned)sty_server_port(sv));
 	int st = tu_run(cmd, out, sizeof out);
 	assert_int_not_equal(st, 0);
@@ -715,7 +727,7 @@ static void test_serve_messages(void **state)
 	/* The same through the library: the reason is in the message, nothing is printed. */
 	sty_server *sv2 = NULL;
 	sty_server_desc d = {.port = sty_server_port(sv)};
-	assert_int_equal(sty_server_start(s, &d, &sv2, err, sizeof err), TL_ERR_ARG);
+	assert_int_equal(sty_server_start(o, &d, &sv2, err, sizeof err), TL_ERR_ARG);
 	if (!strstr(err, "Address already in use"))
 		fail_msg("%s", err);
 	/* The page: no entity inside the script. */
@@ -737,6 +749,7 @@ static void test_serve_messages(void **state)
 	free_codes(codes, n);
 	sty_server_stop(&sv);
 	sty_close(&s);
+	sty_close(&o);
 }
 
 int main(void)

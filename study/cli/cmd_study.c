@@ -1,4 +1,4 @@
-/* cmd_study.c — `taslab study design|links|serve|tally|export|import` (study/). */
+/* cmd_study.c — `taslab study design|add|links|serve|status|tally|export|import` (study/). */
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,6 +9,7 @@
 #include "taslab/method.h"
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
+#include "taslab/study_status.h"
 
 static const cli_opt db_option[] = {
 	{.name = "db", .arg = "STUDY.db",
@@ -37,6 +38,14 @@ static const cli_opt design_options[] = {
 	{.name = "break-every", .arg = "N",
 	 .help = "a break after every N trials (0: none)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, break_every), .lo = 0, .hi = 10000},
+	{0},
+};
+
+static const cli_opt add_options[] = {
+	{.type = CLI_INCLUDE, .include = db_option},
+	{.name = "participants", .arg = "N",
+	 .help = "participants to add (1..10000), planned from the study's seed like the first ones",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, participants), .lo = 1, .hi = 10000},
 	{0},
 };
 
@@ -122,6 +131,8 @@ static int study_validate(void *opts, cli_ctx *ctx)
 	size_t n = sizeof ctx->err;
 	if (!o->db)
 		return tl_error(err, n, TL_ERR_ARG, "--db STUDY.db is required (see 'taslab %s --help')", ctx->name);
+	if (!strcmp(sub, "add") && !o->participants)
+		return tl_error(err, n, TL_ERR_ARG, "--participants N is required");
 	if (!strcmp(sub, "design") && (!o->stimuli || !o->participants))
 		return tl_error(err, n, TL_ERR_ARG, "--stimuli DIR and --participants N are required");
 	if ((!strcmp(sub, "tally") || !strcmp(sub, "export")) && !o->out)
@@ -165,6 +176,12 @@ static int study_main(void *opts, cli_ctx *ctx)
 	int create = !strcmp(sub, "design") || !strcmp(sub, "import");
 	sty *s = NULL;
 	int rc = create ? sty_create(o->db, &s, err, err_size) : sty_open(o->db, &s, err, err_size);
+	if (rc == TL_ERR_CONFLICT) { /* an existing study: bad input (exit 2), and how to grow one (issue 27.7) */
+		size_t len = strlen(err);
+		snprintf(err + len, err_size - len, "%s", !strcmp(sub, "design") ? "; to add participants to it: taslab study "
+					     "add --db STUDY.db --participants N" : "");
+		return TL_ERR_ARG;
+	}
 	if (rc)
 		return rc;
 	if ((rc = describe_methods(s, err, err_size))) {
@@ -181,6 +198,13 @@ static int study_main(void *opts, cli_ctx *ctx)
 			       ov.db, sm.conditions, sm.sets, sm.participants, sm.trials_per_participant, sm.breaks, sm.session_minutes,
 			       ov.db, ov.db);
 		}
+	} else if (!strcmp(sub, "add")) {
+		uint32_t first;
+		if (!(rc = sty_add_participants(s, ov.participants, &first, err, err_size)))
+			printf("study %s: added participants P%03u..P%03u (their links: taslab study links --db %s)\n", ov.db, first,
+			       first + ov.participants - 1, ov.db);
+	} else if (!strcmp(sub, "status")) {
+		rc = sty_status_print(s, stdout, err, err_size);
 	} else if (!strcmp(sub, "links")) {
 		char **codes;
 		size_t n;
@@ -205,7 +229,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 				      .head_timeout_s = ov.head_timeout, .body_timeout_s = ov.body_timeout};
 		if (!(rc = sty_server_start(s, &sd, &sv, err, err_size))) {
 			printf("listening on %s\nadmin token %s (send it as the header 'Authorization: Bearer TOKEN' to "
-			       "/admin/export.csv and /admin/export-pwcmp.csv)\n", sty_served_url(s), sty_admin_token(s));
+			       "/admin/status, /admin/export.csv and /admin/export-pwcmp.csv)\nstatus page %s/status#%s\n",
+			       sty_served_url(s), sty_admin_token(s), sty_served_url(s), sty_admin_token(s));
 			fflush(stdout);
 			struct sigaction sa = {.sa_handler = on_signal};
 			sigaction(SIGINT, &sa, NULL);
@@ -242,6 +267,20 @@ static const cli_command study_design = {
 	.synopsis = "taslab study design --db STUDY.db --stimuli DIR --participants N [--seed S] [--training K] [--catch K] "
 		    "[--break-every N]",
 	.options = design_options,
+	STUDY_SUB,
+};
+static const cli_command study_add = {
+	.name = "study add",
+	.summary = "add participants to a designed study (seeded plans; existing participants untouched)",
+	.synopsis = "taslab study add --db STUDY.db --participants N",
+	.options = add_options,
+	STUDY_SUB,
+};
+static const cli_command study_status = {
+	.name = "study status",
+	.summary = "participants' progress and the conditions' n, p_ref and Q so far (also while serving)",
+	.synopsis = "taslab study status --db STUDY.db",
+	.options = db_option,
 	STUDY_SUB,
 };
 static const cli_command study_links = {
@@ -284,12 +323,12 @@ static const cli_command study_import = {
 	STUDY_SUB,
 };
 
-static const cli_command *const study_subs[] = {&study_design, &study_links, &study_serve, &study_tally, &study_export,
-						&study_import, NULL};
+static const cli_command *const study_subs[] = {&study_design, &study_add, &study_links, &study_serve, &study_status,
+						&study_tally, &study_export, &study_import, NULL};
 
 const cli_command cli_cmd_study = {
 	.name = "study",
-	.summary = "pairwise-comparison studies: design, serve, tally, export/import",
+	.summary = "pairwise-comparison studies: design, add, serve, status, tally, export/import",
 	.synopsis = "taslab study <subcommand> --db STUDY.db [options]",
 	.subcommands = study_subs,
 };

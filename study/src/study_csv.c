@@ -19,12 +19,22 @@
 static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms";
 static const char *LONG_HEADER_NO_PERIOD = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
 
-/* Query of every answered test trial, one row per answer, in participant / trial order. */
-static const char *ANSWERS_SQL =
-	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms, c.period"
-	" FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx"
+/* Issue 27.9: the export holds every answered trial (test, catch and training) with its type, when it was answered and
+ * whether the participant completed the session, so that screening can be redone after export -> import. */
+static const char *LONG_HEADER_FULL = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,"
+				      "rt_ms,trial_type,answered_at,completed";
+
+/* Query of every answered trial, one row per answer, in participant / trial order (columns 0-10 shared by both
+ * exports; 11-13: type, time, completed — "" when unknown, as for ratings imported from a file without the column).
+ * pwcmp takes the test trials only. */
+#define ANSWERS_COLUMNS \
+	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms, c.period," \
+	" t.kind, a.at, coalesce((SELECT value FROM meta WHERE key = 'completed:' || p.label)," \
+	" (SELECT count(*) FROM trials u WHERE u.participant = p.id) = (SELECT count(*) FROM answers v WHERE v.participant = p.id))" \
+	" FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx" \
 	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
-	" WHERE t.kind = 'test' ORDER BY p.id, t.idx";
+static const char *ANSWERS_SQL = ANSWERS_COLUMNS " WHERE t.kind = 'test' ORDER BY p.id, t.idx";
+static const char *ALL_ANSWERS_SQL = ANSWERS_COLUMNS " ORDER BY p.id, t.idx";
 
 int sty_csv_formula(const char *s)
 {
@@ -81,7 +91,7 @@ int sty_check_output(const sty *s, const char *path, char *err, size_t err_size)
 static void write_long(sqlite3_stmt *st, FILE *f, const char *ref)
 {
 	(void)ref;
-	fprintf(f, "%s\n", LONG_HEADER);
+	fprintf(f, "%s\n", LONG_HEADER_FULL);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
 		char c0[160], c2[160], c3[160], c4[40], c5[80];
@@ -95,7 +105,8 @@ static void write_long(sqlite3_stmt *st, FILE *f, const char *ref)
 		fprintf(f, ",%d,%d,%d,", ref_first, answer, ref_first ? -answer : answer);
 		if (sqlite3_column_type(st, 9) != SQLITE_NULL)
 			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 9));
-		fputc('\n', f);
+		char c11[40], c12[80], c13[8];
+		fprintf(f, ",%s,%s,%s\n", CELL(st, 11, c11), CELL(st, 12, c12), CELL(st, 13, c13));
 	}
 }
 
@@ -147,7 +158,7 @@ int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err,
 		tl_fs_clean_temps_beside(paths[i]);
 		if ((rc = tl_atomic_open(&out[i], paths[i], err, err_size)))
 			break;
-		if (sqlite3_prepare_v2(s->db, ANSWERS_SQL, -1, &st, NULL)) {
+		if (sqlite3_prepare_v2(s->db, i == 0 ? ALL_ANSWERS_SQL : ANSWERS_SQL, -1, &st, NULL)) {
 			rc = sty_db_fail(s, err, err_size, "export");
 			break;
 		}
@@ -182,6 +193,9 @@ typedef struct row {
 	long period; /* 0: none */
 	int ref_first, answer, rating;
 	long long rt_ms; /* -1: none */
+	char kind[16];   /* test, catch, training (files without trial_type: test) */
+	char at[40];     /* answered_at ("imported" for files without it) */
+	int completed;   /* 0, 1; -1: unknown */
 } row;
 
 static int split(char *line, char **f, int max)
@@ -231,14 +245,17 @@ static int safe_name(const char *s, size_t max)
 	return 1;
 }
 
-/* One data row; `with_period`: the file has the period column (LONG_HEADER), else the DESIGN section 7 layout
- * without it. A file without period reads as if it had the column, empty. TL_OK, or TL_ERR_INPUT with the reason
- * in `why`. */
-static int parse_row(const sty *s, char *line, bool with_period, row *r, char *why, size_t why_size)
+enum { LAYOUT_NO_PERIOD, LAYOUT_PERIOD, LAYOUT_FULL };
+
+/* One data row in `layout`: LAYOUT_FULL (LONG_HEADER_FULL), LAYOUT_PERIOD (LONG_HEADER: type test, answered_at
+ * "imported", completion unknown) or LAYOUT_NO_PERIOD (the DESIGN section 7 layout, which reads as if it had the period
+ * column, empty). TL_OK, or TL_ERR_INPUT with the reason in `why`. */
+static int parse_row(const sty *s, char *line, int layout, row *r, char *why, size_t why_size)
 {
 	static char none[1] = "";
-	char *c[13], *f[13];
-	int cols = with_period ? 12 : 11;
+	bool with_period = layout != LAYOUT_NO_PERIOD;
+	char *c[16], *f[16];
+	int cols = layout == LAYOUT_FULL ? 15 : with_period ? 12 : 11;
 	int n = split(line, c, cols);
 	if (n != cols) {
 		snprintf(why, why_size, "expected %d columns, found %d", cols, n > cols ? cols + 1 : n);
@@ -317,6 +334,35 @@ static int parse_row(const sty *s, char *line, bool with_period, row *r, char *w
 		}
 		r->rt_ms = v;
 	}
+	snprintf(r->kind, sizeof r->kind, "test");
+	snprintf(r->at, sizeof r->at, "imported");
+	r->completed = -1;
+	if (layout != LAYOUT_FULL)
+		return TL_OK;
+	if (strcmp(c[12], "test") && strcmp(c[12], "catch") && strcmp(c[12], "training")) {
+		snprintf(why, why_size, "trial_type '%s' is not test, catch or training", c[12]);
+		return TL_ERR_INPUT;
+	}
+	snprintf(r->kind, sizeof r->kind, "%s", c[12]);
+	if (!strcmp(r->kind, "catch") && !facts->reference) {
+		snprintf(why, why_size, "a catch trial compares the reference with itself: method %s is not the reference", r->method);
+		return TL_ERR_INPUT;
+	}
+	/* an ISO 8601 time as the server writes it (2026-11-26T04:50:01.123Z), or "imported" */
+	if (!c[13][0] || strlen(c[13]) >= sizeof r->at || strspn(c[13], "0123456789-:.TZ") != strlen(c[13]) ||
+	    !isdigit((unsigned char)c[13][0])) {
+		if (strcmp(c[13], "imported")) {
+			snprintf(why, why_size, "answered_at '%.40s' is not a time like 2026-11-26T04:50:01.123Z (or 'imported')", c[13]);
+			return TL_ERR_INPUT;
+		}
+	}
+	snprintf(r->at, sizeof r->at, "%s", c[13]);
+	long done;
+	if (c[14][0] && !parse_long(c[14], 0, 1, &done)) {
+		snprintf(why, why_size, "completed '%s' is not 0 or 1 (or empty: unknown)", c[14]);
+		return TL_ERR_INPUT;
+	}
+	r->completed = c[14][0] ? (int)done : -1;
 	return TL_OK;
 }
 
@@ -346,10 +392,13 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	row *rows = NULL;
 	size_t n = 0, lineno = 1;
 	int rc = TL_ERR_INPUT; /* until the rows are stored: a malformed file */
-	bool have = fgets(line, sizeof line, f) != NULL, with_period = have && header_is(line, LONG_HEADER);
-	if (!with_period && !(have && header_is(line, LONG_HEADER_NO_PERIOD))) {
-		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or, from before the period column, the same "
-			 "without period)", path, LONG_HEADER);
+	bool have = fgets(line, sizeof line, f) != NULL;
+	int layout = !have ? -1 : header_is(line, LONG_HEADER_FULL) ? LAYOUT_FULL : header_is(line, LONG_HEADER) ? LAYOUT_PERIOD
+		     : header_is(line, LONG_HEADER_NO_PERIOD) ? LAYOUT_NO_PERIOD : -1;
+	if (layout < 0) {
+		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or, from before issue 27, the same without "
+			 "trial_type,answered_at,completed, or from before the period column without period either)", path,
+			 LONG_HEADER_FULL);
 		goto done;
 	}
 	/* Validate everything before touching the database. */
@@ -367,7 +416,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			goto done;
 		}
 		rows = nr;
-		int prc = parse_row(s, line, with_period, &rows[n], why, sizeof why);
+		int prc = parse_row(s, line, layout, &rows[n], why, sizeof why);
 		if (prc) {
 			rc = prc;
 			snprintf(err, err_size, "%s:%zu: %s; nothing imported", path, lineno, why);
@@ -377,6 +426,10 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			if (rows[k].trial == rows[n].trial && !strcmp(rows[k].participant, rows[n].participant)) {
 				snprintf(err, err_size, "%s:%zu: participant %s has trial %ld twice; nothing imported", path, lineno,
 					 rows[n].participant, rows[n].trial);
+				goto done;
+			} else if (!strcmp(rows[k].participant, rows[n].participant) && rows[k].completed != rows[n].completed) {
+				snprintf(err, err_size, "%s:%zu: participant %s has two values of completed; nothing imported", path,
+					 lineno, rows[n].participant);
 				goto done;
 			}
 		n++;
@@ -395,13 +448,12 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 				  " AND period IS ?",
 			   -1, &fc, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(scene, camera, camera_motion, method, T, period, ref_clip, test_clip,"
-				  " is_catch) VALUES(?,?,?,?,?,?,'','',0)", -1, &ic, NULL);
+				  " is_catch) VALUES(?,?,?,?,?,?,'','',?)", -1, &ic, NULL);
 	sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE label=?", -1, &fp, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO participants(code, label) VALUES(?, ?)", -1, &ip, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind) VALUES(?,?,?,?,'test')", -1,
+	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind) VALUES(?,?,?,?,?)", -1,
 			   &it, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at) VALUES(?,?,?,?,'imported')", -1, &ia,
-			   NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at) VALUES(?,?,?,?,?)", -1, &ia, NULL);
 	for (size_t i = 0; ok && i < n; i++) {
 		row *r = &rows[i];
 		sqlite3_int64 cid = -1, pid = -1;
@@ -422,6 +474,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			sqlite3_bind_text(ic, 4, r->method, -1, SQLITE_STATIC);
 			isnan(r->T) ? sqlite3_bind_null(ic, 5) : sqlite3_bind_double(ic, 5, r->T);
 			r->period ? sqlite3_bind_int64(ic, 6, r->period) : sqlite3_bind_null(ic, 6);
+			sqlite3_bind_int(ic, 7, !strcmp(r->kind, "catch"));
 			ok = sqlite3_step(ic) == SQLITE_DONE;
 			cid = sqlite3_last_insert_rowid(s->db);
 		}
@@ -440,18 +493,24 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			sqlite3_bind_text(ip, 2, r->participant, -1, SQLITE_STATIC);
 			ok = ok && sqlite3_step(ip) == SQLITE_DONE;
 			pid = sqlite3_last_insert_rowid(s->db);
+			/* the session's completion as the file says it ("" unknown), for the next export (issue 27.9) */
+			char key[96];
+			snprintf(key, sizeof key, "completed:%s", r->participant);
+			ok = ok && !sty_meta_set(s, key, r->completed < 0 ? "" : r->completed ? "1" : "0");
 		}
 		sqlite3_reset(it);
 		sqlite3_bind_int64(it, 1, pid);
 		sqlite3_bind_int64(it, 2, r->trial);
 		sqlite3_bind_int64(it, 3, cid);
 		sqlite3_bind_int(it, 4, r->ref_first);
+		sqlite3_bind_text(it, 5, r->kind, -1, SQLITE_STATIC);
 		ok = ok && sqlite3_step(it) == SQLITE_DONE;
 		sqlite3_reset(ia);
 		sqlite3_bind_int64(ia, 1, pid);
 		sqlite3_bind_int64(ia, 2, r->trial);
 		sqlite3_bind_int(ia, 3, r->answer);
 		r->rt_ms >= 0 ? sqlite3_bind_int64(ia, 4, r->rt_ms) : sqlite3_bind_null(ia, 4);
+		sqlite3_bind_text(ia, 5, r->at, -1, SQLITE_STATIC);
 		ok = ok && sqlite3_step(ia) == SQLITE_DONE;
 	}
 	sqlite3_finalize(fc);

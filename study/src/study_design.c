@@ -3,8 +3,6 @@
 #define _DEFAULT_SOURCE /* realpath */
 #include <dirent.h>
 #include <errno.h>
-#include <gsl/gsl_randist.h>
-#include <gsl/gsl_rng.h>
 #include <math.h>
 #include <sqlite3.h>
 #include <stdio.h>
@@ -13,6 +11,7 @@
 #include <sys/stat.h>
 
 #include "study_internal.h"
+#include "study_plan.h"
 #include "taslab/pairs.h"
 #include "taslab/tl_fs.h"
 
@@ -157,7 +156,6 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	int rc = TL_ERR_ARG;
 	char **sets = NULL;
 	size_t nsets = 0;
-	gsl_rng *rng = NULL;
 	memset(out, 0, sizeof *out);
 	if (!d->stimuli || d->participants < 1 || d->participants > 100000) {
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
@@ -252,12 +250,9 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		rc = sty_db_fail(s, err, err_size, "begin");
 		goto done;
 	}
-	sqlite3_stmt *ic, *ip, *it;
+	sqlite3_stmt *ic;
 	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(id, scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch,"
 				  " period) VALUES(?,?,?,?,?,?,?,?,?,?)", -1, &ic, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO participants(id, code, label) VALUES(?,?,?)", -1, &ip, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind, break_before)"
-				  " VALUES(?,?,?,?,?,?)", -1, &it, NULL);
 	int ok = 1;
 	for (size_t i = 0; i < nc && ok; i++) {
 		sqlite3_reset(ic);
@@ -279,68 +274,17 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 			sqlite3_bind_null(ic, 10);
 		ok = sqlite3_step(ic) == SQLITE_DONE;
 	}
-	/* Plan per participant: [training] then shuffled (test conditions + catch trials). */
-	rng = gsl_rng_alloc(gsl_rng_mt19937);
-	size_t per = ntest + d->catch_trials;
-	size_t *order = calloc(per + d->training + 1, sizeof *order);
-	int *flip = calloc(nc + 1, sizeof *flip);
-	size_t *tests = calloc(ntest + 1, sizeof *tests), *catches = calloc(ncatch + 1, sizeof *catches);
-	if (!rng || !order || !flip || !tests || !catches)
-		ok = 0;
-	for (size_t i = 0, a = 0, b = 0; ok && i < nc; i++)
-		cs[i].is_catch ? (catches[b++] = i) : (tests[a++] = i);
-	uint32_t breaks = 0;
-	for (uint32_t pi = 0; ok && pi < d->participants; pi++) {
-		char code[33], label[32];
-		if (!sty_random_hex(code)) {
-			ok = 0;
-			break;
-		}
-		snprintf(label, sizeof label, "P%03u", pi + 1);
-		sqlite3_reset(ip);
-		sqlite3_bind_int64(ip, 1, pi + 1);
-		sqlite3_bind_text(ip, 2, code, -1, SQLITE_TRANSIENT);
-		sqlite3_bind_text(ip, 3, label, -1, SQLITE_TRANSIENT);
-		ok = sqlite3_step(ip) == SQLITE_DONE;
-		/* Each pair of participants (2k, 2k+1) shares one seeded draw of in-pair orders, the second taking the
-		 * complement: orders are random per participant and each pair appears in both orders. */
-		gsl_rng_set(rng, (unsigned long)(d->seed * 1000003ull + (pi / 2) * 2654435761ull + 1));
-		for (size_t c = 0; c < nc; c++)
-			flip[c] = (int)gsl_rng_uniform_int(rng, 2) ^ (int)(pi % 2);
-		gsl_rng_set(rng, (unsigned long)(d->seed * 1000003ull + pi * 40503ull + 7777));
-		size_t n = 0;
-		for (size_t k = 0; k < d->training; k++)
-			order[n++] = ntest ? tests[gsl_rng_uniform_int(rng, ntest)] : catches[0];
-		size_t start = n;
-		for (size_t k = 0; k < ntest; k++)
-			order[n++] = tests[k];
-		size_t off = ncatch ? gsl_rng_uniform_int(rng, ncatch) : 0; /* which catch pairs: rotates per participant */
-		for (size_t k = 0; k < d->catch_trials; k++)
-			order[n++] = catches[(k + off) % ncatch];
-		gsl_ran_shuffle(rng, order + start, n - start, sizeof *order);
-		for (size_t k = 0; ok && k < n; k++) {
-			size_t c = order[k];
-			const char *kind = k < start ? "training" : cs[c].is_catch ? "catch" : "test";
-			int brk = d->break_every && k > 0 && k % d->break_every == 0;
-			breaks += brk && pi == 0;
-			sqlite3_reset(it);
-			sqlite3_bind_int64(it, 1, pi + 1);
-			sqlite3_bind_int64(it, 2, (sqlite3_int64)k);
-			sqlite3_bind_int64(it, 3, (sqlite3_int64)c + 1);
-			sqlite3_bind_int(it, 4, flip[c]);
-			sqlite3_bind_text(it, 5, kind, -1, SQLITE_STATIC);
-			sqlite3_bind_int(it, 6, brk);
-			ok = sqlite3_step(it) == SQLITE_DONE;
-		}
-		out->trials_per_participant = (uint32_t)n;
-	}
 	sqlite3_finalize(ic);
-	sqlite3_finalize(ip);
-	sqlite3_finalize(it);
-	free(order);
-	free(flip);
-	free(tests);
-	free(catches);
+	/* The participants' plans (study_plan.c; sty_add_participants makes later participants' the same way). */
+	int *is_catch = calloc(nc + 1, sizeof *is_catch);
+	for (size_t i = 0; is_catch && i < nc; i++)
+		is_catch[i] = cs[i].is_catch;
+	sty_plan_params pp = {.seed = d->seed, .training = d->training, .catch_trials = d->catch_trials,
+			      .break_every = d->break_every};
+	uint32_t breaks = 0;
+	ok = ok && is_catch && !sty_plan_participants(s, is_catch, nc, &pp, 0, d->participants, &out->trials_per_participant,
+						      &breaks, err, err_size);
+	free(is_catch);
 	char seedbuf[32];
 	snprintf(seedbuf, sizeof seedbuf, "%llu", (unsigned long long)d->seed);
 	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf);
@@ -367,7 +311,6 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	out->session_minutes = (out->trials_per_participant * (2 * clip_s + gap + ans) + 30.0 * breaks) / 60.0;
 	rc = TL_OK;
 done:
-	gsl_rng_free(rng);
 	for (size_t i = 0; i < nsets; i++)
 		free(sets[i]);
 	free(sets);

@@ -22,7 +22,10 @@
 
 #include "study_internal.h"
 #include "study_serve_internal.h"
+#include "study_session.h"
+#include "taslab/study_status.h"
 #include "taslab/tl_fs.h"
+#include "web/status_html.h"
 #include "web/study_html.h"
 
 #define LOG_LINES_PER_S 10 /* more log lines than this in one second are counted, not printed */
@@ -35,15 +38,12 @@ static void default_log(void *cls, const char *line)
 	fprintf(stderr, "taslab study serve: %s\n", line);
 }
 
-/* One line to the configured log, at most LOG_LINES_PER_S per second (a flood of bad requests must not become a
- * flood on the terminal). */
-void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
+/* One line to the configured log, at most LOG_LINES_PER_S per second when `limited` (a flood of bad requests must not
+ * become a flood on the terminal). */
+static void serve_vlog(struct sty_server *sv, bool limited, const char *fmt, va_list ap)
 {
 	char line[512];
-	va_list ap;
-	va_start(ap, fmt);
 	vsnprintf(line, sizeof line, fmt, ap);
-	va_end(ap);
 	for (char *c = line; *c; c++)
 		if (*c == '\n' || *c == '\r')
 			*c = ' ';
@@ -64,7 +64,7 @@ void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
 		sv->log_second = now;
 		sv->log_count = sv->log_dropped = 0;
 	}
-	if (++sv->log_count > LOG_LINES_PER_S) {
+	if (limited && ++sv->log_count > LOG_LINES_PER_S) {
 		sv->log_dropped++;
 		print = 0;
 	}
@@ -77,6 +77,24 @@ void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
 	if (print)
 		log(sv->desc.log_cls, line);
 	pthread_mutex_unlock(&sv->log_lock);
+}
+
+void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	serve_vlog(sv, true, fmt, ap);
+	va_end(ap);
+}
+
+/* A stored answer or a completed session (issue 27.8): never dropped by the rate limit — there are at most as many as
+ * the study has trials, whoever sends them. */
+static void serve_event(struct sty_server *sv, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	serve_vlog(sv, false, fmt, ap);
+	va_end(ap);
 }
 
 /* ------------------------------------------------------------------ responses */
@@ -391,7 +409,15 @@ static void serve_clip(struct sty_server *sv, const sty_request *rq, const char 
 		set_internal(sv, r, rq, "a clip of the design is missing or outside the stimulus folder");
 		return;
 	}
-	uint64_t size = (uint64_t)sb.st_size, first = 0, last = size ? size - 1 : 0;
+	/* Blinding by size (issue 27.6): the representation is the file and then its container's padding up to the
+	 * length every clip of this scene x camera path is served at. */
+	uint64_t fsize = (uint64_t)sb.st_size, padded = 0;
+	if (sty_clip_padded_size(sv->study, sv->root, name, rel, &padded, err, sizeof err)) {
+		close(fd);
+		set_internal(sv, r, rq, err);
+		return;
+	}
+	uint64_t size = padded > fsize ? padded : fsize, first = 0, last = size ? size - 1 : 0;
 	size_t nrange, nifrange;
 	const char *range = header(rq, "Range", &nrange);
 	header(rq, "If-Range", &nifrange);
@@ -410,8 +436,15 @@ static void serve_clip(struct sty_server *sv, const sty_request *rq, const char 
 	r->status = kind == RANGE_ONE ? 206 : 200;
 	r->content_type = clip_type(real);
 	r->fd = fd;
-	r->file_offset = first;
-	r->file_size = size ? last - first + 1 : 0;
+	r->file_offset = first < fsize ? first : fsize;
+	r->file_size = size && first < fsize ? (last < fsize ? last : fsize - 1) - first + 1 : 0;
+	if (size > fsize && last >= fsize) { /* the part of [first, last] past the file's end is padding */
+		r->pad_total = size - fsize;
+		size_t rl = strlen(rel);
+		r->pad_ext = rl >= 5 && !strcmp(rel + rl - 5, ".webm") ? ".webm" : ".mp4"; /* padded only these two */
+		r->pad_offset = first > fsize ? first - fsize : 0;
+		r->pad_size = last - fsize + 1 - r->pad_offset;
+	}
 	r->accept_ranges = true;
 	r->cacheable = false;
 	if (kind == RANGE_ONE)
@@ -450,8 +483,10 @@ static void serve_export(struct sty_server *sv, const sty_request *rq, int pwcmp
 	r->file_size = (uint64_t)sb.st_size;
 }
 
-/* POST /api/<code>/answer: exactly {"trial": int, "answer": int, "rt_ms": int} (JSON integers, no other keys, no
- * duplicates), range-checked before any narrowing conversion; the storage rules are sty_answer's. */
+/* POST /api/<code>/answer: exactly {"trial": int, "answer": int, "rt_ms": int} and optionally "session": the id from
+ * /session (JSON integers and a string, no other keys, no duplicates), range-checked before any narrowing conversion;
+ * the storage rules are sty_answer's and sty_session_answer's. Each stored answer is a log line, and so is a
+ * completed session (issue 27.8). */
 static void serve_answer(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
 {
 	if (rq->body_too_large) {
@@ -462,32 +497,80 @@ static void serve_answer(struct sty_server *sv, const sty_request *rq, const cha
 	json_t *j = json_loadb(rq->body, rq->body_size, JSON_REJECT_DUPLICATES, &je);
 	const char *why = NULL;
 	json_t *t = json_object_get(j, "trial"), *a = json_object_get(j, "answer"), *rt = json_object_get(j, "rt_ms");
+	json_t *ses = json_object_get(j, "session");
 	if (!json_is_object(j))
 		why = "body must be a JSON object {\"trial\": int, \"answer\": int, \"rt_ms\": int}";
-	else if (json_object_size(j) != 3 || !t || !a || !rt)
-		why = "body must have exactly the keys trial, answer and rt_ms";
+	else if (json_object_size(j) != 3u + (ses != NULL) || !t || !a || !rt)
+		why = "body must have exactly the keys trial, answer and rt_ms (and session)";
 	else if (!json_is_integer(t) || json_integer_value(t) < 0 || json_integer_value(t) > UINT32_MAX)
 		why = "trial must be a whole number >= 0";
 	else if (!json_is_integer(a) || json_integer_value(a) < -2 || json_integer_value(a) > 2)
 		why = "answer must be an integer from -2 to 2";
 	else if (!json_is_integer(rt) || json_integer_value(rt) < 0 || json_integer_value(rt) > STY_RT_MS_MAX)
 		why = "rt_ms must be a whole number of milliseconds from 0 to 86400000";
+	else if (ses && (!json_is_string(ses) || !valid_hex32(json_string_value(ses), strlen(json_string_value(ses)))))
+		why = "session must be the id POST /api/<code>/session returned";
 	if (why) {
 		json_decref(j);
 		set_error(r, 400, why);
 		return;
 	}
-	char err[512];
-	int rc = sty_answer(sv->study, code, (uint32_t)json_integer_value(t), (int64_t)json_integer_value(a),
-			    (int64_t)json_integer_value(rt), err, sizeof err);
+	char err[512], session[33] = "";
+	if (ses)
+		snprintf(session, sizeof session, "%s", json_string_value(ses));
+	uint32_t trial = (uint32_t)json_integer_value(t);
+	sty_session_info info;
+	int rc = sty_session_answer(sv->study, code, ses ? session : NULL, trial, (int64_t)json_integer_value(a),
+				    (int64_t)json_integer_value(rt), &info, err, sizeof err);
 	json_decref(j);
 	switch (rc) {
-	case TL_OK: set_json(r, json_pack("{s:b}", "ok", 1)); break;
+	case TL_OK:
+		set_json(r, info.repeat ? json_pack("{s:b, s:b}", "ok", 1, "repeat", 1) : json_pack("{s:b}", "ok", 1));
+		if (!info.repeat)
+			serve_event(sv, "%s answered trial %u (%u/%u)", info.label, trial, info.answered, info.total);
+		if (!info.repeat && info.total && info.answered == info.total)
+			serve_event(sv, "%s completed the session (%u trials)", info.label, info.total);
+		break;
 	case TL_ERR_ARG: set_error(r, 400, err); break;
 	case TL_ERR_NOTFOUND: set_error(r, 404, err); break;
-	case TL_ERR_CONFLICT: set_error(r, 409, err); break;
+	case TL_ERR_CONFLICT:
+		if (info.superseded) {
+			json_t *e = json_pack("{s:s, s:b}", "error", err, "superseded", 1);
+			set_json(r, e);
+			r->status = 409;
+			sty_serve_log(sv, "%s: an answer to trial %u from a superseded session refused (the link is open in another window)",
+				      info.label, trial);
+		} else {
+			set_error(r, 409, err);
+		}
+		break;
 	default: set_internal(sv, r, rq, err);
 	}
+}
+
+/* POST /api/<code>/session: a new session for the link (the page's Start); the earlier one is superseded. A log line
+ * says so when the link had one (a reload, or a second browser: "restart"). The body is not read. */
+static void serve_session(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
+{
+	if (rq->body_too_large) {
+		set_error(r, 413, "request body larger than 4096 bytes");
+		return;
+	}
+	char session[33], err[512];
+	sty_session_info info;
+	int rc = sty_session_start(sv->study, code, session, &info, err, sizeof err);
+	if (rc == TL_ERR_NOTFOUND) {
+		set_error(r, 404, "unknown participant");
+		return;
+	}
+	if (rc) {
+		set_internal(sv, r, rq, err);
+		return;
+	}
+	sty_serve_log(sv, "%s %s (%u/%u answered)", info.label,
+		      info.restart ? "restarted: a new session took over the link" : "started a session", info.answered,
+		      info.total);
+	set_json(r, json_pack("{s:s}", "session", session));
 }
 
 static void serve_trial(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
@@ -511,9 +594,24 @@ static void serve_trial(struct sty_server *sv, const sty_request *rq, const char
 	char a[64], b[64];
 	snprintf(a, sizeof a, "/clips/%s", t.clip_a);
 	snprintf(b, sizeof b, "/clips/%s", t.clip_b);
-	set_json(r, json_pack("{s:b, s:I, s:I, s:I, s:s, s:s, s:s, s:b}", "done", 0, "index", (json_int_t)t.index, "total",
-			      (json_int_t)t.total, "answered", (json_int_t)t.answered, "clip_a", a, "clip_b", b, "kind", t.kind,
-			      "break_before", t.break_before));
+	/* No trial kind but training (issue 27.6): a catch trial looks like any other trial to the browser. */
+	set_json(r, json_pack("{s:b, s:I, s:I, s:I, s:s, s:s, s:b, s:b}", "done", 0, "index", (json_int_t)t.index, "total",
+			      (json_int_t)t.total, "answered", (json_int_t)t.answered, "clip_a", a, "clip_b", b, "training",
+			      !strcmp(t.kind, "training"), "break_before", t.break_before));
+}
+
+/* GET /admin/status: the study's status as JSON (study_status.h), for the live status page. */
+static void serve_status(struct sty_server *sv, const sty_request *rq, sty_response *r)
+{
+	char err[512];
+	char *text = NULL;
+	int rc = sty_status_json(sv->study, &text, err, sizeof err);
+	if (rc) {
+		set_internal(sv, r, rq, err);
+		return;
+	}
+	set_body(r, 200, "application/json", text, strlen(text));
+	free(text);
 }
 
 void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
@@ -575,8 +673,10 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 			serve_trial(sv, rq, cb, r);
 		else if (!strcmp(slash, "/answer") && post)
 			serve_answer(sv, rq, cb, r);
-		else if (!strcmp(slash, "/trial") || !strcmp(slash, "/answer"))
-			set_error(r, 405, "GET /trial, POST /answer");
+		else if (!strcmp(slash, "/session") && post)
+			serve_session(sv, rq, cb, r);
+		else if (!strcmp(slash, "/trial") || !strcmp(slash, "/answer") || !strcmp(slash, "/session"))
+			set_error(r, 405, "GET /trial, POST /answer, POST /session");
 		else
 			set_error(r, 404, "no such endpoint");
 		return;
@@ -599,9 +699,15 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 			serve_export(sv, rq, 0, r);
 		} else if (!strcmp(url, "/admin/export-pwcmp.csv")) {
 			serve_export(sv, rq, 1, r);
+		} else if (!strcmp(url, "/admin/status")) {
+			serve_status(sv, rq, r);
 		} else {
-			set_error(r, 404, "no such endpoint (export.csv, export-pwcmp.csv)");
+			set_error(r, 404, "no such endpoint (status, export.csv, export-pwcmp.csv)");
 		}
+		return;
+	}
+	if (!strcmp(url, "/status") && get) { /* the page only: its data come from /admin/status with the token */
+		set_body(r, 200, "text/html; charset=utf-8", status_html, strlen(status_html));
 		return;
 	}
 	if (!strcmp(url, "/") && get) {

@@ -19,6 +19,7 @@ struct sty_server {
 	char root[PATH_MAX]; /* realpath of the stimulus folder */
 	uint16_t port;
 	sty_server_desc desc;
+	int lock_fd; /* the database file, flock'ed while serving (one server per study); -1: none */
 	pthread_mutex_t log_lock;
 	int starting;        /* while MHD_start_daemon runs, its messages explain a failure: keep the last */
 	char start_msg[256];

@@ -4,6 +4,7 @@
 #define _DEFAULT_SOURCE /* realpath */
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <microhttpd.h>
 #include <netinet/in.h>
@@ -12,12 +13,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "study_internal.h"
 #include "study_serve_internal.h"
+#include "study_session.h"
 
 #define MAX_HEADERS 64
 
@@ -55,10 +58,48 @@ static enum MHD_Result collect_header(void *cls, enum MHD_ValueKind kind, const 
 	return MHD_YES;
 }
 
+/* A clip followed by its padding (study_session.h): file_size bytes of the file from file_offset, then pad_size bytes
+ * of the padding from pad_offset into it. */
+typedef struct padded_body {
+	int fd;
+	uint64_t file_offset, file_size, pad_offset, pad_total;
+	const char *pad_ext;
+} padded_body;
+
+static ssize_t padded_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+	padded_body *p = cls;
+	if (pos < p->file_size) {
+		size_t n = p->file_size - pos < max ? (size_t)(p->file_size - pos) : max;
+		ssize_t got = pread(p->fd, buf, n, (off_t)(p->file_offset + pos));
+		return got > 0 ? got : MHD_CONTENT_READER_END_WITH_ERROR; /* the file shrank or failed: end the reply */
+	}
+	sty_pad_bytes(p->pad_ext, p->pad_total, p->pad_offset + (pos - p->file_size), (uint8_t *)buf, max);
+	return (ssize_t)max; /* MHD asks no further than the size it was given */
+}
+
+static void padded_free(void *cls)
+{
+	padded_body *p = cls;
+	close(p->fd);
+	free(p);
+}
+
 static enum MHD_Result queue(struct MHD_Connection *c, sty_response *r)
 {
 	struct MHD_Response *m;
-	if (r->fd >= 0) {
+	padded_body *pb;
+	if (r->fd >= 0 && r->pad_size) {
+		m = NULL;
+		if ((pb = malloc(sizeof *pb))) {
+			*pb = (padded_body){r->fd, r->file_offset, r->file_size, r->pad_offset, r->pad_total, r->pad_ext};
+			m = MHD_create_response_from_callback(r->file_size + r->pad_size, 64 * 1024, padded_read, pb, padded_free);
+		}
+		if (m)
+			r->fd = -1; /* padded_free closes it */
+		else
+			free(pb);
+	} else if (r->fd >= 0) {
 		m = MHD_create_response_from_fd_at_offset64(r->file_size, r->fd, r->file_offset);
 		if (m)
 			r->fd = -1; /* MHD closes it */
@@ -313,6 +354,7 @@ int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, cha
 	if (!sv)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	sv->study = s;
+	sv->lock_fd = -1;
 	if (desc)
 		sv->desc = *desc;
 	pthread_mutex_init(&sv->log_lock, NULL);
@@ -338,6 +380,20 @@ int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char
 	if (rc)
 		return rc;
 	const sty_server_desc *d = &sv->desc;
+	/* One server per study (issue 27.5): an exclusive flock(2) on the database file, held until the server stops (or
+	 * its process dies). flock, not fcntl: SQLite's own POSIX locks on the file are independent of it, and closing
+	 * this descriptor does not release them. */
+	sv->lock_fd = open(sty_path(s), O_RDONLY | O_CLOEXEC);
+	if (sv->lock_fd < 0 || flock(sv->lock_fd, LOCK_EX | LOCK_NB)) {
+		int busy = sv->lock_fd >= 0 && errno == EWOULDBLOCK;
+		rc = busy ? tl_error(err, err_size, TL_ERR_CONFLICT, "%s is being served already (by another 'taslab study serve'%s%s); "
+				     "stop that server first: one server per study", sty_path(s), sty_served_url(s)[0] ? " on " : "",
+				     sty_served_url(s))
+			  : tl_error(err, err_size, TL_ERR_INPUT, "%s: cannot open the study to lock it: %s", sty_path(s),
+				     strerror(errno));
+		sty_server_stop(&sv);
+		return rc;
+	}
 	const char *bind = d->bind ? d->bind : "127.0.0.1";
 	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(d->port)};
 	if (inet_pton(AF_INET, bind, &sa.sin_addr) != 1) {
@@ -408,6 +464,8 @@ void sty_server_stop(sty_server **psv)
 	}
 	if (sv->mhd)
 		MHD_stop_daemon(sv->mhd);
+	if (sv->lock_fd >= 0)
+		close(sv->lock_fd); /* releases the study's serve lock */
 	pthread_cond_destroy(&sv->conn_wake);
 	pthread_mutex_destroy(&sv->conn_lock);
 	pthread_mutex_destroy(&(*psv)->log_lock);

@@ -54,12 +54,14 @@ try {
   // The admin token travels in a header (never in the URL); without it the export is refused.
   const refused = (await fetch(`${base}/admin/export.csv?token=${token}`)).status;
   const csv = await (await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } })).text();
-  const rows = csv.trim().split('\n').slice(1);
-  const trials = new Set(rows.map(r => r.split(',').slice(0, 2).join(',')));
-  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${rows.length} test ratings, ${trials.size} distinct`);
+  const all = csv.trim().split('\n').slice(1);               // every answered trial, typed (issue 27.9)
+  const rows = all.filter(r => r.split(',')[12] === 'test');
+  const trials = new Set(all.map(r => r.split(',').slice(0, 2).join(',')));
+  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${all.length} rows, ${rows.length} test ratings, ${trials.size} distinct`);
+  if (all.length !== state.total || trials.size !== all.length) { console.error('the export does not hold every answered trial once'); status = 1; }
   if (refused !== 401) { console.error(`export with ?token= answered ${refused}, expected 401`); status = 1; }
   if (!clipUrls.length || clipUrls.some(u => !/^\/clips\/[0-9a-f]{32}\.webm$/.test(u))) { console.error('clip URLs not opaque: ' + clipUrls.join(' ')); status = 1; }
-  if (!state.done || state.answered !== state.total || answered !== state.total || rows.length !== expected || trials.size !== rows.length)
+  if (!state.done || state.answered !== state.total || answered !== state.total || rows.length !== expected)
     status = 1;
 } catch (e) {
   console.error('study_session: ' + String(e.message || e).split('\n')[0]);

@@ -22,7 +22,7 @@ done
 server=$!
 trap 'kill $server 2>/dev/null || true' EXIT
 for _ in $(seq 50); do grep -q "admin token" "$work/serve.out" 2>/dev/null && break; sleep 0.1; done
-base=$(grep -o 'http://127.0.0.1:[0-9]*' "$work/serve.out")
+base=$(grep -o 'http://127.0.0.1:[0-9]*' "$work/serve.out" | head -1)
 token=$(grep -o 'admin token [0-9a-f]*' "$work/serve.out" | cut -d' ' -f3)
 code=$("$taslab" study links --db "$work/study.db" | head -1 | sed 's|.*/p/||')
 node "$here/study_session.mjs" "$base" "$code" "$token" 4

@@ -129,9 +129,12 @@ int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *er
  * (rt_ms = -1: not measured). */
 int sty_answer(sty *s, const char *code, uint32_t trial, int64_t answer, int64_t rt_ms, char *err, size_t err_size);
 
-/* Long-format ratings CSV (DESIGN section 7 plus the period column of DESIGN section 4, right after T):
- * participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms  (test trials
- * only; T and period empty where the method has none).
+/* Long-format ratings CSV (DESIGN section 7 plus the period column of DESIGN section 4, right after T, and issue 27's
+ * three last columns):
+ * participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms,trial_type,answered_at,
+ * completed — every answered trial (trial_type test, catch or training; answered_at the answer's UTC time; completed 1
+ * when the participant answered their whole plan, 0 if not, empty when unknown); T and period empty where the method
+ * has none.
  * Text cells are written so that a spreadsheet cannot run them (OWASP "CSV injection"): a cell starting with
  * = + - @ TAB or CR gets a leading ', and a cell holding , " CR or LF is quoted (RFC 4180). The same holds for
  * every CSV the study module writes. */
@@ -150,7 +153,8 @@ int sty_export(sty *s, const char *long_path, const char *pwcmp_path, char *err,
 int sty_check_output(const sty *s, const char *path, char *err, size_t err_size);
 /* Imports a long-format ratings file into a new study (sty_create; a study that holds participants is refused);
  * validates every row first and imports nothing if any row is bad (the message names the line). The header is
- * the one sty_export_long writes, or the DESIGN section 7 header without period (files from before the period
+ * the one sty_export_long writes, the same without its last three columns (every row a test trial, answered at
+ * "imported", completion unknown), or the DESIGN section 7 header without period either (files from before the period
  * column: every period is then empty). Rules beyond the column types: method is a DESIGN section 4 name; T is
  * given exactly for methods with a threshold (tfr, tarc, tasa and -oracle forms; 0 < T <= 255) and empty for
  * the others; period is given exactly for rrc and sau (1, 2, 4 or 8) and empty for the others; text cells

@@ -1,18 +1,26 @@
 /* study_serve.h — the study's web server (libmicrohttpd), bound to 127.0.0.1 by default.
  *   GET  /p/<code>               the participant page (an unguessable 128-bit link code)
- *   GET  /api/<code>/trial       the current trial (JSON: index, total, answered, kind, break_before and the
- *                                clip URLs clip_a/clip_b = /clips/<opaque name>), or {"done": true}
- *   POST /api/<code>/answer      {"trial": i, "answer": -2..2, "rt_ms": 0..STY_RT_MS_MAX}, exactly these keys,
- *                                JSON integers; committed to SQLite before the 200 reply. 400 malformed or not
- *                                the current trial (answers are given in order), 404 unknown participant or
- *                                trial, 409 answered already (a retry), 413 body larger than STY_MAX_BODY_B
+ *   GET  /api/<code>/trial       the current trial (JSON: index, total, answered, training, break_before and the
+ *                                clip URLs clip_a/clip_b = /clips/<opaque name>), or {"done": true}; nothing that
+ *                                tells a catch trial from a test trial (only training trials are marked)
+ *   POST /api/<code>/session     a new session for this link ({"session": 32 hex digits}); the link's earlier
+ *                                session is superseded (one browser at a time; the newest takes over)
+ *   POST /api/<code>/answer      {"trial": i, "answer": -2..2, "rt_ms": 0..STY_RT_MS_MAX[, "session": id]}, exactly
+ *                                these keys, JSON integers; committed to SQLite before the 200 reply. 400 malformed
+ *                                or not the current trial (answers are given in order), 404 unknown participant or
+ *                                trial, 409 answered already, or {"superseded": true} when the session is not the
+ *                                link's current one (nothing stored); a session's retry of the answer it stored
+ *                                already is 200 {"ok": true, "repeat": true}. 413 body larger than STY_MAX_BODY_B
  *   GET  /clips/<name>           the clips of trials served so far, by the opaque names of the trial API only;
  *                                every other name is 404 (nothing else under the stimulus folder is served).
  *                                Range (RFC 7233): one byte range -> 206; a range that is invalid (last < first)
  *                                or unsatisfiable -> 416 with a Content-Range naming the size; a header that does not
  *                                parse, another unit, several ranges, If-Range (we send no validators) or a method
  *                                other than GET -> the header is ignored and the whole file is sent (200; RFC 7233
- *                                section 3.1 lets a server ignore Range).
+ *                                section 3.1 lets a server ignore Range). Every clip of a scene x camera path is
+ *                                served at one length (padded with the container's own padding, study_session.h).
+ *   GET  /status                 the live status page (no data; it asks /admin/status with the token from #TOKEN)
+ *   GET  /admin/status           the study's status as JSON (study_status.h)
  *   GET  /admin/export.csv, /admin/export-pwcmp.csv   with "Authorization: Bearer <admin token>" (RFC 6750;
  *                                compared in constant time); 401 otherwise. The token is never read from the URL.
  * Framing: conflicting duplicate Content-Length, or Content-Length with Transfer-Encoding -> 400 (RFC 7230
@@ -98,6 +106,10 @@ typedef struct sty_response {
 	size_t body_size;
 	int fd;                        /* >= 0: send file_size bytes of this file from file_offset (owned) */
 	uint64_t file_offset, file_size;
+	/* after the file's bytes, pad_size bytes of padding from pad_offset into it (clips served at one length per scene x
+	 * camera path, issue 27.6): pad_total bytes of the container pad_ext's own padding in all (study_session.h) */
+	uint64_t pad_offset, pad_size, pad_total;
+	const char *pad_ext;
 	char content_range[96];        /* "" when none */
 	bool accept_ranges;            /* Accept-Ranges: bytes */
 	bool authenticate;             /* WWW-Authenticate: Bearer */

@@ -1,0 +1,24 @@
+/* study_plan.h (private) — the per-participant trial plans of a design (study_plan.c): used by sty_design for a new
+ * study and by sty_add_participants (study_status.h) for participants added later, so that participant k's plan is
+ * the same whenever it is made. Errors: a tl_err code, one line in `err`. */
+#ifndef TASLAB_STUDY_PLAN_H
+#define TASLAB_STUDY_PLAN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "study_internal.h"
+
+typedef struct sty_plan_params {
+	uint64_t seed;
+	uint32_t training, catch_trials, break_every;
+} sty_plan_params;
+
+/* Inserts participants first+1 .. first+count (labels P001.., random link codes) with their plans over the conditions
+ * with ids 1..nc (is_catch[i]: condition i+1 is a reference-vs-reference pair). Participant k's plan is a function of
+ * the seed, k and the conditions only. The caller holds a transaction. *per = trials per participant, *breaks =
+ * breaks in each plan. */
+int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan_params *pp, uint32_t first,
+			  uint32_t count, uint32_t *per, uint32_t *breaks, char *err, size_t err_size);
+
+#endif

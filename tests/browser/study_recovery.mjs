@@ -1,0 +1,224 @@
+// study_recovery.mjs — the participant page and the server under failure (issue 27), in Debian's Chromium
+// (playwright-core). It runs `taslab study serve` itself, on a fixed port, so that it can SIGKILL and restart it:
+//   1. after a break the server is down when Continue is pressed: no answer panel (no key or click can answer) until
+//      this trial's clips have played, a visible retry message, recovery when the server is back (items 27.1, 27.2);
+//   2. the server is killed when the page asks for a clip: "Connection lost, retrying" shows, the page recovers by
+//      itself once the server is back, and the message is gone on the next trial (27.2, 27.3);
+//   3. one link in two browser contexts: the window taken over is told so and stores nothing; every answer the
+//      server holds is one the page was told was saved (27.4);
+//   4. both clips of every trial the same byte length, and no trial kind but training in the trial JSON (27.6);
+//   5. a second `study serve` on the same study refused in one line (27.5); the log lines of answers, restarts and
+//      completions, and the live status page with the admin token (27.8, screenshot WORK/status.png).
+//   node study_recovery.mjs TASLAB_BINARY STUDY.db WORK_DIR
+import { chromium } from 'playwright-core';
+import { spawn, spawnSync } from 'node:child_process';
+import { createServer } from 'node:net';
+import { readFileSync } from 'node:fs';
+const require_file = p => readFileSync(p, 'utf8');
+
+const [taslab, db, work] = process.argv.slice(2);
+const timer = setTimeout(() => { console.error('study_recovery: timed out'); process.exit(2); }, 240000);
+const sleep = ms => new Promise(r => setTimeout(r, ms));
+const port = await new Promise(r => { const s = createServer(); s.listen(0, '127.0.0.1', () => { const p = s.address().port; s.close(() => r(p)); }); });
+const base = `http://127.0.0.1:${port}`;
+let server = null, serverLog = '', status = 0;
+const fail = msg => { console.error('FAIL ' + msg); status = 1; };
+
+async function startServer() {
+  server = spawn(taslab, ['study', 'serve', '--db', db, '--port', String(port)], { stdio: ['ignore', 'pipe', 'pipe'] });
+  server.stdout.on('data', d => { serverLog += d; });
+  server.stderr.on('data', d => { serverLog += d; });
+  for (let i = 0; i < 200; i++) {
+    try { if ((await fetch(base + '/')).ok) return; } catch (e) { /* not yet */ }
+    await sleep(50);
+  }
+  throw new Error('the server did not start:\n' + serverLog);
+}
+async function killServer() {
+  const s = server;
+  server = null;
+  const gone = new Promise(r => s.once('exit', r));
+  s.kill('SIGKILL');
+  await gone;
+}
+const panel = (page, id) => page.evaluate(i => getComputedStyle(document.getElementById(i)).display === 'block', id);
+const waitPanel = (page, ids, timeout = 30000) => page.waitForFunction(list => list.some(id =>
+  getComputedStyle(document.getElementById(id)).display === 'block'), ids, { timeout });
+const statusText = page => page.evaluate(() => {
+  const s = document.getElementById('status');
+  return getComputedStyle(s).display === 'none' ? '' : s.textContent;
+});
+async function answered(code) { return (await (await fetch(`${base}/api/${code}/trial`)).json()).answered; }
+// Answers the trial on the ask panel by key and waits for what comes next.
+async function answerNow(page, key) {
+  const before = await page.locator('#progress').textContent();
+  await page.keyboard.press(key);
+  await page.waitForFunction(b => document.getElementById('progress').textContent !== b ||
+    ['done', 'problem'].some(id => getComputedStyle(document.getElementById(id)).display === 'block'), before, { timeout: 30000 });
+}
+
+let browser;
+const trials = [];   // every trial JSON the pages received
+try {
+  await startServer();
+  const token = (serverLog.match(/admin token ([0-9a-f]{32})/) || [])[1];
+  if (!token) throw new Error('no admin token in: ' + serverLog);
+  const links = spawnSync(taslab, ['study', 'links', '--db', db], { encoding: 'utf8' }).stdout.trim().split('\n');
+  const codes = links.map(l => l.replace(/.*\/p\//, ''));
+
+  // 5a. A second server on the same study: refused, one line, non-zero exit.
+  const second = spawnSync(taslab, ['study', 'serve', '--db', db, '--port', '0'], { encoding: 'utf8', timeout: 20000 });
+  const secondOut = (second.stdout + second.stderr).trim();
+  if (second.status === 0 || secondOut.split('\n').length !== 1 || !/being served already/.test(secondOut))
+    fail(`a second 'study serve' on the same study: exit ${second.status}, output:\n${secondOut}`);
+
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync',
+           '--autoplay-policy=no-user-gesture-required'],
+  });
+  const watch = page => {
+    page.on('response', async r => {
+      if (new URL(r.url()).pathname.endsWith('/trial') && r.status() === 200) trials.push(await r.json().catch(() => ({})));
+    });
+    page.on('pageerror', e => fail('page error: ' + e.message));
+  };
+
+  // ---- participant 1: a break with the server down, then a clip download with the server killed
+  const ctx1 = await browser.newContext();
+  const page = await ctx1.newPage();
+  watch(page);
+  await page.goto(`${base}/p/${codes[0]}`);
+  await page.click('#start');
+  let acknowledged = 0, sawBreakDown = false, sawClipKill = false;
+  let killOnClip = false;
+  await page.route('**/clips/**', async route => {
+    if (killOnClip) { killOnClip = false; await killServer(); }
+    await route.continue().catch(() => route.abort().catch(() => {}));
+  });
+  for (let step = 0; step < 40; step++) {
+    await waitPanel(page, ['ask', 'break', 'done']);
+    if (await panel(page, 'done')) break;
+    if (await panel(page, 'break')) {
+      if (!sawBreakDown) {
+        // 1. The server is down when Continue is pressed: the page must not offer the answer panel.
+        sawBreakDown = true;
+        await killServer();
+        const before = await answered(codes[0]).catch(() => -1);
+        await page.click('#resume');
+        await sleep(2500);
+        if (await panel(page, 'ask')) fail('after a break with the server down, the answer panel is shown before the clips played');
+        for (const k of ['1', '2', '3', '4', '5']) await page.keyboard.press(k);
+        const msg = await statusText(page);
+        if (!/Connection lost/.test(msg)) fail(`no visible retry message while the server is down (status '${msg}')`);
+        await startServer();
+        await waitPanel(page, ['ask']);
+        if ((await answered(codes[0])) !== acknowledged) fail(`keys pressed before the clips played stored an answer (before ${before})`);
+        if (await statusText(page)) fail('the retry message stays after the server came back');
+      } else {
+        await page.click('#resume');
+      }
+      continue;
+    }
+    const armed = sawBreakDown && !sawClipKill;
+    killOnClip = armed;                          // 2./3. the server dies when the page asks for the next trial's clip
+    await answerNow(page, String(1 + (acknowledged % 5)));
+    acknowledged++;
+    if (armed) {
+      sawClipKill = true;
+      await page.waitForFunction(() => /Connection lost/.test(document.getElementById('status').textContent), null, { timeout: 30000 });
+      if (!(await panel(page, 'loading')) && !(await panel(page, 'break')))
+        fail('while the clip cannot be fetched the page shows neither the loading panel nor the break');
+      await sleep(1500);
+      await startServer();
+      await waitPanel(page, ['ask', 'break', 'done'], 60000);
+      const msg = await statusText(page);
+      if (msg) fail(`after the clips came, the retry message stays: '${msg}'`);
+    }
+  }
+  if (!(await panel(page, 'done'))) fail('participant 1 did not reach the end');
+  if (!sawBreakDown || !sawClipKill) fail(`scenarios not reached (break with server down ${sawBreakDown}, clip kill ${sawClipKill})`);
+  const state1 = await (await fetch(`${base}/api/${codes[0]}/trial`)).json();
+  if (!state1.done || state1.answered !== acknowledged)
+    fail(`participant 1: server holds ${state1.answered}/${state1.total} answers, the page had ${acknowledged} acknowledged`);
+  console.log(`participant 1: ${acknowledged} answers, the server killed twice (at a break, at a clip download); server ${state1.answered}/${state1.total}`);
+
+  // ---- participant 2: the link open in two browser contexts
+  const ctxA = await browser.newContext(), ctxB = await browser.newContext();
+  const pa = await ctxA.newPage(), pb = await ctxB.newPage();
+  watch(pa); watch(pb);
+  await pa.goto(`${base}/p/${codes[1]}`);
+  await pa.click('#start');
+  await waitPanel(pa, ['ask']);
+  await pb.goto(`${base}/p/${codes[1]}`);
+  await pb.click('#start');                  // B takes the link over
+  await waitPanel(pb, ['ask']);
+  const n0 = await answered(codes[1]);
+  await answerNow(pb, '4');                  // B answers the trial A is also showing
+  const n1 = await answered(codes[1]);
+  await answerNow(pa, '2');                  // A answers the same trial: it must be told, and nothing stored
+  const n2 = await answered(codes[1]);
+  const titleA = await pa.locator('#problem-title').textContent();
+  if (!(await panel(pa, 'problem')) || !/another window/.test(titleA)) fail(`the window taken over was not told (problem panel: ${await panel(pa, 'problem')}, '${titleA}')`);
+  if (n1 !== n0 + 1 || n2 !== n1) fail(`answers stored: ${n0} -> ${n1} (B answered) -> ${n2} (A, superseded, answered)`);
+  // A takes the link back; B's next answer is refused and B is told.
+  await pa.click('#problem-go');
+  await waitPanel(pa, ['ask', 'break']);
+  await waitPanel(pb, ['ask', 'break']);
+  if (await panel(pb, 'ask')) {
+    await answerNow(pb, '3');
+    if (!(await panel(pb, 'problem'))) fail('B, taken over by A, was not told');
+    if ((await answered(codes[1])) !== n2) fail('an answer from the superseded window B was stored');
+  }
+  console.log(`participant 2 in two contexts: B's answer stored (${n0} -> ${n1}), A's refused and A told; A took the link back`);
+
+  // ---- blinding: one byte length per trial, no kind but training
+  let pairs = 0;
+  const seen = new Set();
+  for (const t of trials) {
+    if (t.done || seen.has(t.clip_a)) continue;
+    seen.add(t.clip_a);
+    if ('kind' in t || 'catch' in t) fail('the trial JSON tells the trial kind: ' + JSON.stringify(t));
+    const la = (await (await fetch(base + t.clip_a)).arrayBuffer()).byteLength;
+    const lb = (await (await fetch(base + t.clip_b)).arrayBuffer()).byteLength;
+    if (la !== lb) fail(`trial ${t.index}: clips of ${la} and ${lb} bytes`);
+    pairs++;
+  }
+  if (pairs < 6) fail(`only ${pairs} trials seen`);
+  console.log(`blinding: ${pairs} trials, both clips of each the same byte length`);
+
+  // ---- log lines and the status page
+  for (const re of [/P001 answered trial \d+ \(\d+\/\d+\)/, /P001 completed the session/, /P002 restarted/,
+                    /P002: an answer to trial \d+ from a superseded session refused/])
+    if (!re.test(serverLog)) fail(`no log line ${re}:\n${serverLog}`);
+  const st = await browser.newPage();
+  await st.goto(`${base}/status#${token}`);
+  // conditions: rows, or the note why there are none yet (all test answers from observers the screening flags)
+  await st.waitForFunction(() => document.querySelectorAll('#participants tbody tr').length === 2 &&
+    (document.querySelectorAll('#conditions tbody tr').length > 0 || document.getElementById('note').textContent),
+    null, { timeout: 20000 });
+  const rows = await st.$$eval('#participants tbody tr', trs => trs.map(tr => [...tr.children].map(td => td.textContent)));
+  await st.screenshot({ path: `${work}/status.png`, fullPage: true });
+  if (rows[0][0] !== 'P001' || !rows[0][1].startsWith(`${state1.total}/${state1.total}`) || rows[0][2] !== 'yes')
+    fail('status page, participant 1: ' + JSON.stringify(rows[0]));
+  if (rows[1][0] !== 'P002' || Number(rows[1][4]) < 2) fail('status page, participant 2 (two restarts expected): ' + JSON.stringify(rows[1]));
+  // P001 answered its catch trial "much better" or not: the page shows what the tally's screening says
+  const obs = spawnSync(taslab, ['study', 'tally', '--db', db, '--out', `${work}/tally`, '--keep-flagged', '--bootstrap', '10'], { encoding: 'utf8' });
+  const flaggedP1 = /\nP001,[^\n]*,1\n/.test(require_file(`${work}/tally/observers.csv`));
+  if (obs.status !== 0 || rows[0][5] !== (flaggedP1 ? 'yes' : 'no')) fail(`status page flags P001 '${rows[0][5]}', the tally: ${flaggedP1}`);
+  const anon = await fetch(`${base}/admin/status`);
+  if (anon.status !== 401) fail(`/admin/status without the token: ${anon.status}`);
+  const bare = await (await fetch(`${base}/status`)).text();
+  if (/P001|tfr/.test(bare)) fail('the /status page itself carries data');
+  console.log(`status page: ${rows.map(r => r.slice(0, 3).join(' ')).join('; ')} (screenshot status.png)`);
+} catch (e) {
+  console.error('study_recovery: ' + String(e.stack || e.message || e).split('\n').slice(0, 3).join('\n'));
+  console.error('server log:\n' + serverLog.split('\n').slice(-20).join('\n'));
+  status = 2;
+} finally {
+  clearTimeout(timer);
+  if (browser) await browser.close();
+  if (server) server.kill('SIGTERM');
+}
+process.exit(status);
