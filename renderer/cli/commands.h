@@ -66,9 +66,9 @@ typedef struct analyze_opts {
 
 typedef struct study_opts {
 	const char *db, *stimuli, *out, *pwcmp, *base, *bind;
-	uint32_t participants, training, catch_trials, break_every, port, threads, bootstrap;
+	uint32_t participants, training, catch_trials, break_every, port, threads, bootstrap, trials;
 	uint64_t seed;
-	bool keep_flagged;
+	bool keep_flagged, adaptive;
 } study_opts;
 
 /* A sweep setting as the command line gave it: the option parser's own types (CLI_STRING for lists and strings,

@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "study_adaptive_db.h"
 #include "study_internal.h"
 #include "taslab/pairs.h"
 #include "taslab/tl_fs.h"
@@ -150,6 +151,18 @@ static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
+/* An adaptive trial in a plan (issue 28): the group's representative condition with this bit set. */
+#define ADAPTIVE_SLOT ((size_t)1 << (sizeof(size_t) * 8 - 1))
+
+/* One seeded bit per (seed, pair of participants, trial): splitmix64's finaliser. */
+static unsigned order_bit(uint64_t seed, uint64_t pair, uint64_t k)
+{
+	uint64_t z = seed * 0x9e3779b97f4a7c15ull + pair * 0xbf58476d1ce4e5b9ull + k * 0x94d049bb133111ebull + 1;
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+	return (unsigned)((z ^ (z >> 31)) & 1);
+}
+
 int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *err, size_t err_size)
 {
 	cond *cs = NULL;
@@ -163,6 +176,9 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
 		return TL_ERR_ARG;
 	}
+	if (d->adaptive != (d->trials > 0))
+		return tl_error(err, err_size, TL_ERR_ARG, d->adaptive ? "--adaptive needs --trials N (test trials per participant)"
+									: "--trials N goes with --adaptive (a full design rates every condition)");
 	sqlite3_stmt *cnt;
 	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM conditions) + (SELECT count(*) FROM participants)", -1, &cnt, NULL);
 	int used = sqlite3_step(cnt) == SQLITE_ROW && sqlite3_column_int(cnt, 0) > 0;
@@ -212,6 +228,10 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	size_t ntest = 0, ncatch = 0;
 	for (size_t i = 0; i < nc; i++)
 		cs[i].is_catch ? ncatch++ : ntest++;
+	if (d->adaptive && ntest == 0) {
+		snprintf(err, err_size, "%s: --adaptive needs test conditions; the sets hold only reference-vs-reference pairs", root);
+		goto done;
+	}
 	if (ntest == 0 && d->catch_trials == 0) {
 		snprintf(err, err_size, "%s: the sets hold only reference-vs-reference pairs; add variants with 'taslab pair --variants'", root);
 		goto done;
@@ -290,6 +310,28 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	for (size_t i = 0, a = 0, b = 0; ok && i < nc; i++)
 		cs[i].is_catch ? (catches[b++] = i) : (tests[a++] = i);
 	uint32_t breaks = 0;
+	/* Adaptive (issue 28): d->trials test trials per participant, aimed at groups (method x period x scene x camera)
+	 * in turn from a random start; each group's representative is its first test condition, and the T is chosen when
+	 * the trial is shown (study_adaptive_db.c). */
+	size_t *groups = calloc(ntest + 1, sizeof *groups), ngroups = 0;
+	if (!groups || (d->adaptive && sty_adaptive_schema(s, err, err_size)))
+		ok = 0;
+	for (size_t k = 0; ok && k < ntest; k++) {
+		int seen = 0;
+		for (size_t g = 0; g < ngroups && !seen; g++) {
+			const cond *a = &cs[tests[k]], *b = &cs[groups[g]];
+			seen = !strcmp(a->method, b->method) && a->period == b->period && !strcmp(a->scene, b->scene) &&
+			       !strcmp(a->camera, b->camera);
+		}
+		if (!seen)
+			groups[ngroups++] = tests[k];
+	}
+	if (d->adaptive) {
+		free(order);
+		per = d->trials + d->catch_trials;
+		order = ok ? calloc(per + d->training + 1, sizeof *order) : NULL;
+		ok = ok && order;
+	}
 	for (uint32_t pi = 0; ok && pi < d->participants; pi++) {
 		char code[33], label[32];
 		if (!sty_random_hex(code)) {
@@ -312,14 +354,16 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		for (size_t k = 0; k < d->training; k++)
 			order[n++] = ntest ? tests[gsl_rng_uniform_int(rng, ntest)] : catches[0];
 		size_t start = n;
-		for (size_t k = 0; k < ntest; k++)
-			order[n++] = tests[k];
+		size_t goff = d->adaptive && ngroups ? gsl_rng_uniform_int(rng, ngroups) : 0; /* full plans draw as before */
+		for (size_t k = 0; k < (d->adaptive ? d->trials : ntest); k++)
+			order[n++] = d->adaptive ? groups[(k + goff) % ngroups] | ADAPTIVE_SLOT : tests[k];
 		size_t off = ncatch ? gsl_rng_uniform_int(rng, ncatch) : 0; /* which catch pairs: rotates per participant */
 		for (size_t k = 0; k < d->catch_trials; k++)
 			order[n++] = catches[(k + off) % ncatch];
 		gsl_ran_shuffle(rng, order + start, n - start, sizeof *order);
 		for (size_t k = 0; ok && k < n; k++) {
-			size_t c = order[k];
+			size_t c = order[k] & ~ADAPTIVE_SLOT;
+			bool adaptive = order[k] & ADAPTIVE_SLOT;
 			const char *kind = k < start ? "training" : cs[c].is_catch ? "catch" : "test";
 			int brk = d->break_every && k > 0 && k % d->break_every == 0;
 			breaks += brk && pi == 0;
@@ -327,10 +371,13 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 			sqlite3_bind_int64(it, 1, pi + 1);
 			sqlite3_bind_int64(it, 2, (sqlite3_int64)k);
 			sqlite3_bind_int64(it, 3, (sqlite3_int64)c + 1);
-			sqlite3_bind_int(it, 4, flip[c]);
+			/* an adaptive trial's order: one seeded bit per trial, complementary for participants 2k and 2k+1 */
+			sqlite3_bind_int(it, 4, adaptive ? (int)(order_bit(d->seed, pi / 2, k) ^ (pi % 2)) : flip[c]);
 			sqlite3_bind_text(it, 5, kind, -1, SQLITE_STATIC);
 			sqlite3_bind_int(it, 6, brk);
 			ok = sqlite3_step(it) == SQLITE_DONE;
+			if (ok && adaptive)
+				ok = sty_adaptive_plan(s, pi + 1, k, (int64_t)c + 1) == TL_OK;
 		}
 		out->trials_per_participant = (uint32_t)n;
 	}
@@ -338,12 +385,14 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	sqlite3_finalize(ip);
 	sqlite3_finalize(it);
 	free(order);
+	free(groups);
 	free(flip);
 	free(tests);
 	free(catches);
 	char seedbuf[32];
 	snprintf(seedbuf, sizeof seedbuf, "%llu", (unsigned long long)d->seed);
-	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf);
+	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf) &&
+	     !sty_meta_set(s, "design", d->adaptive ? "adaptive" : "full");
 	if (!ok || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
 		rc = sty_db_fail(s, err, err_size, "writing the design");
 		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "study_adaptive_db.h"
 #include "study_internal.h"
 #include "study_select.h"
 
@@ -187,7 +188,8 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 		goto done;
 	}
 	in_tx = 1;
-	if ((rc = sty_select_current(s, pid, &p, err, err_size)))
+	/* an adaptive trial's T is chosen when it is first shown, in this transaction (study_adaptive_db.c) */
+	if ((rc = sty_adaptive_resolve(s, pid, err, err_size)) || (rc = sty_select_current(s, pid, &p, err, err_size)))
 		goto done;
 	t->total = p.total;
 	t->answered = p.answered;
