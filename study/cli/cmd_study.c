@@ -1,4 +1,4 @@
-/* cmd_study.c — `taslab study design|add|links|serve|status|tally|export|import` (study/). */
+/* cmd_study.c — `taslab study design|add|links|serve|status|tally|export|import` (study/; `simulate`: cmd_study_simulate.c). */
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -38,6 +38,12 @@ static const cli_opt design_options[] = {
 	{.name = "break-every", .arg = "N",
 	 .help = "a break after every N trials (0: none)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, break_every), .lo = 0, .hi = 10000},
+	{.name = "adaptive", .arg = NULL,
+	 .help = "choose each trial's T when it is shown (QUEST+ on everyone's answers so far; needs --trials)",
+	 .type = CLI_FLAG, .offset = offsetof(study_opts, adaptive)},
+	{.name = "trials", .arg = "N",
+	 .help = "with --adaptive: test trials per participant (1..10000)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, trials), .lo = 1, .hi = 10000},
 	{0},
 };
 
@@ -190,7 +196,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 	}
 	if (!strcmp(sub, "design")) {
 		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
-				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every};
+				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every,
+				     .adaptive = ov.adaptive, .trials = ov.trials};
 		sty_design_summary sm;
 		if (!(rc = sty_design(s, &d, &sm, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {
 			printf("study %s: %u conditions from %u set(s), %u participants, %u trials each, %u break(s); "
@@ -244,7 +251,7 @@ static int study_main(void *opts, cli_ctx *ctx)
 		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .bootstrap = ov.bootstrap, .seed = ov.seed};
 		if (!(rc = sty_tally(s, &t, err, err_size))) {
 			fprintf(stderr, "taslab: study statistics in %s (conditions.csv, anova.csv, posthoc.csv, observers.csv, "
-					"jod.csv, tables.md, fig3.png)\n", ov.out);
+					"jod.csv, thresholds.csv, tables.md, fig3.png)\n", ov.out);
 		}
 	} else if (!strcmp(sub, "export")) {
 		/* Both files are checked before either is written (not the database, not each other) and appear together. */
@@ -265,7 +272,7 @@ static const cli_command study_design = {
 	.name = "study design",
 	.summary = "randomised within-subject plan from the pairs.json sets of a stimulus folder",
 	.synopsis = "taslab study design --db STUDY.db --stimuli DIR --participants N [--seed S] [--training K] [--catch K] "
-		    "[--break-every N]",
+		    "[--break-every N] [--adaptive --trials N]",
 	.options = design_options,
 	STUDY_SUB,
 };
@@ -301,7 +308,8 @@ static const cli_command study_tally = {
 	.name = "study tally",
 	.summary = "Q, p_ref, JND, RM-ANOVA, post hoc tests, screening, JOD, Fig. 3",
 	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--bootstrap B] [--seed S]",
-	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, tables.md, fig3.png.",
+	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, thresholds.csv, tables.md, "
+		       "fig3.png.",
 	.options = tally_options,
 	STUDY_SUB,
 };
@@ -323,8 +331,9 @@ static const cli_command study_import = {
 	STUDY_SUB,
 };
 
+extern const cli_command cli_cmd_study_simulate; /* cmd_study_simulate.c (issue 28) */
 static const cli_command *const study_subs[] = {&study_design, &study_add, &study_links, &study_serve, &study_status,
-						&study_tally, &study_export, &study_import, NULL};
+						&study_tally, &study_export, &study_import, &cli_cmd_study_simulate, NULL};
 
 const cli_command cli_cmd_study = {
 	.name = "study",

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "study_adaptive_db.h"
 #include "study_internal.h"
 #include "study_plan.h"
 #include "taslab/pairs.h"
@@ -161,6 +162,9 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
 		return TL_ERR_ARG;
 	}
+	if (d->adaptive != (d->trials > 0))
+		return tl_error(err, err_size, TL_ERR_ARG, d->adaptive ? "--adaptive needs --trials N (test trials per participant)"
+									: "--trials N goes with --adaptive (a full design rates every condition)");
 	sqlite3_stmt *cnt;
 	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM conditions) + (SELECT count(*) FROM participants)", -1, &cnt, NULL);
 	int used = sqlite3_step(cnt) == SQLITE_ROW && sqlite3_column_int(cnt, 0) > 0;
@@ -210,6 +214,10 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	size_t ntest = 0, ncatch = 0;
 	for (size_t i = 0; i < nc; i++)
 		cs[i].is_catch ? ncatch++ : ntest++;
+	if (d->adaptive && ntest == 0) {
+		snprintf(err, err_size, "%s: --adaptive needs test conditions; the sets hold only reference-vs-reference pairs", root);
+		goto done;
+	}
 	if (ntest == 0 && d->catch_trials == 0) {
 		snprintf(err, err_size, "%s: the sets hold only reference-vs-reference pairs; add variants with 'taslab pair --variants'", root);
 		goto done;
@@ -279,15 +287,33 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	int *is_catch = calloc(nc + 1, sizeof *is_catch);
 	for (size_t i = 0; is_catch && i < nc; i++)
 		is_catch[i] = cs[i].is_catch;
+	/* Adaptive (issue 28): the test trials are aimed at groups (method x period x scene x camera), each represented by
+	 * its first test condition; the T is chosen when the trial is shown (study_adaptive_db.c). */
+	size_t *groups = calloc(nc + 1, sizeof *groups), ngroups = 0;
+	if (!groups || (d->adaptive && sty_adaptive_schema(s, err, err_size)))
+		ok = 0;
+	for (size_t k = 0; ok && k < nc; k++) {
+		int seen = cs[k].is_catch;
+		for (size_t g = 0; g < ngroups && !seen; g++) {
+			const cond *a = &cs[k], *b = &cs[groups[g]];
+			seen = !strcmp(a->method, b->method) && a->period == b->period && !strcmp(a->scene, b->scene) &&
+			       !strcmp(a->camera, b->camera);
+		}
+		if (!seen)
+			groups[ngroups++] = k;
+	}
 	sty_plan_params pp = {.seed = d->seed, .training = d->training, .catch_trials = d->catch_trials,
-			      .break_every = d->break_every};
+			      .break_every = d->break_every, .adaptive = d->adaptive, .trials = d->trials,
+			      .groups = groups, .ngroups = ngroups};
 	uint32_t breaks = 0;
 	ok = ok && is_catch && !sty_plan_participants(s, is_catch, nc, &pp, 0, d->participants, &out->trials_per_participant,
 						      &breaks, err, err_size);
 	free(is_catch);
+	free(groups);
 	char seedbuf[32];
 	snprintf(seedbuf, sizeof seedbuf, "%llu", (unsigned long long)d->seed);
-	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf);
+	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf) &&
+	     !sty_meta_set(s, "design", d->adaptive ? "adaptive" : "full");
 	if (!ok || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
 		rc = sty_db_fail(s, err, err_size, "writing the design");
 		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);

@@ -7,8 +7,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "study_adaptive_db.h"
 #include "study_plan.h"
 #include "taslab/study_status.h"
+
+/* An adaptive trial in a plan (issue 28): the group's representative condition with this bit set. */
+#define ADAPTIVE_SLOT ((size_t)1 << (sizeof(size_t) * 8 - 1))
+
+/* One seeded bit per (seed, pair of participants, trial): splitmix64's finaliser. */
+static unsigned order_bit(uint64_t seed, uint64_t pair, uint64_t k)
+{
+	uint64_t z = seed * 0x9e3779b97f4a7c15ull + pair * 0xbf58476d1ce4e5b9ull + k * 0x94d049bb133111ebull + 1;
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+	return (unsigned)((z ^ (z >> 31)) & 1);
+}
 
 int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan_params *pp, uint32_t first,
 			  uint32_t count, uint32_t *per_out, uint32_t *breaks_out, char *err, size_t err_size)
@@ -22,11 +35,12 @@ int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan
 				  " VALUES(?,?,?,?,?,?)", -1, &it, NULL);
 	/* Plan per participant: [training] then shuffled (test conditions + catch trials). */
 	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
-	size_t per = ntest + pp->catch_trials;
+	size_t per = (pp->adaptive ? pp->trials : ntest) + pp->catch_trials;
 	size_t *order = calloc(per + pp->training + 1, sizeof *order);
 	int *flip = calloc(nc + 1, sizeof *flip);
 	size_t *tests = calloc(ntest + 1, sizeof *tests), *catches = calloc(ncatch + 1, sizeof *catches);
-	int ok = ip && it && rng && order && flip && tests && catches && (ncatch || !pp->catch_trials);
+	int ok = ip && it && rng && order && flip && tests && catches && (ncatch || !pp->catch_trials) &&
+		 (!pp->adaptive || pp->ngroups);
 	for (size_t i = 0, a = 0, b = 0; ok && i < nc; i++)
 		is_catch[i] ? (catches[b++] = i) : (tests[a++] = i);
 	uint32_t breaks = 0;
@@ -52,14 +66,16 @@ int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan
 		for (size_t k = 0; k < pp->training; k++)
 			order[n++] = ntest ? tests[gsl_rng_uniform_int(rng, ntest)] : catches[0];
 		size_t start = n;
-		for (size_t k = 0; k < ntest; k++)
-			order[n++] = tests[k];
+		size_t goff = pp->adaptive ? gsl_rng_uniform_int(rng, pp->ngroups) : 0; /* full plans draw as before */
+		for (size_t k = 0; k < (pp->adaptive ? pp->trials : ntest); k++)
+			order[n++] = pp->adaptive ? pp->groups[(k + goff) % pp->ngroups] | ADAPTIVE_SLOT : tests[k];
 		size_t off = ncatch ? gsl_rng_uniform_int(rng, ncatch) : 0; /* which catch pairs: rotates per participant */
 		for (size_t k = 0; k < pp->catch_trials; k++)
 			order[n++] = catches[(k + off) % ncatch];
 		gsl_ran_shuffle(rng, order + start, n - start, sizeof *order);
 		for (size_t k = 0; ok && k < n; k++) {
-			size_t c = order[k];
+			size_t c = order[k] & ~ADAPTIVE_SLOT;
+			bool adaptive = order[k] & ADAPTIVE_SLOT;
 			const char *kind = k < start ? "training" : is_catch[c] ? "catch" : "test";
 			int brk = pp->break_every && k > 0 && k % pp->break_every == 0;
 			breaks += brk && pi == first;
@@ -67,10 +83,13 @@ int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan
 			sqlite3_bind_int64(it, 1, pi + 1);
 			sqlite3_bind_int64(it, 2, (sqlite3_int64)k);
 			sqlite3_bind_int64(it, 3, (sqlite3_int64)c + 1);
-			sqlite3_bind_int(it, 4, flip[c]);
+			/* an adaptive trial's order: one seeded bit per trial, complementary for participants 2k and 2k+1 */
+			sqlite3_bind_int(it, 4, adaptive ? (int)(order_bit(pp->seed, pi / 2, k) ^ (pi % 2)) : flip[c]);
 			sqlite3_bind_text(it, 5, kind, -1, SQLITE_STATIC);
 			sqlite3_bind_int(it, 6, brk);
 			ok = sqlite3_step(it) == SQLITE_DONE;
+			if (ok && adaptive)
+				ok = sty_adaptive_plan(s, pi + 1, k, (int64_t)c + 1) == TL_OK;
 		}
 		*per_out = (uint32_t)n;
 	}
@@ -96,7 +115,8 @@ static int plan_settings(sty *s, sty_plan_params *pp, uint32_t *existing, char *
 			       " (SELECT coalesce(max(id), 0) FROM participants),"
 			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'training'),"
 			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'catch'),"
-			       " (SELECT coalesce(min(idx), 0) FROM trials WHERE participant = 1 AND break_before)", -1, &st, NULL))
+			       " (SELECT coalesce(min(idx), 0) FROM trials WHERE participant = 1 AND break_before),"
+			       " (SELECT value FROM meta WHERE key = 'design')", -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "reading the design");
 	int rc = TL_OK;
 	if (sqlite3_step(st) != SQLITE_ROW) {
@@ -104,6 +124,9 @@ static int plan_settings(sty *s, sty_plan_params *pp, uint32_t *existing, char *
 	} else if (sqlite3_column_type(st, 0) == SQLITE_NULL || !sty_stimuli(s)[0] || sqlite3_column_int(st, 1) == 0) {
 		rc = tl_error(err, err_size, TL_ERR_ARG, "%s has no design to add participants to (an imported study, or "
 			      "no participants): make one with 'taslab study design'", sty_path(s));
+	} else if (sqlite3_column_type(st, 6) == SQLITE_TEXT && !strcmp((const char *)sqlite3_column_text(st, 6), "adaptive")) {
+		rc = tl_error(err, err_size, TL_ERR_ARG, "%s is an adaptive design: adding participants to one is not supported "
+			      "yet (design it again with the participants you need)", sty_path(s));
 	} else if (sqlite3_column_int64(st, 1) != sqlite3_column_int64(st, 2)) {
 		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: participant ids are not 1..N (edited by hand?)", sty_path(s));
 	} else {

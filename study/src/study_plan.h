@@ -12,6 +12,12 @@
 typedef struct sty_plan_params {
 	uint64_t seed;
 	uint32_t training, catch_trials, break_every;
+	/* adaptive designs (issue 28): `trials` test trials aimed in turn at the groups (each a test condition index
+	 * representing method x period x scene x camera), the T chosen when shown (study_adaptive_db.c) */
+	bool adaptive;
+	uint32_t trials;
+	const size_t *groups;
+	size_t ngroups;
 } sty_plan_params;
 
 /* Inserts participants first+1 .. first+count (labels P001.., random link codes) with their plans over the conditions

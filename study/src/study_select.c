@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "study_adaptive_db.h"
 #include "study_internal.h"
 #include "study_select.h"
 
@@ -183,6 +184,10 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 	 * fsync: study_commit.c) before the trial is sent. */
 	if (!rc)
 		rc = sty_batch_join(s, err, err_size);
+	int changes = sqlite3_total_changes(s->db);
+	/* an adaptive trial's T is chosen when it is first shown, in this transaction (study_adaptive_db.c) */
+	if (!rc)
+		rc = sty_adaptive_resolve(s, pid, err, err_size);
 	if (!rc)
 		rc = sty_select_current(s, pid, &p, err, err_size);
 	if (!rc) {
@@ -198,8 +203,8 @@ int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err
 		    !clip_name(s, pid, t->index, 1, p.ref_first ? p.test_clip : p.ref_clip, t->clip_b, sizeof t->clip_b, &named))
 			rc = sty_db_fail(s, err, err_size, "naming the clips");
 	}
-	if (pid >= 0)
-		rc = sty_batch_leave(s, rc, named, err, err_size);
+	if (pid >= 0) /* a commit to wait for only when this request stored something (clip names, an adaptive T) */
+		rc = sty_batch_leave(s, rc, named || sqlite3_total_changes(s->db) != changes, err, err_size);
 	if (rc)
 		memset(t, 0, sizeof *t);
 	pthread_mutex_unlock(&s->lock);

@@ -27,6 +27,7 @@
 #include "study_internal.h"
 #include "taslab/metrics.h"
 #include "taslab/study_result.h"
+#include "study_threshold_rows.h"
 
 /* ------------------------------------------------------------------ repeated-measures ANOVA */
 
@@ -576,6 +577,26 @@ done:
 	return rc;
 }
 
+/* The threshold fits (issue 28, study_threshold_rows.h): every rating of a variant with a threshold T as a record. */
+static int thresholds_of(const data *d, sty_result *res, char *err, size_t err_size)
+{
+	sty_trating *t = malloc((d->n ? d->n : 1) * sizeof *t);
+	size_t n = 0;
+	if (!t)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	for (size_t i = 0; i < d->n; i++) {
+		const condk *c = &d->c[d->o[i].cond];
+		if (isnan(c->T))
+			continue;
+		t[n++] = (sty_trating){.method = c->method, .scene = c->scene, .camera = c->camera, .period = c->period,
+				       .T = c->T, .participant = d->o[i].participant,
+				       .y = d->o[i].rating > 0 ? 1 : d->o[i].rating == 0 ? 0.5 : 0};
+	}
+	int rc = sty_thresholds_compute(t, n, res, err, err_size);
+	free(t);
+	return rc;
+}
+
 int sty_tally_compute(sty *s, const sty_tally_desc *td, sty_result **out, char *err, size_t err_size)
 {
 	*out = NULL;
@@ -625,7 +646,7 @@ int sty_tally_compute(sty *s, const sty_tally_desc *td, sty_result **out, char *
 		if (anova_of(&d, &mts[m], m, res))
 			goto nomem;
 	}
-	rc = TL_OK;
+	rc = thresholds_of(&d, res, err, err_size);
 	goto done;
 nomem:
 	rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
@@ -654,6 +675,7 @@ void sty_result_free(sty_result **pr)
 	free(r->anova);
 	free(r->posthoc);
 	free(r->observers);
+	free(r->thresholds);
 	free(r);
 	*pr = NULL;
 }

@@ -1,7 +1,8 @@
 /* study_tally_write.c — the tally's files from its result (study_result.h sty_tally_write; study.h sty_tally): one
  * writer per file — observers.csv, conditions.csv, anova.csv, posthoc.csv, jod.csv, tables.md, fig3.csv,
- * conditions.json, anova.json — and the Fig. 3 plot (gnuplot). Every CSV has T and period right after method (DESIGN
- * section 4; empty where the variant has none), and text cells are written with sty_csv_cell (no spreadsheet
+ * conditions.json, anova.json, thresholds.csv (study_threshold_rows.c) — and the Fig. 3 plot (gnuplot). Every CSV
+ * has T and period right after method (DESIGN section 4; empty where the variant has none; thresholds.csv has period
+ * only, its rows span T), and text cells are written with sty_csv_cell (no spreadsheet
  * formulas). The files appear together or not at all (tl_atomic_commit_set). */
 #include <jansson.h>
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <unistd.h>
 
 #include "study_internal.h"
+#include "study_threshold_rows.h"
 #include "taslab/metrics.h"
 #include "taslab/study_result.h"
 #include "taslab/tl_fs.h"
@@ -18,9 +20,11 @@
 
 /* Every file a tally writes into its folder (fig3.png is gnuplot's, drawn from fig3.gp and fig3.csv). */
 static const char *const TALLY_FILES[] = {"observers.csv", "conditions.csv", "anova.csv", "posthoc.csv", "jod.csv",
-					  "tables.md", "fig3.csv", "conditions.json", "anova.json", "fig3.gp", "fig3.png"};
-#define TALLY_SET 9 /* the first nine are written as one set (tl_atomic_commit_set) */
-enum { F_OBSERVERS, F_CONDITIONS, F_ANOVA, F_POSTHOC, F_JOD, F_TABLES, F_FIG3, F_CONDITIONS_JSON, F_ANOVA_JSON };
+					  "tables.md", "fig3.csv", "conditions.json", "anova.json", "thresholds.csv", "fig3.gp",
+					  "fig3.png"};
+#define TALLY_SET 10 /* the first ten are written as one set (tl_atomic_commit_set) */
+enum { F_OBSERVERS, F_CONDITIONS, F_ANOVA, F_POSTHOC, F_JOD, F_TABLES, F_FIG3, F_CONDITIONS_JSON, F_ANOVA_JSON,
+       F_THRESHOLDS };
 
 static void csv_num(FILE *f, double v, const char *fmt)
 {
@@ -268,6 +272,7 @@ static int write_files(const sty_result *r, const sty_tally_desc *d, bool made_d
 		write_jod(outs[F_JOD].f, r);
 		write_tables(outs[F_TABLES].f, r);
 		write_fig3(outs[F_FIG3].f, r);
+		sty_write_thresholds(outs[F_THRESHOLDS].f, r);
 		json_t *jc = conditions_json(r), *ja = anova_json(r);
 		if (tl_json_dump(outs[F_CONDITIONS_JSON].f, jc) || tl_json_dump(outs[F_ANOVA_JSON].f, ja))
 			rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write the JSON tables", d->out);

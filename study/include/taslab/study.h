@@ -91,6 +91,8 @@ typedef struct sty_design_desc {
 	uint32_t break_every;     /* a break before every N-th trial (0: none) */
 	double answer_s;          /* assumed answer time per trial for the session-length estimate (default 4) */
 	double gap_s;             /* grey gap between the clips (default 0.5) */
+	bool adaptive;            /* issue 28: `trials` test trials per participant, each T chosen when shown (QUEST+) */
+	uint32_t trials;          /* with adaptive only */
 } sty_design_desc;
 
 typedef struct sty_design_summary {
@@ -100,7 +102,10 @@ typedef struct sty_design_summary {
 
 /* Creates conditions, participants (unguessable link codes) and per-participant trial plans. The plan is a
  * pure function of the seed: trial order shuffled per participant; in-pair order random per participant with
- * participants 2k and 2k+1 seeing complementary orders, so every pair is shown in both orders. */
+ * participants 2k and 2k+1 seeing complementary orders, so every pair is shown in both orders.
+ * Adaptive (issue 28): each participant gets d->trials test trials, each aimed at a method x period x scene x camera
+ * path in turn (plus the training and catch trials); a trial's T is chosen when it is first shown, by QUEST+ on every
+ * participant's answers in that group so far (study_threshold.h sty_adapt), and stored (sty_next_trial). */
 int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *err, size_t err_size);
 
 /* Participant link codes, in participant order; *codes is malloc'ed (free each, then the array). */

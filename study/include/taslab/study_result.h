@@ -20,6 +20,7 @@
 
 #include "taslab/metrics.h"
 #include "taslab/study.h"
+#include "taslab/study_threshold.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -70,6 +71,16 @@ typedef struct sty_observer {
 	bool flagged;                /* more than half of them |a| = 2 */
 } sty_observer;
 
+/* The JND threshold of a method (x period) in one scene and camera path, or pooled over them (issue 28; thresholds.csv):
+ * the psychometric fit of study_threshold.h over the rated levels of T (at least two). */
+typedef struct sty_threshold_row {
+	char method[32];
+	uint32_t period;             /* 0: none */
+	char scene[64], camera[64];  /* "all" and "all" in the pooled row */
+	bool pooled;
+	sty_tfit f;
+} sty_threshold_row;
+
 /* The tally. Rows come per variant: its (scene, camera) rows in the order of their first answer, then its pooled
  * row; anova and posthoc rows per variant in variant order. */
 typedef struct sty_result {
@@ -83,6 +94,8 @@ typedef struct sty_result {
 	size_t posthoc_count;
 	sty_observer *observers;     /* every participant, in id order */
 	size_t observer_count;
+	sty_threshold_row *thresholds; /* per method x period: its (scene, camera) rows by name, then pooled */
+	size_t threshold_count;
 	size_t left_out;             /* flagged participants whose ratings were left out (0 with keep_flagged) */
 } sty_result;
 
