@@ -28,8 +28,8 @@ async function startServer() {
   server = spawn(taslab, ['study', 'serve', '--db', db, '--port', String(port)], { stdio: ['ignore', 'pipe', 'pipe'] });
   server.stdout.on('data', d => { serverLog += d; });
   server.stderr.on('data', d => { serverLog += d; });
-  for (let i = 0; i < 200; i++) {
-    try { if ((await fetch(base + '/')).ok) return; } catch (e) { /* not yet */ }
+  for (let i = 0; i < 200; i++) {   // listening, and its first lines read (the token comes from them)
+    try { if ((await fetch(base + '/')).ok && /admin token/.test(serverLog)) return; } catch (e) { /* not yet */ }
     await sleep(50);
   }
   throw new Error('the server did not start:\n' + serverLog);
