@@ -40,6 +40,7 @@ typedef struct tonemap_opts {
 
 typedef struct clip_opts {
 	const char *out;
+	const char *eye; /* --eye L|R|sbs (stereo runs) */
 } clip_opts;
 
 typedef struct metrics_diff_opts {

@@ -775,6 +775,16 @@ int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err
 	return ids_pass_copy(r, &state_of(r)->ids[r->view], ids, upload, err, err_size);
 }
 
+int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, char *err, size_t err_size)
+{
+	if (view >= r->view_count)
+		return tl_error(err, err_size, TL_ERR_ARG, "no view %u", view);
+	render_use_view(r, view);
+	int rc = ids_pass_copy(r, &state_of(r)->ids[view], ids, upload, err, err_size);
+	render_use_view(r, 0);
+	return rc;
+}
+
 int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size)
 {
 	atlas_state *s = state_of(r);
@@ -786,8 +796,12 @@ int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, 
 	vkCmdFillBuffer(cmd, s->buf[B_VISIBLE].buffer, 0, VK_WHOLE_SIZE, 0);
 	vkCmdFillBuffer(cmd, s->buf[B_F].buffer, 0, VK_WHOLE_SIZE, 0);
 	barrier_compute(cmd);
-	bind_compute(r, s, cmd, s->visible_pipe, 0, 0, 0, 0);
-	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	for (uint32_t v = 0; v < r->view_count; v++) { /* stereo: both eyes into the one visible set and F */
+		render_use_view(r, v);
+		bind_compute(r, s, cmd, s->visible_pipe, v, 0, 0, 0);
+		vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	}
+	render_use_view(r, 0);
 	barrier_compute(cmd);
 	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
 		return render_vk_error(err, err_size, "atlas visible pass", res);
