@@ -779,8 +779,9 @@ int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, c
 {
 	if (view >= r->view_count)
 		return tl_error(err, err_size, TL_ERR_ARG, "no view %u", view);
+	atlas_state *s = state_of(r); /* view 0's: a shared-views method keeps one state */
 	render_use_view(r, view);
-	int rc = ids_pass_copy(r, &state_of(r)->ids[view], ids, upload, err, err_size);
+	int rc = ids_pass_copy(r, &s->ids[view], ids, upload, err, err_size);
 	render_use_view(r, 0);
 	return rc;
 }
