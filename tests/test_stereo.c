@@ -333,13 +333,23 @@ static void test_static(void **state)
 	(void)state;
 	scene *s = tu_load_scene("tfr_static");
 	vkdev *dev = tu_lavapipe();
+	/* STEREO.md's "1-2x mono" compares with the centre camera, which can see a patch neither eye sees (measured: 0.992x
+	 * at frame 0). The exact bound is per eye: the shared atlas is the union of both eyes' patches at the larger of
+	 * their levels, so it shades at least what either eye's mono run shades and at most both together. */
 	sclip sa1 = render_views(dev, s, 0, "sa", 48, 32, 2, 1, 0.0f, 0.0f);
+	sclip sal = render_views(dev, s, 0, "sa", 48, 32, 2, 1, 0.0f, -0.063f / 2);
+	sclip sar = render_views(dev, s, 0, "sa", 48, 32, 2, 1, 0.0f, 0.063f / 2);
 	sclip sa2 = render_views(dev, s, 0, "sa", 48, 32, 2, 2, 0.063f, 0.0f);
 	for (uint32_t f = 0; f < 2; f++) {
-		double k = (double)sa2.st[f].shaded_samples / (double)sa1.st[f].shaded_samples;
-		if (!(k >= 1.0 && k <= 2.0))
-			fail_msg("sa frame %u: stereo shades %.3fx mono, expected 1-2x", f, k);
+		uint64_t st = sa2.st[f].shaded_samples, a = sal.st[f].shaded_samples, b = sar.st[f].shaded_samples;
+		if (!(st >= (a > b ? a : b) && st <= a + b))
+			fail_msg("sa frame %u: stereo shades %llu, expected between max and sum of the eyes' mono runs (%llu, %llu)",
+				 f, (unsigned long long)st, (unsigned long long)a, (unsigned long long)b);
+		fprintf(stderr, "sa frame %u: stereo shades %.3fx the centre camera's mono run\n", f,
+			(double)st / (double)sa1.st[f].shaded_samples);
 	}
+	sclip_free(&sal);
+	sclip_free(&sar);
 	sclip t = render_views(dev, s, 0, "tasa@8", 48, 32, 5, 2, 0.063f, 0.0f);
 	sclip t2 = render_views(dev, s, 0, "tasa@8", 48, 32, 5, 2, 0.063f, 0.0f);
 	for (uint32_t f = 0; f < 5; f++) {
@@ -394,7 +404,9 @@ static void test_cli(void **state)
 	char *m = tu_read_file(path, NULL);
 	assert_non_null(m);
 	assert_non_null(strstr(m, "\"stereo\": true"));
-	assert_non_null(strstr(m, "\"ipd\": 0.08"));
+	const char *ipd = strstr(m, "\"ipd\": "); /* stored as a float: 0.08 to within its precision */
+	assert_non_null(ipd);
+	assert_true(fabs(strtod(ipd + 7, NULL) - 0.08) < 1e-6);
 	free(m);
 	snprintf(path, sizeof path, "%s/stats.csv", dir);
 	char *csv = tu_read_file(path, NULL);
