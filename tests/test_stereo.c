@@ -341,10 +341,10 @@ static void test_static(void **state)
 	sclip sar = render_views(dev, s, 0, "sa", 48, 32, 2, 1, 0.0f, 0.063f / 2);
 	sclip sa2 = render_views(dev, s, 0, "sa", 48, 32, 2, 2, 0.063f, 0.0f);
 	for (uint32_t f = 0; f < 2; f++) {
-		uint64_t st = sa2.st[f].shaded_samples, a = sal.st[f].shaded_samples, b = sar.st[f].shaded_samples;
+		int64_t st = sa2.st[f].shaded_samples, a = sal.st[f].shaded_samples, b = sar.st[f].shaded_samples;
 		if (!(st >= (a > b ? a : b) && st <= a + b))
-			fail_msg("sa frame %u: stereo shades %llu, expected between max and sum of the eyes' mono runs (%llu, %llu)",
-				 f, (unsigned long long)st, (unsigned long long)a, (unsigned long long)b);
+			fail_msg("sa frame %u: stereo shades %lld, expected between max and sum of the eyes' mono runs (%lld, %lld)",
+				 f, (long long)st, (long long)a, (long long)b);
 		fprintf(stderr, "sa frame %u: stereo shades %.3fx the centre camera's mono run\n", f,
 			(double)st / (double)sa1.st[f].shaded_samples);
 	}
