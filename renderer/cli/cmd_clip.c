@@ -10,6 +10,9 @@ static const cli_opt clip_options[] = {
 	{.name = "out", .arg = "CLIP.webm",
 	 .help = "the clip to write (a temporary name until it is complete)",
 	 .type = CLI_STRING, .offset = offsetof(clip_opts, out)},
+	{.name = "eye", .arg = "E",
+	 .help = "stereo runs: L, R or sbs (default: sbs, the eyes side by side)",
+	 .type = CLI_STRING, .offset = offsetof(clip_opts, eye)},
 	{0},
 };
 
@@ -36,7 +39,7 @@ static int clip_main(void *opts, cli_ctx *ctx)
 				"--out %s lies inside the run folder %s, whose files it could replace (write the clip elsewhere)",
 				o->out, run);
 	uint32_t n;
-	int rc = clip_encode_run(run, o->out, &n, ctx->err, sizeof ctx->err);
+	int rc = clip_encode_run_view(run, o->eye, o->out, &n, ctx->err, sizeof ctx->err);
 	if (!rc)
 		fprintf(stderr, "taslab: wrote %u frames to %s (lossless VP9, gbrp, WebM)\n", n, o->out);
 	return rc;
@@ -46,7 +49,7 @@ const cli_command cli_cmd_clip = {
 	.name = "clip",
 	.summary = "encode a run's frames as a bit-exact lossless VP9/WebM clip",
 	.synopsis = "taslab clip RUN --out CLIP.webm",
-	.description = "Encodes RUN/frames/NNNNNN.png at the run's fps as lossless VP9 with RGB (gbrp) pixels in WebM:\n"
+	.description = "Encodes RUN/frames/NNNNNN.png (stereo runs: RUN/sbs/, or one eye with --eye) at the run's fps as lossless VP9 with RGB (gbrp) pixels in WebM:\n"
 		       "decoded frames equal the PNG frames exactly (plays back bit-exact in Chromium). The frames must be\n"
 		       "exactly those of the run's manifest. The clip is written under a temporary name and renamed at the\n"
 		       "end; on any error no clip is left.",

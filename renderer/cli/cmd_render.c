@@ -91,6 +91,12 @@ static const cli_opt render_options[] = {
 	{.name = "quiet", .arg = NULL,
 	 .help = "no progress output",
 	 .type = CLI_FLAG, .offset = offsetof(render_opts, quiet)},
+	{.name = "stereo", .arg = NULL,
+	 .help = "render both eyes (--size per eye): RUN/frames/L/, RUN/frames/R/, RUN/sbs/ side by side",
+	 .type = CLI_FLAG, .offset = offsetof(render_opts, stereo)},
+	{.name = "ipd", .arg = "M",
+	 .help = "with --stereo: distance between the eyes in metres (default 0.063)",
+	 .type = CLI_DOUBLE, .offset = offsetof(render_opts, ipd), .lo = 0.0, .hi = RENDER_IPD_MAX},
 	{0},
 };
 
@@ -100,6 +106,7 @@ static void render_defaults(void *opts, cli_setup_opts *setup)
 {
 	(void)setup;
 	((render_opts *)opts)->method = "ref";
+	((render_opts *)opts)->ipd = -1.0;
 }
 
 static int render_validate(void *opts, cli_ctx *ctx)
@@ -110,6 +117,13 @@ static int render_validate(void *opts, cli_ctx *ctx)
 		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 			      "--decisions: method %s makes no reuse decisions (use rrc, tarc or their variants)",
 			      o->config.method->name);
+	if (!rc && o->ipd >= 0.0 && !o->stereo)
+		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--ipd needs --stereo");
+	if (!rc && o->stereo && o->decisions)
+		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+			      "--decisions with --stereo: decision maps are written for mono runs only");
+	if (o->stereo && o->ipd < 0.0)
+		o->ipd = RENDER_STEREO_IPD_DEFAULT;
 	return rc;
 }
 
@@ -173,9 +187,9 @@ static int render_main(void *opts, cli_ctx *ctx)
 	}
 	method_config_variant(&o->config, variant, sizeof variant);
 	progress_state ps = {isatty(2), tl_clock_s(), ""};
-	snprintf(ps.banner, sizeof ps.banner, "taslab: rendering %s/%s with %s on %s, frames %u..%u at %ux%u\n",
+	snprintf(ps.banner, sizeof ps.banner, "taslab: rendering %s/%s with %s on %s, frames %u..%u at %ux%u%s\n",
 		 s->scene->name, s->scene->cameras[s->camera].name, variant, s->dev->props.deviceName, s->first, s->end - 1,
-		 s->width, s->height);
+		 s->width, s->height, o->stereo ? " per eye, stereo" : "");
 	render_run_desc rr = {
 		.dev = s->dev,
 		.scene = s->scene,
@@ -192,6 +206,8 @@ static int render_main(void *opts, cli_ctx *ctx)
 		.write_png = !o->no_png,
 		.trivial_shading = o->trivial_shading,
 		.write_decisions = o->decisions,
+		.views = o->stereo ? 2 : 1,
+		.ipd = o->stereo ? (float)o->ipd : 0.0f,
 		.out = out,
 		.command_line = ctx->command_line,
 		.progress = o->quiet ? NULL : progress,
@@ -204,7 +220,8 @@ static int render_main(void *opts, cli_ctx *ctx)
 		return rc;
 	}
 	if (!o->quiet)
-		fprintf(stderr, "taslab: wrote %u frames to %s/frames (stats: %s/stats.csv)\n", s->end - s->first, out, out);
+		fprintf(stderr, "taslab: wrote %u frames to %s/%s (stats: %s/stats.csv)\n", s->end - s->first, out,
+			o->stereo ? "frames/L, frames/R and sbs" : "frames", out);
 	printf("%s\n", out);
 	return TL_OK;
 }

@@ -24,6 +24,8 @@ typedef struct render_opts {
 	bool no_exr, no_png, trivial_shading, quiet, decisions;
 	cli_method_args margs;
 	method_config config; /* from --method and the method options (validate) */
+	bool stereo;          /* --stereo: both eyes (STEREO.md) */
+	double ipd;           /* --ipd M (metres); negative until given */
 } render_opts;
 
 typedef struct pair_opts {
@@ -38,6 +40,7 @@ typedef struct tonemap_opts {
 
 typedef struct clip_opts {
 	const char *out;
+	const char *eye; /* --eye L|R|sbs (stereo runs) */
 } clip_opts;
 
 typedef struct metrics_diff_opts {

@@ -6,6 +6,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, size_t err_size)
@@ -78,6 +79,18 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 		return tl_error(err, err_size, TL_ERR_ARG, "frame size %ux%u out of range (1..16384)", desc->width, desc->height);
 	if (desc->decisions && !m->decisions)
 		return tl_error(err, err_size, TL_ERR_ARG, "decision maps: method %s makes no reuse decisions", m->info.name);
+	if (desc->views > RENDER_MAX_VIEWS)
+		return tl_error(err, err_size, TL_ERR_ARG, "%u views: at most %u (mono or stereo)", desc->views, RENDER_MAX_VIEWS);
+	if (desc->views > 1 && !(desc->ipd >= 0.0f && desc->ipd <= RENDER_IPD_MAX))
+		return tl_error(err, err_size, TL_ERR_ARG, "--ipd %g: the distance between the eyes in metres, 0..%g (human: about 0.063)",
+				(double)desc->ipd, (double)RENDER_IPD_MAX);
+	if (desc->views > 1 && desc->eye_shift != 0.0f)
+		return tl_error(err, err_size, TL_ERR_ARG, "an eye shift is for mono renders; stereo places both eyes itself");
+	if (desc->views > 1 && desc->decisions)
+		return tl_error(err, err_size, TL_ERR_ARG, "--decisions with --stereo: decision maps are written for mono runs only");
+	if (!(fabsf(desc->eye_shift) <= RENDER_IPD_MAX))
+		return tl_error(err, err_size, TL_ERR_ARG, "eye shift %g m out of range (|shift| <= %g)", (double)desc->eye_shift,
+				(double)RENDER_IPD_MAX);
 	render *r = calloc(1, sizeof *r);
 	if (!r)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
@@ -91,6 +104,14 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 	if (!(r->desc.fps > 0.0f))
 		r->desc.fps = r->scene->fps;
 	r->state_ring = m->state_ring ? m->state_ring : 1;
+	r->view_count = desc->views > 1 ? desc->views : 1;
+	r->slot_time = malloc(r->state_ring * sizeof *r->slot_time);
+	if (!r->slot_time) {
+		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		goto fail;
+	}
+	for (uint32_t i = 0; i < r->state_ring; i++)
+		r->slot_time[i] = NAN;
 	r->world = calloc(r->scene->object_count, sizeof *r->world);
 	r->light_states = calloc(r->scene->light_count + 1, sizeof *r->light_states);
 	if (!r->world || !r->light_states) {
@@ -116,8 +137,19 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 	if ((rc = render_depth_init(r, err, err_size)) || (rc = render_shade_init(r, err, err_size)) ||
 	    (rc = render_display_init(r, err, err_size)) || (rc = create_submission(r, err, err_size)))
 		goto fail;
-	if (m->init && (rc = m->init(r, err, err_size)))
-		goto fail;
+	/* stereo: the other eyes' targets, rings and sets; then the method: a per-eye method gets a state per eye */
+	for (uint32_t v = 1; v < r->view_count; v++) {
+		render_use_view(r, v);
+		if ((rc = render_view_create(r, err, err_size)))
+			goto fail;
+		render_shadow_write_sets(r);
+	}
+	for (uint32_t v = 0; v < (m->shared_views ? 1 : r->view_count); v++) {
+		render_use_view(r, v);
+		if (m->init && (rc = m->init(r, err, err_size)))
+			goto fail;
+	}
+	render_use_view(r, 0);
 	*out = r;
 	return TL_OK;
 fail:
@@ -137,8 +169,13 @@ void render_destroy(render **pr)
 	render *r = *pr;
 	VkDevice d = r->dev->device;
 	vkDeviceWaitIdle(d);
-	if (r->method && r->method->finish)
-		r->method->finish(r);
+	for (uint32_t v = r->view_count; v-- > 0;) {
+		render_use_view(r, v);
+		if (r->method && r->method->finish && (v == 0 || !r->method->shared_views))
+			r->method->finish(r);
+		if (v > 0)
+			render_view_destroy(r);
+	}
 	render_pipeline *pipes[] = {&r->shadow_pipe,	  &r->depth_pipe,      &r->shade_pipe,	    &r->display_pipe,
 				    &r->shadow_mask_pipe, &r->depth_mask_pipe, &r->shade_blend_pipe};
 	for (size_t i = 0; i < sizeof pipes / sizeof pipes[0]; i++)
@@ -164,11 +201,13 @@ void render_destroy(render **pr)
 	free(r->blend_order);
 	free(r->world);
 	free(r->light_states);
+	free(r->slot_time);
 	free(r);
 	*pr = NULL;
 }
 
-int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, char *err, size_t err_size)
+/* One frame of the active view (mono, one eye of a per-eye method, or every eye of a shared_views method). */
+static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visible, char *err, size_t err_size)
 {
 	int rc = 0;
 	VkResult res;
@@ -194,12 +233,16 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 		return render_vk_error(err, err_size, "frame submission", res);
 
 	memset(st, 0, sizeof *st);
-	st->visible_samples = render_readback_finish(r);
-	img->width = r->desc.width;
-	img->height = r->desc.height;
-	img->hdr_rgba_half = r->hdr_packed;
-	img->display_rgba = r->display_packed;
-	img->decisions = r->desc.decisions ? r->method->decisions(r) : NULL;
+	if (r->method->shared_views && r->view_count > 1) {
+		for (uint32_t v = 0; v < r->view_count; v++) {
+			render_use_view(r, v);
+			visible[v] = render_readback_finish(r);
+		}
+		render_use_view(r, 0);
+	} else {
+		visible[r->view] = render_readback_finish(r);
+	}
+	st->visible_samples = visible[r->view];
 	st->frame = frame;
 	st->time_s = (double)frame / (double)r->desc.fps;
 	st->shaded_samples = st->reused_samples = st->visible_units = st->shaded_units = st->new_units = -1;
@@ -230,7 +273,90 @@ int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, c
 	for (uint32_t p = 0; have_ts && p < st->pass_count; p++)
 		if (!strcmp(st->pass_names[p], "truth"))
 			st->gpu_ms_total -= st->gpu_ms[p];
+	for (uint32_t v = 0; v < RENDER_MAX_VIEWS; v++)
+		r->view_shaded[v] = -1;
 	if (r->method->collect)
 		r->method->collect(r, st);
+	return TL_OK;
+}
+
+static void sum_count(int64_t *a, int64_t b) { *a = *a >= 0 && b >= 0 ? *a + b : -1; }
+static void sum_ms(double *a, double b) { *a = *a >= 0.0 && b >= 0.0 ? *a + b : -1.0; }
+
+static void add_extra(frame_stats *st, const char *name, double v)
+{
+	if (st->extra_count < FRAME_MAX_EXTRA) {
+		st->extra_names[st->extra_count] = name;
+		st->extra[st->extra_count++] = v;
+	}
+}
+
+int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *st, char *err, size_t err_size)
+{
+	int rc;
+	int64_t visible[RENDER_MAX_VIEWS] = {-1, -1}, shaded[RENDER_MAX_VIEWS] = {-1, -1};
+	if (r->view_count < 2 || r->method->shared_views) {
+		render_use_view(r, 0);
+		if ((rc = frame_view(r, frame, st, visible, err, err_size)))
+			return rc;
+		if (r->view_count > 1) {
+			st->visible_samples = 0;
+			for (uint32_t v = 0; v < r->view_count; v++) {
+				sum_count(&st->visible_samples, visible[v]);
+				shaded[v] = r->view_shaded[v];
+			}
+		}
+	} else {
+		/* per-eye methods: each eye a frame of its own (the scene state and the shadow maps of the frame are
+		 * made once: render_update_state and the shadow pool find the second eye's already done); totals summed */
+		frame_stats sv;
+		for (uint32_t v = 0; v < r->view_count; v++) {
+			render_use_view(r, v);
+			rc = frame_view(r, frame, v ? &sv : st, visible, err, err_size);
+			render_use_view(r, 0);
+			if (rc)
+				return rc;
+			shaded[v] = (v ? &sv : st)->shaded_samples;
+			if (!v)
+				continue;
+			sum_count(&st->visible_samples, sv.visible_samples);
+			sum_count(&st->shaded_samples, sv.shaded_samples);
+			sum_count(&st->reused_samples, sv.reused_samples);
+			sum_count(&st->allocated_samples, sv.allocated_samples);
+			sum_count(&st->late_samples, sv.late_samples);
+			sum_count(&st->visible_units, sv.visible_units);
+			sum_count(&st->shaded_units, sv.shaded_units);
+			sum_count(&st->new_units, sv.new_units);
+			sum_count(&st->fs_invocations, sv.fs_invocations);
+			sum_count(&st->cs_invocations, sv.cs_invocations);
+			sum_ms(&st->gpu_ms_total, sv.gpu_ms_total);
+			for (uint32_t p = 0; p < st->pass_count; p++)
+				sum_ms(&st->gpu_ms[p], sv.gpu_ms[p]);
+			for (uint32_t e = 0; e < st->extra_count && e < sv.extra_count; e++)
+				st->extra[e] += sv.extra[e];
+		}
+	}
+	if (r->view_count > 1) {
+		add_extra(st, "visible_samples_l", (double)visible[0]);
+		add_extra(st, "visible_samples_r", (double)visible[1]);
+		add_extra(st, "shaded_samples_l", shaded[0] >= 0 ? (double)shaded[0] : NAN);
+		add_extra(st, "shaded_samples_r", shaded[1] >= 0 ? (double)shaded[1] : NAN);
+	}
+	return render_view_image(r, 0, img);
+}
+
+uint32_t render_view_count(const render *r) { return r->view_count; }
+
+int render_view_image(render *r, uint32_t v, frame_image *img)
+{
+	if (v >= r->view_count)
+		return TL_ERR_ARG;
+	render_use_view(r, v);
+	img->width = r->desc.width;
+	img->height = r->desc.height;
+	img->hdr_rgba_half = r->hdr_packed;
+	img->display_rgba = r->display_packed;
+	img->decisions = r->desc.decisions && r->view_count < 2 ? r->method->decisions(r) : NULL;
+	render_use_view(r, 0);
 	return TL_OK;
 }

@@ -31,6 +31,8 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.trivial_shading = d->trivial_shading,
 		.decisions = d->write_decisions,
 		.colour = d->colour,
+		.views = d->views,
+		.ipd = d->ipd,
 	};
 	if ((rc = render_create(d->dev, &rd, &r, err, err_size)))
 		goto done;
@@ -81,6 +83,8 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.write_decisions = d->write_decisions,
 		.command_line = d->command_line,
 		.display_transform = d->colour ? colour_name(d->colour) : NULL,
+		.views = d->views > 1 ? d->views : 1,
+		.ipd = d->ipd,
 	};
 	if ((rc = run_writer_create(d->out, &info, &w, err, err_size)))
 		goto done;
@@ -89,8 +93,11 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		frame_image img;
 		frame_stats st;
 		char why[1024];
+		frame_image eyes[2];
 		if ((rc = render_frame(r, f, &img, &st, why, sizeof why)) ||
-		    (rc = run_writer_frame(w, &img, &st, why, sizeof why))) {
+		    (d->views > 1 && ((rc = render_view_image(r, 0, &eyes[0])) || (rc = render_view_image(r, 1, &eyes[1])) ||
+				      (rc = run_writer_frame_views(w, eyes, 2, &st, why, sizeof why)))) ||
+		    (d->views < 2 && (rc = run_writer_frame(w, &img, &st, why, sizeof why)))) {
 			snprintf(err, err_size, "frame %u: %s", f, why);
 			goto done;
 		}

@@ -43,13 +43,30 @@ typedef struct render_desc {
 	bool trivial_shading;   /* benchmark only: swap the shading for base colour output */
 	bool decisions;         /* fill frame_image.decisions (methods with reuse decisions only) */
 	const struct colour *colour; /* display transform (borrowed); NULL: the built-in ACES default */
+	/* Stereo (STEREO.md): views 2 renders a left (0) and a right (1) eye, each width x height, the eyes ipd metres
+	 * apart along the camera's right axis (parallel axes); 0 or 1: mono. eye_shift (mono only): the camera moved
+	 * that far along its right axis (-ipd/2: the left eye of a stereo run, for comparisons). */
+	uint32_t views;
+	float ipd, eye_shift;
 } render_desc;
+
+/* The largest --ipd accepted, in metres (a human IPD is 0.054-0.074; larger values are hyperstereo, up to 1 m). */
+#define RENDER_IPD_MAX 1.0f
+/* --ipd when not given (metres; a common adult mean, [P] of STEREO.md) */
+#define RENDER_STEREO_IPD_DEFAULT 0.063
 
 int render_create(vkdev *dev, const render_desc *desc, render **out, char *err, size_t err_size);
 void render_destroy(render **r);
 /* Renders frame `frame` (time = frame / fps) and reads it back; img's pixels stay valid until the next
  * render_frame. */
 int render_frame(render *r, uint32_t frame, frame_image *img, frame_stats *stats, char *err, size_t err_size);
+/* Stereo: view v's image of the last render_frame (render_frame's `img` is view 0's, the left eye). Valid until the
+ * next render_frame. Returns TL_ERR_ARG for a view the render does not have. In stereo, render_frame's statistics
+ * are totals over both eyes, with the per-eye counts in the extra columns visible_samples_l/_r and
+ * shaded_samples_l/_r (the atlas methods: the shaded texels of the blocks each eye sees; the shared ones count for
+ * both eyes, the total once). */
+int render_view_image(render *r, uint32_t v, frame_image *img);
+uint32_t render_view_count(const render *r);
 /* What the method derived from its options at creation (atlas size, density used, ...: manifest
  * inputs.method_derived); returns the count (<= max), 0 for methods that derive nothing. */
 size_t render_derived(const render *r, run_option *out, size_t max);
@@ -71,6 +88,8 @@ typedef struct render_run_desc {
 	float fps;
 	bool write_exr, write_png, trivial_shading;
 	bool write_decisions;   /* RUN/decisions/ (render_desc.decisions) */
+	uint32_t views;         /* 2: stereo (render_desc.views), frames/L, frames/R and sbs/ */
+	float ipd;
 	const char *out;
 	const char *command_line;
 	void (*progress)(void *user, uint32_t done, uint32_t total);

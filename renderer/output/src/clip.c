@@ -303,6 +303,12 @@ done:
 
 int clip_encode_run(const char *run_dir, const char *out, uint32_t *frames_written, char *err, size_t err_size)
 {
+	return clip_encode_run_view(run_dir, NULL, out, frames_written, err, err_size);
+}
+
+int clip_encode_run_view(const char *run_dir, const char *view, const char *out, uint32_t *frames_written, char *err,
+			 size_t err_size)
+{
 	char path[TL_PATH_MAX];
 	clip_writer *w = NULL;
 	uint8_t *rgb = NULL;
@@ -311,16 +317,27 @@ int clip_encode_run(const char *run_dir, const char *out, uint32_t *frames_writt
 	int rc = run_manifest_read(run_dir, &m, err, err_size);
 	if (rc || (rc = run_check_frames(run_dir, &m, "png", err, err_size)))
 		return rc;
+	/* stereo: the side-by-side frames (2W x H) unless one eye is asked for */
+	const char *sub = "frames";
+	if (view && m.views < 2 && strcmp(view, "sbs"))
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: a mono run has no eye '%s' (--eye is for stereo runs)", run_dir, view);
+	if (m.views > 1)
+		sub = !view || !strcmp(view, "sbs") ? "sbs" : !strcmp(view, "L") ? "frames/L" : !strcmp(view, "R") ? "frames/R" : NULL;
+	if (!sub)
+		return tl_error(err, err_size, TL_ERR_ARG, "--eye %s: one of L, R, sbs", view);
+	if (m.views < 2)
+		sub = "frames";
+	uint32_t want_w = !strcmp(sub, "sbs") ? 2 * m.width : m.width;
 	for (uint32_t f = m.first_frame; f <= m.last_frame; f++) {
 		uint32_t fw, fh;
-		snprintf(path, sizeof path, "%s/frames/%06u.png", run_dir, f);
+		snprintf(path, sizeof path, "%s/%s/%06u.png", run_dir, sub, f);
 		free(rgb);
 		rgb = NULL;
 		if ((rc = imageio_read_rgb8_as(path, IMAGEIO_FORMAT_PNG, &fw, &fh, &rgb, err, err_size)))
 			goto done;
-		if (fw != m.width || fh != m.height) {
+		if (fw != want_w || fh != m.height) {
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: size %ux%u differs from the run's %ux%u; render the run again",
-				      path, fw, fh, m.width, m.height);
+				      path, fw, fh, want_w, m.height);
 			goto done;
 		}
 		if (!w && (rc = clip_writer_create(out, fw, fh, m.fps, &w, err, err_size)))

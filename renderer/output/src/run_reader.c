@@ -72,6 +72,9 @@ int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_si
 	m->shaded_samples = (uint64_t)json_integer_value(json_object_get(tot, "shaded_samples"));
 	m->gpu_ms_median = json_number_value(json_object_get(tot, "gpu_ms_median"));
 	m->wall_s = json_number_value(json_object_get(tot, "wall_s"));
+	json_t *stereo = json_object_get(in, "stereo"), *ipd = json_object_get(in, "ipd");
+	m->views = json_is_true(stereo) ? 2 : 1;
+	m->ipd = m->views > 1 && json_is_number(ipd) ? json_number_value(ipd) : 0.0;
 	json_decref(j);
 	if (a < 0 || b < a || b > 0xffffffffLL || w < 1 || h < 1 || w > 16384 || h > 16384 || !(m->fps > 0) || m->fps > 1000)
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: impossible frames, size or fps; render the run again", path);
@@ -147,10 +150,11 @@ static bool frame_file_size(const char *path, bool exr, uint32_t *w, uint32_t *h
 	return false;
 }
 
-int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size)
+static int check_frames_in(const char *dir, const char *sub, const run_manifest *m, const char *ext, char *err,
+			   size_t err_size)
 {
 	char path[TL_PATH_MAX];
-	snprintf(path, sizeof path, "%s/frames", dir);
+	snprintf(path, sizeof path, "%s/%s", dir, sub);
 	size_t count = (size_t)(m->last_frame - m->first_frame) + 1;
 	unsigned char *seen = calloc(count, 1);
 	if (!seen)
@@ -158,7 +162,7 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 	DIR *d = opendir(path);
 	int rc = TL_OK;
 	if (!d)
-		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: no frames folder; render the run again", dir);
+		rc = tl_error(err, err_size, TL_ERR_INPUT, "%s: no %s folder; render the run again", dir, sub);
 	struct dirent *e;
 	while (!rc && (e = readdir(d))) {
 		long f = frame_number(e->d_name, ext);
@@ -191,6 +195,14 @@ int run_check_frames(const char *dir, const run_manifest *m, const char *ext, ch
 				      f, w, h, m->width, m->height);
 	}
 	free(seen);
+	return rc;
+}
+
+int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size)
+{
+	int rc = TL_OK;
+	for (uint32_t v = 0; !rc && v < (m->views > 1 ? m->views : 1); v++)
+		rc = check_frames_in(dir, run_view_dir(m->views, v), m, ext, err, err_size);
 	return rc;
 }
 

@@ -53,8 +53,8 @@ static int clear_run(const char *dir, char *err, size_t err_size)
 	}
 	tl_fs_clean_temps(dir);
 	int rc = TL_OK;
-	const char *subdirs[2] = {"frames", "decisions"};
-	for (int i = 0; i < 2 && !rc; i++) {
+	const char *subdirs[5] = {"frames", "decisions", "frames/L", "frames/R", "sbs"};
+	for (int i = 0; i < 5 && !rc; i++) {
 		snprintf(p, sizeof p, "%s/%s", dir, subdirs[i]);
 		tl_fs_clean_temps(p);
 		DIR *d = opendir(p);
@@ -133,6 +133,10 @@ static json_t *inputs_json(const run_info *in)
 	/* What metrics and studies need to know of the method, so they need not know its name (issue 30.1). */
 	if (j && in->facts.known)
 		json_object_set_new(j, "method_facts", method_facts_json(&in->facts));
+	if (j && in->views > 1) { /* stereo (STEREO.md); mono manifests stay as they were */
+		json_object_set_new(j, "stereo", json_true());
+		json_object_set_new(j, "ipd", json_real(in->ipd));
+	}
 	return j;
 }
 
@@ -140,9 +144,14 @@ int run_writer_create(const char *dir, const run_info *info, run_writer **out, c
 {
 	*out = NULL;
 	char frames[TL_PATH_MAX];
-	if (snprintf(frames, sizeof frames, "%s/frames", dir) >= (int)sizeof frames)
+	if (snprintf(frames, sizeof frames, "%s/frames/L", dir) >= (int)sizeof frames)
 		return tl_error(err, err_size, TL_ERR_ARG, "%s: path too long", dir);
+	frames[strlen(frames) - 2] = 0; /* mono: DIR/frames */
 	int rc = tl_mkdirs(frames, err, err_size);
+	for (uint32_t v = 0; !rc && info->views > 1 && v < 3; v++) {
+		snprintf(frames, sizeof frames, "%s/%s", dir, v < 2 ? run_view_dir(2, v) : "sbs");
+		rc = tl_mkdirs(frames, err, err_size);
+	}
 	if (rc || (rc = clear_run(dir, err, err_size)))
 		return rc;
 	if (info->write_decisions) {
@@ -199,10 +208,14 @@ static void stats_header(const frame_stats *st, char *h, size_t n)
 		len += (size_t)snprintf(h + len, n - len, ",%s", st->extra_names[e]);
 }
 
-int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size)
+const char *run_view_dir(uint32_t views, uint32_t v)
 {
-	char path[TL_PATH_MAX], val[3][64], header[sizeof w->header];
-	int rc;
+	return views < 2 ? "frames" : v == 0 ? "frames/L" : "frames/R";
+}
+
+static int check_header(run_writer *w, const frame_stats *st, char *err, size_t err_size)
+{
+	char header[sizeof w->header];
 	stats_header(st, header, sizeof header);
 	if (w->frames == 0) {
 		snprintf(w->header, sizeof w->header, "%s", header);
@@ -210,6 +223,15 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 	} else if (strcmp(header, w->header)) {
 		return tl_error(err, err_size, TL_ERR_INTERNAL, "frame %u: statistics columns changed within the run", st->frame);
 	}
+	return TL_OK;
+}
+
+/* One view's EXR and PNG into DIR/`sub`. */
+static int write_images(run_writer *w, const char *sub, const frame_image *img, const frame_stats *st, char *err,
+			size_t err_size)
+{
+	char path[TL_PATH_MAX], val[3][64];
+	int rc;
 	if (w->info.write_exr) {
 		snprintf(val[0], sizeof val[0], "%u", st->frame);
 		snprintf(val[1], sizeof val[1], "%.9g", st->time_s);
@@ -222,16 +244,29 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 			{"taslab:method", w->info.method},    {"taslab:threshold", val[2]},
 			{"taslab:frame", val[0]},             {"taslab:time_s", val[1]},
 		};
-		snprintf(path, sizeof path, "%s/frames/%06u.exr", w->dir, st->frame);
+		snprintf(path, sizeof path, "%s/%s/%06u.exr", w->dir, sub, st->frame);
 		if ((rc = imageio_write_exr_half(path, img->width, img->height, img->hdr_rgba_half, attrs,
 						 sizeof attrs / sizeof attrs[0], err, err_size)))
 			return rc;
 	}
 	if (w->info.write_png) {
-		snprintf(path, sizeof path, "%s/frames/%06u.png", w->dir, st->frame);
+		snprintf(path, sizeof path, "%s/%s/%06u.png", w->dir, sub, st->frame);
 		if ((rc = imageio_write_png_rgb8(path, img->width, img->height, img->display_rgba, err, err_size)))
 			return rc;
 	}
+	return TL_OK;
+}
+
+static int write_stats_row(run_writer *w, const frame_stats *st, char *err, size_t err_size);
+
+int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size)
+{
+	char path[TL_PATH_MAX];
+	int rc;
+	if (w->info.views > 1)
+		return tl_error(err, err_size, TL_ERR_ARG, "frame %u: a stereo run takes both eyes (run_writer_frame_views)", st->frame);
+	if ((rc = check_header(w, st, err, err_size)) || (rc = write_images(w, "frames", img, st, err, err_size)))
+		return rc;
 	if (w->info.write_decisions) {
 		if (!img->decisions)
 			return tl_error(err, err_size, TL_ERR_INTERNAL, "frame %u: no decision map", st->frame);
@@ -239,6 +274,39 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 		if ((rc = write_decisions(path, img, err, err_size)))
 			return rc;
 	}
+	return write_stats_row(w, st, err, err_size);
+}
+
+int run_writer_frame_views(run_writer *w, const frame_image *imgs, uint32_t views, const frame_stats *st, char *err,
+			   size_t err_size)
+{
+	if (w->info.views < 2 || views != w->info.views || views != 2)
+		return tl_error(err, err_size, TL_ERR_ARG, "frame %u: %u views for a run of %u", st->frame, views,
+				w->info.views ? w->info.views : 1);
+	if (imgs[0].width != imgs[1].width || imgs[0].height != imgs[1].height)
+		return tl_error(err, err_size, TL_ERR_ARG, "frame %u: the eyes differ in size", st->frame);
+	int rc = check_header(w, st, err, err_size);
+	for (uint32_t v = 0; !rc && v < views; v++)
+		rc = write_images(w, run_view_dir(views, v), &imgs[v], st, err, err_size);
+	if (rc)
+		return rc;
+	/* sbs/NNNNNN.png: left | right, the display PNGs' pixels side by side */
+	uint32_t W = imgs[0].width, H = imgs[0].height;
+	uint8_t *sbs = malloc((size_t)2 * W * H * 4);
+	if (!sbs)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory for a %ux%u side-by-side frame", 2 * W, H);
+	for (uint32_t y = 0; y < H; y++)
+		for (uint32_t v = 0; v < 2; v++)
+			memcpy(sbs + ((size_t)y * 2 * W + (size_t)v * W) * 4, imgs[v].display_rgba + (size_t)y * W * 4, (size_t)W * 4);
+	char path[TL_PATH_MAX];
+	snprintf(path, sizeof path, "%s/sbs/%06u.png", w->dir, st->frame);
+	rc = imageio_write_png_rgb8(path, 2 * W, H, sbs, err, err_size);
+	free(sbs);
+	return rc ? rc : write_stats_row(w, st, err, err_size);
+}
+
+static int write_stats_row(run_writer *w, const frame_stats *st, char *err, size_t err_size)
+{
 	FILE *f = w->stats.f;
 	/* reuse_fraction: 1 - shaded / denominator, the denominator being the allocated atlas texels for atlas
 	 * methods ("fraction of the total allocated space in the atlas", paper sec. 4.3) and the visible

@@ -18,11 +18,11 @@ layout(std430, set = 1, binding = 2) readonly buffer ObjInfo { uvec4 obj_info[];
 // per pid: corner x | y << 16; lw | lh << 8 | age << 16 (frames since its last shading, 0 = new); mesh pid; object
 layout(std430, set = 1, binding = 3) readonly buffer Blocks { uvec4 blocks[]; };
 layout(std430, set = 1, binding = 4) readonly buffer Work { uvec2 work[]; };        // chunks of 8 texels: pid, first texel
-layout(std430, set = 1, binding = 5) buffer Visible { uint visible[]; };            // per pid
+layout(std430, set = 1, binding = 5) buffer Visible { uint visible[]; };            // per pid: bit v, seen by view v
 layout(std430, set = 1, binding = 6) readonly buffer Grad { float G[]; };           // tasa: per pid, last frame
 layout(std430, set = 1, binding = 7) buffer Filtered { uint F[]; };                 // tasa: 2x2 image max (float bits)
 layout(std430, set = 1, binding = 8) buffer GradNew { uint Gnew[]; };               // tasa: max g of the shading (bits)
-layout(std430, set = 1, binding = 9) buffer Counters { uint count[8]; };            // 0 committed blocks, 1 their texels, 2 late texels, 3 texels shaded by shade.comp
+layout(std430, set = 1, binding = 9) buffer Counters { uint count[8]; };            // 0 committed blocks, 1 their texels, 2 late texels, 3 texels shaded by shade.comp, 4/5 of those in blocks the left/right eye sees
 layout(std430, set = 1, binding = 11) buffer DMax { uint dmax[]; };                 // oracle: per pid max d (bits)
 layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D ids;             // the ids pass (passes/ids.h)
 layout(set = 1, binding = 13, rgba16f) uniform image2D atlas;

@@ -48,6 +48,11 @@ typedef struct render_method {
 	/* Values the method derived from its options and the frame size at init (the atlas size, the density used when
 	 * the option says "default"), for the manifest's inputs.method_derived; returns the count (<= max). NULL: none. */
 	size_t (*derived)(const render *r, run_option *out, size_t max);
+	/* Stereo (STEREO.md): false, the frame core runs the method once per eye (its own state per eye, init and
+	 * finish per eye); true, the method renders every view itself in one frame (the atlas methods share their
+	 * atlas) using render_use_view, leaves view 0 active, and reports each eye's shaded samples in
+	 * render.view_shaded from collect. */
+	bool shared_views;
 } render_method;
 
 /* The registry (methods/registry.c, the only list of methods; each method file defines its render_method_NAME):
@@ -86,6 +91,21 @@ typedef struct render_pipeline {
 	VkPipelineLayout layout;
 } render_pipeline;
 
+/* Stereo (STEREO.md): what each view (eye) has of its own. The active view's values live in the render's own fields
+ * (r->hdr, r->states, ...), so passes and per-eye methods run unchanged; render_use_view swaps them. The shadow pool,
+ * the scene's geometry, materials and textures, the pipelines and the command buffer are shared. */
+#define RENDER_MAX_VIEWS 2
+typedef struct render_view_ctx {
+	vkdev_buffer states, objects, shade_count;
+	vkdev_image depth, hdr, display;
+	vkdev_buffer readback_hdr, readback_display;
+	uint16_t *hdr_packed;
+	uint8_t *display_packed;
+	VkDescriptorSet scene_set, display_set;
+	void *method_state;
+	tlm_vec3 eye;
+} render_view_ctx;
+
 struct render {
 	vkdev *dev;
 	const scene *scene;
@@ -93,6 +113,12 @@ struct render {
 	method_config config;     /* copy of *desc.method (desc.method points here) */
 	const render_method *method;
 	void *method_state;
+
+	/* views (STEREO.md): 1 mono, 2 stereo (0 left, 1 right); views[v] holds view v's fields while it is inactive */
+	uint32_t view_count, view;
+	render_view_ctx views[RENDER_MAX_VIEWS];
+	double *slot_time;        /* stereo: per state slot, the time last evaluated into every view (NAN: none) */
+	int64_t view_shaded[RENDER_MAX_VIEWS]; /* shared_views methods: each eye's shaded samples of the frame (-1: n/a) */
 
 	uint32_t state_ring;      /* slots in the state and object rings */
 	uint32_t push_aux[4];     /* copied into gpu_push.aux of every draw */
@@ -143,15 +169,40 @@ struct render {
 
 /* ---- frame/upload.c: the scene on the device ---- */
 int render_upload_scene(render *r, char *err, size_t err_size);
+/* The active view's state and object rings and shading counter (render_upload_scene calls it for view 0). */
+int render_upload_rings(render *r, char *err, size_t err_size);
 void render_upload_destroy(render *r);
 
 /* ---- frame/state.c: state rings ---- */
-/* Evaluates the scene and camera at `time_s` into state slot `slot` (FrameState + object ring). */
+/* Evaluates the scene and camera at `time_s` into state slot `slot` (FrameState + object ring). In stereo it
+ * writes the slot of every view at once (the scene evaluated once, each view with its eye: STEREO.md
+ * e_{L,R} = eye -/+ (ipd/2) r, targets shifted alike); a view > 0 asking again for the same slot and time finds it
+ * written and evaluates nothing. */
 void render_update_state(render *r, uint32_t slot, double time_s);
+/* Stereo: the centre-eye state slot (index state_ring of the active view's rings, allocated in stereo only): a copy
+ * of slot `slot` (objects, lights and shadow layers included, so call it after render_shadow_plan) with the centre
+ * camera, from which the atlas methods shade the texels both eyes share. Returns its index. */
+uint32_t render_center_slot(render *r, uint32_t slot, double time_s);
+/* Stereo, for methods that record every eye in one frame: the other views' slot `slot` maps the shadow layers the
+ * active view's planned (render_shadow_plan once, the layers rendered once). */
+void render_share_shadows(render *r, uint32_t slot);
+
+/* ---- frame/view.c: views ---- */
+/* Makes view v the active one (its targets, state rings, descriptor sets and method state in the render's fields). */
+void render_use_view(render *r, uint32_t v);
+/* Creates the active view's own resources (state rings, targets, readback, scene and display sets) after view 0's
+ * were created by render_upload_scene, render_targets_create and render_descriptors_create. */
+int render_view_create(render *r, char *err, size_t err_size);
+/* Destroys the active view's own resources (not view 0's: render_destroy does those). */
+void render_view_destroy(render *r);
 
 /* ---- frame/targets.c: render targets, samplers, readback buffers, the scene descriptor set ---- */
 int render_targets_create(render *r, char *err, size_t err_size);
 int render_descriptors_create(render *r, char *err, size_t err_size);
+/* The active view's depth, HDR and display targets and readback buffers (render_targets_create: view 0's), and its
+ * scene and display descriptor sets (render_descriptors_create: view 0's; the shadow maps' binding 5 is shadow.c's). */
+int render_targets_view_create(render *r, char *err, size_t err_size);
+int render_descriptors_view_create(render *r, char *err, size_t err_size);
 void render_targets_destroy(render *r);
 
 /* ---- frame/pipeline.c: pipelines ---- */

@@ -12,7 +12,92 @@ static tlm_vec3 safe_up(tlm_vec3 dir)
 	return fabsf(dir.y) > 0.99f ? tlm_v3(0, 0, 1) : tlm_v3(0, 1, 0);
 }
 
+/* The camera of view v of `views` at time t (STEREO.md: parallel axes, e = eye -/+ (ipd/2) r with
+ * r = normalize((target - eye) x (0, 1, 0)), the target shifted alike; view -1: the centre eye). */
+static scene_camera_state view_camera(const render *r, double t, int v)
+{
+	scene_camera_state cam = scene_camera_eval(r->scene, r->desc.camera, (float)t);
+	/* mono: render_desc.eye_shift (a mono run from one eye's camera, STEREO.md X3); stereo: -/+ ipd/2 */
+	float shift = r->view_count < 2 ? r->desc.eye_shift : v < 0 ? 0.0f : 0.5f * r->desc.ipd * (v == 0 ? -1.0f : 1.0f);
+	if (shift == 0.0f)
+		return cam;
+	tlm_vec3 right = tlm_v3_cross(tlm_v3_sub(cam.target, cam.eye), tlm_v3(0, 1, 0));
+	float len = tlm_v3_length(right);
+	if (!(len > 0.0f))
+		return cam; /* looking straight up or down: no horizon to separate the eyes along */
+	float half = shift / len;
+	cam.eye = tlm_v3_add(cam.eye, tlm_v3_scale(right, half));
+	cam.target = tlm_v3_add(cam.target, tlm_v3_scale(right, half));
+	return cam;
+}
+
+static void write_camera(const render *r, gpu_frame_state *st, const scene_camera_state *cam, float t)
+{
+	tlm_mat4 view = tlm_mat4_look_at(cam->eye, cam->target, tlm_v3(0, 1, 0));
+	tlm_mat4 proj = tlm_mat4_perspective(cam->fov_deg * TLM_PI / 180.0f,
+					     (float)r->desc.width / (float)r->desc.height, cam->znear, cam->zfar);
+	mat_copy(st->view, view);
+	mat_copy(st->proj, proj);
+	mat_copy(st->view_proj, tlm_mat4_mul(proj, view));
+	st->camera_time[0] = cam->eye.x;
+	st->camera_time[1] = cam->eye.y;
+	st->camera_time[2] = cam->eye.z;
+	st->camera_time[3] = t;
+}
+
+static void update_state_view(render *r, uint32_t slot, double time_s);
+
 void render_update_state(render *r, uint32_t slot, double time_s)
+{
+	if (r->view_count < 2) {
+		update_state_view(r, slot, time_s);
+		return;
+	}
+	if (r->view > 0 && r->slot_time[slot] == time_s)
+		return; /* written for every view when view 0 asked (the scene is evaluated once per frame) */
+	/* view 0's rings hold the full state; the other views get a copy with their own camera */
+	uint32_t active = r->view;
+	render_use_view(r, 0);
+	update_state_view(r, slot, time_s);
+	const gpu_frame_state *st0 = (const gpu_frame_state *)r->states.mapped + slot;
+	size_t n = r->scene->object_count;
+	for (uint32_t v = 1; v < r->view_count; v++) {
+		render_view_ctx *c = &r->views[v];
+		gpu_frame_state *st = (gpu_frame_state *)c->states.mapped + slot;
+		memcpy(st, st0, sizeof *st);
+		memcpy((gpu_object *)c->objects.mapped + slot * n, (const gpu_object *)r->objects.mapped + slot * n,
+		       n * sizeof(gpu_object));
+		scene_camera_state cam = view_camera(r, time_s, (int)v);
+		write_camera(r, st, &cam, (float)time_s);
+		c->eye = cam.eye;
+	}
+	r->slot_time[slot] = time_s;
+	render_use_view(r, active);
+}
+
+uint32_t render_center_slot(render *r, uint32_t slot, double time_s)
+{
+	uint32_t c = r->state_ring;
+	size_t n = r->scene->object_count;
+	gpu_frame_state *st = (gpu_frame_state *)r->states.mapped;
+	memcpy(st + c, st + slot, sizeof *st);
+	memcpy((gpu_object *)r->objects.mapped + c * n, (const gpu_object *)r->objects.mapped + slot * n,
+	       n * sizeof(gpu_object));
+	scene_camera_state cam = view_camera(r, time_s, -1);
+	write_camera(r, st + c, &cam, (float)time_s);
+	return c;
+}
+
+void render_share_shadows(render *r, uint32_t slot)
+{
+	const gpu_frame_state *st = (const gpu_frame_state *)r->states.mapped + slot;
+	for (uint32_t v = 0; v < r->view_count; v++)
+		if (v != r->view)
+			memcpy(((gpu_frame_state *)r->views[v].states.mapped + slot)->shadow_phys, st->shadow_phys,
+			       sizeof st->shadow_phys);
+}
+
+static void update_state_view(render *r, uint32_t slot, double time_s)
 {
 	const scene *s = r->scene;
 	gpu_frame_state *st = (gpu_frame_state *)r->states.mapped + slot;
@@ -25,18 +110,9 @@ void render_update_state(render *r, uint32_t slot, double time_s)
 		mat_copy(ob[i].normal_matrix, tlm_mat4_transpose(tlm_mat4_inverse(r->world[i])));
 		ob[i].material[0] = s->objects[i].material >= 0 ? (uint32_t)s->objects[i].material : 0u;
 	}
-	scene_camera_state cam = scene_camera_eval(s, r->desc.camera, t);
+	scene_camera_state cam = view_camera(r, time_s, (int)r->view);
 	r->eye = cam.eye;
-	tlm_mat4 view = tlm_mat4_look_at(cam.eye, cam.target, tlm_v3(0, 1, 0));
-	tlm_mat4 proj = tlm_mat4_perspective(cam.fov_deg * TLM_PI / 180.0f,
-					     (float)r->desc.width / (float)r->desc.height, cam.znear, cam.zfar);
-	mat_copy(st->view, view);
-	mat_copy(st->proj, proj);
-	mat_copy(st->view_proj, tlm_mat4_mul(proj, view));
-	st->camera_time[0] = cam.eye.x;
-	st->camera_time[1] = cam.eye.y;
-	st->camera_time[2] = cam.eye.z;
-	st->camera_time[3] = t;
+	write_camera(r, st, &cam, t);
 	memcpy(st->ambient_exposure, s->ambient, 3 * sizeof(float));
 	st->ambient_exposure[3] = s->exposure;
 	memcpy(st->sky_lights, s->sky, 3 * sizeof(float));

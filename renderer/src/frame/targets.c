@@ -32,13 +32,22 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 2, .pBindings = db};
 	CHECK_VK(vkCreateDescriptorSetLayout(d, &dl, NULL, &r->display_set_layout));
 	VkDescriptorPoolSize ps[3] = {
-		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 64},
-		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 64},
-		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 64},
+		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 128},
+		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 128},
+		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 128},
 	};
 	VkDescriptorPoolCreateInfo pi = {
-		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 16, .poolSizeCount = 3, .pPoolSizes = ps};
+		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 32, .poolSizeCount = 3, .pPoolSizes = ps};
 	CHECK_VK(vkCreateDescriptorPool(d, &pi, NULL, &r->pool));
+	rc = render_descriptors_view_create(r, err, err_size);
+fail:
+	return rc;
+}
+
+int render_descriptors_view_create(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	VkDevice d = r->dev->device;
 	VkDescriptorSetAllocateInfo ai = {
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
 		.descriptorPool = r->pool,
@@ -88,7 +97,6 @@ int render_targets_create(render *r, char *err, size_t err_size)
 {
 	int rc = 0;
 	const scene *s = r->scene;
-	uint32_t w = r->desc.width, h = r->desc.height;
 	VkSamplerCreateInfo si = {
 		.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
 		.magFilter = VK_FILTER_LINEAR,
@@ -119,6 +127,15 @@ int render_targets_create(render *r, char *err, size_t err_size)
 		if (s->lights[i].casts_shadow)
 			r->shadow.layers += s->lights[i].kind == SCENE_LIGHT_POINT ? 6 : 1;
 	}
+	rc = render_targets_view_create(r, err, err_size);
+fail:
+	return rc;
+}
+
+int render_targets_view_create(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	uint32_t w = r->desc.width, h = r->desc.height;
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, RENDER_DEPTH_FORMAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
 				    VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, false, "depth", &r->depth));
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,

@@ -76,6 +76,21 @@ fail:
 	return rc;
 }
 
+int render_upload_rings(render *r, char *err, size_t err_size)
+{
+	int rc = 0;
+	/* stereo: one more slot, the centre eye's (render_center_slot) */
+	size_t slots = r->state_ring + (r->view_count > 1 ? 1 : 0), objects = r->scene->object_count ? r->scene->object_count : 1;
+	CHECK_VK(vkdev_buffer_create(r->dev, slots * sizeof(gpu_frame_state), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+				     true, "frame states", &r->states));
+	CHECK_VK(vkdev_buffer_create(r->dev, slots * objects * sizeof(gpu_object),
+				     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "objects", &r->objects));
+	CHECK_VK(vkdev_buffer_create(r->dev, 4 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+				     VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "shade count", &r->shade_count));
+fail:
+	return rc;
+}
+
 int render_upload_scene(render *r, char *err, size_t err_size)
 {
 	const scene *s = r->scene;
@@ -148,12 +163,7 @@ int render_upload_scene(render *r, char *err, size_t err_size)
 	CHECK_VK(vkdev_buffer_create(r->dev, s->material_count * sizeof *mats, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
 				     VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "materials", &r->materials));
 	CHECK_VK(vkdev_upload_buffer(r->dev, &r->materials, mats, s->material_count * sizeof *mats));
-	CHECK_VK(vkdev_buffer_create(r->dev, r->state_ring * sizeof(gpu_frame_state), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-				     true, "frame states", &r->states));
-	CHECK_VK(vkdev_buffer_create(r->dev, r->state_ring * s->object_count * sizeof(gpu_object),
-				     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "objects", &r->objects));
-	CHECK_VK(vkdev_buffer_create(r->dev, 4 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-				     VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "shade count", &r->shade_count));
+	rc = render_upload_rings(r, err, err_size);
 fail:
 	free(verts);
 	free(idx);

@@ -55,13 +55,14 @@ typedef struct atlas_state {
 	uint32_t atlas_w, atlas_h;
 	float rho;
 	vkdev_buffer buf[B_COUNT];
-	ids_pass ids;              /* the visibility pass and its image */
+	ids_pass ids[RENDER_MAX_VIEWS]; /* the visibility pass and its image, per eye (stereo: STEREO.md) */
 	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
 	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
 	uint32_t shade_chunks, truth_chunks;
 	VkDescriptorSetLayout set_layout;
-	VkDescriptorSet set;
+	VkDescriptorSet set[RENDER_MAX_VIEWS]; /* per eye: its ids image and HDR target */
+	uint32_t shade_slot;       /* the state slot the texels are shaded from (stereo: the centre eye's) */
 	VkPipelineLayout comp_layout;
 	VkPipeline visible_pipe, shade_pipe, commit_pipe, truth_pipe, resolve_pipe;
 	int64_t last_frame;
@@ -185,7 +186,7 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 enum { ATLAS_BINDINGS = 18 };
 static bool is_image_binding(uint32_t i) { return (i >= 12 && i <= 15) || i == 17; }
 
-static int make_set(render *r, atlas_state *s, char *err, size_t err_size)
+static int make_set(render *r, atlas_state *s, uint32_t v, char *err, size_t err_size)
 {
 	VkDevice d = r->dev->device;
 	VkShaderStageFlags st = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
@@ -197,24 +198,24 @@ static int make_set(render *r, atlas_state *s, char *err, size_t err_size)
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = ATLAS_BINDINGS, .pBindings = b};
 	VkResult res;
-	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
+	if (!s->set_layout && (res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "atlas: descriptor set layout", res);
 	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
 					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
-	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
+	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set[v])))
 		return render_vk_error(err, err_size, "atlas: descriptor set", res);
 	/* bindings 0-9, 11: our buffers; 10 vertices, 16 indices (the scene's); 12-15 and 17 images */
 	const vkdev_buffer *bufs[ATLAS_BINDINGS] = {&s->buf[B_CORNERS], &s->buf[B_TRIINFO], &s->buf[B_OBJINFO], &s->buf[B_BLOCKS],
 					&s->buf[B_WORK],    &s->buf[B_VISIBLE], &s->buf[B_G],       &s->buf[B_F],
 					&s->buf[B_GNEW],    &s->buf[B_COUNTERS], &r->vertices,      &s->buf[B_DMAX],
 					NULL, NULL, NULL, NULL, &r->indices, NULL};
-	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids.image, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
+	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids[v].image, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
 						   [17] = &s->shown};
 	VkDescriptorBufferInfo bi[ATLAS_BINDINGS];
 	VkDescriptorImageInfo ii[ATLAS_BINDINGS];
 	VkWriteDescriptorSet w[ATLAS_BINDINGS];
 	for (uint32_t i = 0; i < ATLAS_BINDINGS; i++) {
-		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set, .dstBinding = i,
+		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set[v], .dstBinding = i,
 					      .descriptorCount = 1};
 		if (is_image_binding(i)) {
 			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
@@ -333,10 +334,14 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 		rc = atlas_alloc_create(s->atlas_w, s->atlas_h, &s->alloc, err, err_size);
 	if (!rc)
 		rc = make_buffers(r, s, err, err_size);
-	if (!rc)
-		rc = ids_pass_init(r, &s->ids, err, err_size);
-	if (!rc)
-		rc = make_set(r, s, err, err_size);
+	/* per eye (stereo): the visibility pass's image and the set binding it and the eye's HDR target */
+	for (uint32_t v = 0; !rc && v < r->view_count; v++) {
+		render_use_view(r, v);
+		rc = ids_pass_init(r, &s->ids[v], err, err_size);
+		if (!rc)
+			rc = make_set(r, s, v, err, err_size);
+	}
+	render_use_view(r, 0);
 	if (!rc)
 		rc = make_pipelines(r, s, err, err_size);
 	if (rc)
@@ -368,9 +373,16 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 static void plan_levels(render *r, atlas_state *s)
 {
 	const scene *sc = r->scene;
-	const gpu_frame_state *st = (const gpu_frame_state *)r->states.mapped;
-	tlm_mat4 vp;
-	memcpy(vp.m, st->view_proj, sizeof vp.m);
+	/* stereo (STEREO.md): one block for both eyes, its level from the larger projected edge over the eyes; the
+	 * facing as the shading sees it, from the shading slot's eye (the centre eye) */
+	tlm_mat4 vps[RENDER_MAX_VIEWS];
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		memcpy(vps[v].m, ((const gpu_frame_state *)r->states.mapped)->view_proj, sizeof vps[v].m);
+	}
+	render_use_view(r, 0);
+	const float *ce = ((const gpu_frame_state *)r->states.mapped + s->shade_slot)->camera_time;
+	tlm_vec3 shade_eye = tlm_v3(ce[0], ce[1], ce[2]);
 	float *G = s->buf[B_G].mapped;
 	for (uint32_t p = 0; p < s->patch_count; p++) {
 		patch_state *q = &s->ps[p];
@@ -378,24 +390,29 @@ static void plan_levels(render *r, atlas_state *s)
 		const scene_mesh *m = &sc->meshes[sc->objects[o].mesh];
 		const uint32_t *c = s->patches.corners + 4 * (size_t)mp;
 		bool single = c[3] == ATLAS_SINGLE;
-		tlm_mat4 mvp = tlm_mat4_mul(vp, r->world[o]);
-		float clip[16] = {0};
+		float lu = 0.0f, lv = 0.0f;
 		tlm_vec3 w[4];
-		for (int k = 0; k < (single ? 3 : 4); k++) {
-			const float *pos = m->vertices[c[k]].position;
-			w[k] = tlm_mat4_mul_point(r->world[o], tlm_v3(pos[0], pos[1], pos[2]));
-			for (int row = 0; row < 4; row++)
-				clip[4 * k + row] = mvp.m[row] * pos[0] + mvp.m[4 + row] * pos[1] + mvp.m[8 + row] * pos[2] + mvp.m[12 + row];
+		for (uint32_t v = 0; v < r->view_count; v++) {
+			tlm_mat4 mvp = tlm_mat4_mul(vps[v], r->world[o]);
+			float clip[16] = {0};
+			for (int k = 0; k < (single ? 3 : 4); k++) {
+				const float *pos = m->vertices[c[k]].position;
+				w[k] = tlm_mat4_mul_point(r->world[o], tlm_v3(pos[0], pos[1], pos[2]));
+				for (int row = 0; row < 4; row++)
+					clip[4 * k + row] = mvp.m[row] * pos[0] + mvp.m[4 + row] * pos[1] + mvp.m[8 + row] * pos[2] + mvp.m[12 + row];
+			}
+			float eu, ev;
+			atlas_edge_lengths(clip, single, r->desc.width, r->desc.height, &eu, &ev);
+			lu = fmaxf(lu, eu);
+			lv = fmaxf(lv, ev);
 		}
-		float lu, lv;
-		atlas_edge_lengths(clip, single, r->desc.width, r->desc.height, &lu, &lv);
 		bool cu, cv;
 		q->want_lw = (uint8_t)atlas_level(lu, s->rho, s->v.lmax, q->allocated ? q->req_lw : 0, &cu);
 		q->want_lh = (uint8_t)atlas_level(lv, s->rho, s->v.lmax, q->allocated ? q->req_lh : 0, &cv);
 		q->clamped = cu || cv;
 		/* facing of triangle A as seen from the eye (a double-sided patch turning around is new) */
 		tlm_vec3 n = tlm_v3_cross(tlm_v3_sub(w[1], w[0]), tlm_v3_sub(w[2], w[0]));
-		q->want_facing = tlm_v3_dot(n, tlm_v3_sub(r->eye, w[0])) > 0.0f;
+		q->want_facing = tlm_v3_dot(n, tlm_v3_sub(shade_eye, w[0])) > 0.0f;
 		bool keeps = q->allocated && q->want_lw == q->req_lw && q->want_lh == q->req_lh && q->want_facing == q->facing;
 		G[p] = keeps && q->phase == 2 ? q->G : 0.0f;
 	}
@@ -404,10 +421,13 @@ static void plan_levels(render *r, atlas_state *s)
 int atlas_prepare(render *r, uint32_t frame, char *err, size_t err_size)
 {
 	atlas_state *s = state_of(r);
-	render_update_state(r, 0, (double)frame / (double)r->desc.fps);
+	double t = (double)frame / (double)r->desc.fps;
+	render_update_state(r, 0, t);
 	int rc = render_shadow_plan(r, 0, err, err_size);
 	if (rc)
 		return rc;
+	render_share_shadows(r, 0); /* stereo: the other eye's slot maps the same shadow layers (rendered once) */
+	s->shade_slot = r->view_count > 1 ? render_center_slot(r, 0, t) : 0;
 	if (!(s->last_frame >= 0 && (int64_t)frame == s->last_frame + 1)) {
 		/* first frame or a jump: everything starts over */
 		for (uint32_t p = 0; p < s->patch_count; p++) {
@@ -431,10 +451,12 @@ static void barrier_compute(VkCommandBuffer cmd)
 static void bind_compute(render *r, atlas_state *s, VkCommandBuffer cmd, VkPipeline p, uint32_t a0, uint32_t a1, uint32_t a2,
 			 uint32_t a3)
 {
-	VkDescriptorSet sets[2] = {r->scene_set, s->set};
+	/* the active eye's scene and atlas sets; the shading runs from the shading slot (stereo: the centre eye) */
+	VkDescriptorSet sets[2] = {r->scene_set, s->set[r->view]};
 	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p);
 	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->comp_layout, 0, 2, sets, 0, NULL);
-	gpu_push pc = {0, 0, (uint32_t)r->scene->object_count, 0, {a0, a1, a2, a3}};
+	uint32_t slot = p == s->shade_pipe || p == s->truth_pipe ? s->shade_slot : 0;
+	gpu_push pc = {slot, 0, (uint32_t)r->scene->object_count, 0, {a0, a1, a2, a3}};
 	vkCmdPushConstants(cmd, s->comp_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
 }
 
@@ -454,17 +476,30 @@ void atlas_record_pre(render *r, VkCommandBuffer cmd, uint32_t frame)
 	vkCmdFillBuffer(cmd, s->buf[B_VISIBLE].buffer, 0, VK_WHOLE_SIZE, 0);
 	vkCmdFillBuffer(cmd, s->buf[B_F].buffer, 0, VK_WHOLE_SIZE, 0);
 	/* the HDR target is bound in the method's descriptor set (resolve writes it): GENERAL from here on */
-	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
-			    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_2_CLEAR_BIT,
-			    VK_ACCESS_2_TRANSFER_WRITE_BIT);
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_2_CLEAR_BIT,
+				    VK_ACCESS_2_TRANSFER_WRITE_BIT);
+	}
+	render_use_view(r, 0);
 	barrier_compute(cmd);
 	render_ts(r, cmd);
 	render_pass_shadows(r, cmd, 0);
 	render_ts(r, cmd);
-	ids_pass_record(r, &s->ids, cmd, 0);
+	/* stereo: each eye's visibility pass; the visible sets and the 2x2 filter's F of both eyes go into the shared
+	 * buffers (visible: bit v per eye; F: atomicMax over both eyes' windows) */
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		ids_pass_record(r, &s->ids[v], cmd, 0);
+	}
 	render_ts(r, cmd);
-	bind_compute(r, s, cmd, s->visible_pipe, 0, 0, 0, 0);
-	vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		bind_compute(r, s, cmd, s->visible_pipe, v, 0, 0, 0);
+		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+	}
+	render_use_view(r, 0);
 	barrier_compute(cmd);
 	render_ts(r, cmd);
 }
@@ -626,26 +661,38 @@ void atlas_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 		barrier_compute(cmd);
 	}
 	render_ts(r, cmd);
-	/* resolve into the HDR target cleared to the sky (coverage 0) */
+	/* resolve into the HDR target cleared to the sky (coverage 0); stereo: each eye from the shared atlas */
 	const scene *sc = r->scene;
 	VkClearColorValue sky = {{sc->sky[0] * sc->exposure, sc->sky[1] * sc->exposure, sc->sky[2] * sc->exposure, 0.0f}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	vkCmdClearColorImage(cmd, r->hdr.image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
-	render_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-		       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-	bind_compute(r, s, cmd, s->resolve_pipe, 0, 0, frame, tbits);
-	vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
-			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		vkCmdClearColorImage(cmd, r->hdr.image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
+		render_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+			       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+		bind_compute(r, s, cmd, s->resolve_pipe, 0, 0, frame, tbits);
+		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+		vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+				    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+				    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+	}
 	render_ts(r, cmd);
-	if (r->blend_count)
+	for (uint32_t v = 0; v < r->view_count && r->blend_count; v++) {
+		render_use_view(r, v);
 		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
+	}
 	render_ts(r, cmd);
-	render_pass_display(r, cmd);
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		render_pass_display(r, cmd);
+	}
 	render_ts(r, cmd);
-	render_pass_readback(r, cmd);
+	for (uint32_t v = 0; v < r->view_count; v++) {
+		render_use_view(r, v);
+		render_pass_readback(r, cmd);
+	}
+	render_use_view(r, 0);
 	barrier_compute(cmd);
 	render_ts(r, cmd);
 	s->last_frame = frame;
@@ -672,6 +719,10 @@ void atlas_collect(render *r, frame_stats *st)
 	st->shaded_samples = (int64_t)s->shaded_texels;
 	st->reused_samples = (int64_t)s->allocated_texels - (int64_t)s->shaded_texels;
 	st->late_samples = s->v.truth ? (int64_t)c[2] : -1;
+	/* stereo: the texels shaded in blocks each eye sees, counted by the shading (count[4], count[5]); a shared block
+	 * counts for both eyes, once in shaded_samples */
+	for (uint32_t v = 0; v < r->view_count && v < 2 && !s->v.oracle; v++)
+		r->view_shaded[v] = (int64_t)c[4 + v];
 	const char *names[5] = {"cpu_ms_alloc", "atlas_overflow", "clamped_units", "listed_samples", "shade_invocations"};
 	double vals[5] = {s->cpu_ms, s->overflow, s->clamped, (double)s->listed_texels, (double)c[3]};
 	for (int i = 0; i < 5 && st->extra_count < FRAME_MAX_EXTRA; i++) {
@@ -703,7 +754,8 @@ void atlas_finish(render *r)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
 	for (int i = 0; i < B_COUNT; i++)
 		vkdev_buffer_destroy(r->dev, &s->buf[i]);
-	ids_pass_finish(r, &s->ids);
+	for (uint32_t v = 0; v < RENDER_MAX_VIEWS; v++)
+		ids_pass_finish(r, &s->ids[v]);
 	vkdev_image_destroy(r->dev, &s->atlas);
 	vkdev_image_destroy(r->dev, &s->scratch);
 	vkdev_image_destroy(r->dev, &s->shown);
@@ -720,7 +772,18 @@ void atlas_finish(render *r)
 
 int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err_size)
 {
-	return ids_pass_copy(r, &state_of(r)->ids, ids, upload, err, err_size);
+	return ids_pass_copy(r, &state_of(r)->ids[r->view], ids, upload, err, err_size);
+}
+
+int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, char *err, size_t err_size)
+{
+	if (view >= r->view_count)
+		return tl_error(err, err_size, TL_ERR_ARG, "no view %u", view);
+	atlas_state *s = state_of(r); /* view 0's: a shared-views method keeps one state */
+	render_use_view(r, view);
+	int rc = ids_pass_copy(r, &s->ids[view], ids, upload, err, err_size);
+	render_use_view(r, 0);
+	return rc;
 }
 
 int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size)
@@ -734,8 +797,12 @@ int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, 
 	vkCmdFillBuffer(cmd, s->buf[B_VISIBLE].buffer, 0, VK_WHOLE_SIZE, 0);
 	vkCmdFillBuffer(cmd, s->buf[B_F].buffer, 0, VK_WHOLE_SIZE, 0);
 	barrier_compute(cmd);
-	bind_compute(r, s, cmd, s->visible_pipe, 0, 0, 0, 0);
-	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	for (uint32_t v = 0; v < r->view_count; v++) { /* stereo: both eyes into the one visible set and F */
+		render_use_view(r, v);
+		bind_compute(r, s, cmd, s->visible_pipe, v, 0, 0, 0);
+		vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	}
+	render_use_view(r, 0);
 	barrier_compute(cmd);
 	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
 		return render_vk_error(err, err_size, "atlas visible pass", res);

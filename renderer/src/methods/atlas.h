@@ -39,7 +39,7 @@ extern const char *const atlas_pass_names[ATLAS_PASS_COUNT];
 #define ATLAS_FRAME_OPS                                                                                            \
 	.pass_names = atlas_pass_names, .pass_count = ATLAS_PASS_COUNT, .state_ring = 1, .prepare = atlas_prepare,      \
 	.record_pre = atlas_record_pre, .cpu_step = atlas_cpu_step, .record = atlas_record, .collect = atlas_collect,   \
-	.finish = atlas_finish, .derived = atlas_derived
+	.finish = atlas_finish, .derived = atlas_derived, .shared_views = true
 
 /* The options every atlas method has (method_option entries for an options struct T with fields scale, density,
  * lmax, lod0; DESIGN section 4 --atlas-scale). */

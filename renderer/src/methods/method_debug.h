@@ -17,6 +17,9 @@
  * patch (x | y << 16, lw | lh << 8 | age << 16, mesh patch, object). */
 int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err_size);
 int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, char *err, size_t err_size);
+/* Stereo: atlas_debug_ids for eye `view`; atlas_debug_visible runs every eye's pass into the shared visible[] (bit v:
+ * seen by eye v) and F[] (the max over both eyes' 2x2 windows). */
+int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, char *err, size_t err_size);
 const uint32_t *atlas_debug_blocks(render *r, uint32_t *patch_count);
 /* The facing the CPU decided for a global patch this frame (triangle A's winding seen from the eye, the rule that
  * replaces gl_FrontFacing; 1 front, 0 back), -1 when the patch has no block. */

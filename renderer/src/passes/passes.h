@@ -12,6 +12,8 @@ void render_shadow_destroy(render *r);
 /* Plans a slot's shadow layers before recording (reuses layers whose inputs are unchanged). */
 int render_shadow_plan(render *r, uint32_t slot, char *err, size_t err_size);
 void render_pass_shadows(render *r, VkCommandBuffer cmd, uint32_t slot);
+/* Writes the shadow pool into binding 5 of every view's scene set (a view created after the pool). */
+void render_shadow_write_sets(render *r);
 
 /* ---- depth.c: depth-only rendering (shadow layers, depth pre-pass) ---- */
 /* Depth-only rendering of opaque + masked objects into `view` (cleared to 1). Shadow layers pass

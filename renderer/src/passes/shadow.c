@@ -84,7 +84,8 @@ static uint64_t layer_key(const render *r, uint32_t slot, uint32_t layer, uint8_
 	return h;
 }
 
-static void write_descriptors(render *r)
+/* Binding 5 of every view's scene set (stereo: both eyes sample the one pool). */
+void render_shadow_write_sets(render *r)
 {
 	render_shadow_pool *p = &r->shadow;
 	VkDescriptorImageInfo ii[GPU_SHADOW_CHUNKS];
@@ -92,10 +93,15 @@ static void write_descriptors(render *r)
 		ii[c] = (VkDescriptorImageInfo){r->shadow_sampler,
 						p->chunks[c].view ? p->chunks[c].view : p->dummy.view,
 						VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-	VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = r->scene_set,
-				  .dstBinding = 5, .descriptorCount = GPU_SHADOW_CHUNKS,
-				  .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .pImageInfo = ii};
-	vkUpdateDescriptorSets(r->dev->device, 1, &w, 0, NULL);
+	for (uint32_t v = 0; v < (r->view_count ? r->view_count : 1); v++) {
+		VkDescriptorSet set = v == r->view ? r->scene_set : r->views[v].scene_set;
+		if (!set)
+			continue; /* a view not created yet: written when it is */
+		VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = set,
+					  .dstBinding = 5, .descriptorCount = GPU_SHADOW_CHUNKS,
+					  .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .pImageInfo = ii};
+		vkUpdateDescriptorSets(r->dev->device, 1, &w, 0, NULL);
+	}
 }
 
 /* Depth image with all layers in SHADER_READ_ONLY (sampled layers must have a defined layout). */
@@ -141,7 +147,7 @@ static int add_chunk(render *r, uint32_t c, char *err, size_t err_size)
 			return render_vk_error(err, err_size, "vkCreateImageView (shadow layer)", res);
 	}
 	p->chunk_count++;
-	write_descriptors(r);
+	render_shadow_write_sets(r);
 	return TL_OK;
 }
 
@@ -241,7 +247,7 @@ int render_shadow_init(render *r, char *err, size_t err_size)
 	VkResult res = make_chunk(r, 1, 1, "shadow dummy", &p->dummy);
 	if (res)
 		return render_vk_error(err, err_size, "creating the shadow-map placeholder", res);
-	write_descriptors(r);
+	render_shadow_write_sets(r);
 	return TL_OK;
 }
 

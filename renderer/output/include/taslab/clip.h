@@ -34,6 +34,10 @@ int clip_decode(const char *path, clip_frame_fn frame, void *user, double *fps, 
 /* Encodes a run folder's frames/NNNNNN.png (contiguous numbers, equal sizes) at the run's fps
  * (manifest.json) into `out`. Missing frames, size mismatches and unreadable images are errors. */
 int clip_encode_run(const char *run_dir, const char *out, uint32_t *frames_written, char *err, size_t err_size);
+/* The same for a stereo run (STEREO.md): `view` "sbs" or NULL encodes RUN/sbs/ (2W x H, left | right), "L" or "R" one
+ * eye's frames; a mono run takes only NULL or "sbs" (its frames). */
+int clip_encode_run_view(const char *run_dir, const char *view, const char *out, uint32_t *frames_written, char *err,
+			 size_t err_size);
 
 #ifdef __cplusplus
 }

@@ -11,7 +11,7 @@ extern "C" {
 #endif
 
 #define FRAME_MAX_PASSES 12 /* timed passes per frame (gpu_ms_<pass> columns) */
-#define FRAME_MAX_EXTRA 8   /* method-specific columns (cpu_ms_<step>, atlas counters, ...) */
+#define FRAME_MAX_EXTRA 12  /* method-specific columns (cpu_ms_<step>, atlas counters, ...) */
 
 /* Per-frame statistics (stats.csv). Counts of -1 mean "not applicable / not available" (empty cells). */
 typedef struct frame_stats {

@@ -7,6 +7,8 @@
  *                           (40,90,255), predicted (255,48,0), scheduled (255,210,0), late (255,0,255:
  *                           reused but more than T from the truth; with --truth)
  *   RUN/stats.csv           one row per frame (frame.h)
+ *   stereo (STEREO.md): RUN/frames/L/ and RUN/frames/R/ instead of RUN/frames/ (the same names inside), and
+ *   RUN/sbs/NNNNNN.png, the display frames side by side (2W x H, left | right); manifest inputs.stereo, inputs.ipd
  *   RUN/manifest.json       written last and atomically: inputs, method options, device, totals
  *
  * Completeness protocol: run_writer_create removes an old manifest.json first and every frame, stats.csv
@@ -85,6 +87,8 @@ typedef struct run_info {
 	/* Content hashes of the inputs (scene_digest: the scene file and its assets; colour_digest: the config and its
 	 * LUTs), recorded so a run made from other inputs than a sweep's is told apart (NULL: not recorded). */
 	const char *scene_digest, *colour_digest;
+	uint32_t views;       /* 2: a stereo run (run_writer_frame_views); 0 or 1: mono */
+	double ipd;           /* stereo: metres between the eyes */
 } run_info;
 
 typedef struct run_writer run_writer;
@@ -92,6 +96,12 @@ typedef struct run_writer run_writer;
 int run_writer_create(const char *dir, const run_info *info, run_writer **out, char *err, size_t err_size);
 /* Writes the frame's EXR and PNG and appends its stats.csv row. */
 int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *st, char *err, size_t err_size);
+/* A stereo run's frame: the eyes' images (imgs[0] left, imgs[1] right) into frames/L/ and frames/R/, the side-by-side
+ * PNG into sbs/, and the stats row. TL_ERR_ARG when the run is not stereo or the eyes differ in size. */
+int run_writer_frame_views(run_writer *w, const frame_image *imgs, uint32_t views, const frame_stats *st, char *err,
+			   size_t err_size);
+/* The folder of view v's frames of a run with `views` views: "frames" (mono), "frames/L", "frames/R". */
+const char *run_view_dir(uint32_t views, uint32_t v);
 /* The frame_decision a decision-map colour stands for; -1 for any other colour. */
 int run_decision_code(const uint8_t rgb[3]);
 /* Closes stats.csv and writes manifest.json (atomically) with totals. */
@@ -113,13 +123,15 @@ typedef struct run_manifest {
 	bool exr, png;
 	uint64_t frames, visible_samples, shaded_samples;
 	double gpu_ms_median, wall_s;
+	uint32_t views;            /* 2: stereo (inputs.stereo), 1: mono (also a manifest made before stereo runs) */
+	double ipd;                /* stereo: inputs.ipd in metres; 0 for mono */
 } run_manifest;
 
 /* Reads DIR/manifest.json. TL_ERR_INPUT when the folder is not a complete run (no manifest) or the
  * manifest lacks a field or holds an impossible value (frames, size, fps). */
 int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_size);
 
-/* Checks that DIR/frames holds exactly the manifest's frames in format `ext` ("png" or "exr"): every
+/* Checks that DIR/frames (stereo: DIR/frames/L and DIR/frames/R) holds exactly the manifest's frames in format `ext` ("png" or "exr"): every
  * frame first..last present, no frame outside that range, each of the manifest's size (its header says).
  * TL_ERR_INPUT naming the first problem. */
 int run_check_frames(const char *dir, const run_manifest *m, const char *ext, char *err, size_t err_size);
