@@ -406,6 +406,99 @@ static void test_truth(void **state)
 #undef TRUTH_SWEEP
 }
 
+/* Issue 26: the compacted-sample-path methods in a sweep beside TAS, and the matched-budget comparison. Each TAS
+ * variant's partners are recomputed here from summary.csv (the setting of each other method with the nearest
+ * shaded_per_frame, ties to the first) and must be the rows of table1.md's matched-budget table; the report has the
+ * table and the plot of exceed_8 against shaded fraction, whose data has one block per method (not ref). */
+static void test_matched_budget(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("sweep_matched");
+	char args[8192], sw[4096], p[4096];
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(args, sizeof args, COMMON " --variants ref,tasa@8,vref,casedge,ads@2,ads@16 --frames 0:3 --jobs 2 --out %s",
+		 sw);
+	int st = sweep(args);
+	if (st)
+		fail_msg("sweep failed (%d):\n%s", st, out);
+	snprintf(p, sizeof p, "%s/summary.csv", sw);
+	char *csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	assert_null(strstr(csv, "missing"));
+	assert_null(strstr(csv, "partial"));
+	enum { MAXR = 8, MAXC = 160 };
+	char *cells[MAXR][MAXC];
+	int nr = 0, nc = 0;
+	for (char *line = csv; line && *line && nr < MAXR; nr++) {
+		char *next = strchr(line, '\n');
+		int k = split_csv(line, cells[nr], MAXC);
+		if (!nr)
+			nc = k;
+		line = next ? next + 1 : NULL;
+	}
+	assert_int_equal(nr, 7);
+	int c_method = col_index(cells[0], nc, "method"), c_var = col_index(cells[0], nc, "variant"),
+	    c_spf = col_index(cells[0], nc, "shaded_per_frame");
+	assert_true(c_method >= 0 && c_var >= 0 && c_spf >= 0);
+	int tas = -1;
+	for (int r = 1; r < nr; r++)
+		if (!strcmp(cells[r][c_var], "tasa@8"))
+			tas = r;
+	assert_true(tas > 0);
+	double ts = strtod(cells[tas][c_spf], NULL);
+	snprintf(p, sizeof p, "%s/table1.md", sw);
+	char *md = tu_read_file(p, NULL);
+	assert_non_null(md);
+	const char *sec = strstr(md, "## Matched budget");
+	assert_non_null(sec);
+	char want[512];
+	snprintf(want, sizeof want, "| turntable | orbit | tasa@8 | **TAS** |");
+	assert_non_null(strstr(sec, want));
+	const char *methods[] = {"vref", "casedge", "ads"};
+	int rows = 0;
+	for (size_t m = 0; m < 3; m++) {
+		int best = -1;
+		for (int r = 1; r < nr; r++)
+			if (!strcmp(cells[r][c_method], methods[m]) &&
+			    (best < 0 || fabs(strtod(cells[r][c_spf], NULL) - ts) < fabs(strtod(cells[best][c_spf], NULL) - ts)))
+				best = r;
+		assert_true(best > 0);
+		snprintf(want, sizeof want, "| turntable | orbit | tasa@8 | %s |", cells[best][c_var]);
+		if (!strstr(sec, want))
+			fail_msg("table1.md has no row '%s' (tasa@8: %.1f shaded per frame):\n%s", want, ts, sec);
+		rows++;
+	}
+	/* nothing else: ref is never matched, and one setting per method */
+	int lines = 0;
+	for (const char *q = strstr(sec, "| turntable | orbit | tasa@8 |"); q; q = strstr(q + 1, "| turntable | orbit | tasa@8 |"))
+		lines++;
+	assert_int_equal(lines, rows + 1);
+	assert_null(strstr(sec, "| tasa@8 | ref |"));
+	free(md);
+	free(csv);
+	/* the report: the table and the plot, its data one block per method other than ref */
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	char *html = tu_read_file(p, NULL);
+	assert_non_null(html);
+	assert_non_null(strstr(html, "<h3>Matched budget</h3>"));
+	assert_non_null(strstr(html, "<tr class=\"tas\"><td class=\"l\">tasa@8 (TAS)</td>"));
+	assert_non_null(strstr(html, "<td class=\"l\">casedge</td>"));
+	assert_non_null(strstr(html, "plots/turntable--orbit--budget.svg"));
+	free(html);
+	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--budget.svg", sw);
+	assert_true(tu_file_exists(p));
+	snprintf(p, sizeof p, "%s/report/data/turntable--orbit--budget.csv", sw);
+	char *data = tu_read_file(p, NULL);
+	assert_non_null(data);
+	const char *blocks[] = {"# ads\n", "# casedge\n", "# tasa\n", "# vref\n"};
+	for (size_t b = 0; b < 4; b++)
+		assert_non_null(strstr(data, blocks[b]));
+	assert_null(strstr(data, "# ref\n"));
+	assert_non_null(strstr(data, ",ads@2\n"));
+	assert_non_null(strstr(data, ",ads@16\n"));
+	free(data);
+}
+
 /* Starts `taslab sweep ARGS` in the background; returns its pid. */
 static pid_t start(const char *args, const char *log)
 {
@@ -555,6 +648,7 @@ int main(void)
 		cmocka_unit_test(test_bad_input),
 		cmocka_unit_test(test_sweep_resume),
 		cmocka_unit_test(test_truth),
+		cmocka_unit_test(test_matched_budget),
 		cmocka_unit_test(test_sigkill_resume),
 		cmocka_unit_test(test_failure_and_study),
 	};

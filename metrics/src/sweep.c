@@ -191,6 +191,8 @@ double mtr_sweep_value(const mtr_sweep_row *row, const char *column)
 		return m->gpu_ms_median;
 	if (!strcmp(column, "shaded_samples"))
 		return m->shaded_samples;
+	if (!strcmp(column, "shaded_fraction"))
+		return m->visible_samples > 0 ? m->shaded_samples / m->visible_samples : NAN;
 	if (!strcmp(column, "shaded_per_frame"))
 		return m->frames ? m->shaded_samples / (double)m->frames : NAN;
 	if (!strcmp(column, "late_samples"))
@@ -198,6 +200,103 @@ double mtr_sweep_value(const mtr_sweep_row *row, const char *column)
 	if (!strcmp(column, "late_percent"))
 		return m->reused_samples > 0 ? 100 * m->late_samples / m->reused_samples : NAN;
 	return NAN;
+}
+
+int mtr_sweep_matched(const sweep_spec *s, const mtr_sweep_row *rows, size_t n, mtr_match_pair **pairs, size_t *np,
+		      char *err, size_t err_size)
+{
+	*pairs = NULL;
+	*np = 0;
+	mtr_match_item *in = calloc(n ? n : 1, sizeof *in);
+	char(*group)[160] = calloc(n ? n : 1, sizeof *group);
+	if (!in || !group) {
+		free(in);
+		free(group);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	}
+	for (size_t i = 0; i < n; i++) {
+		const mtr_sweep_row *r = &rows[i];
+		const sweep_scene *sc = &s->scenes[r->run.scene];
+		snprintf(group[i], sizeof group[i], "%s/%s", sc->name, sc->cameras[r->run.camera].name);
+		in[i] = (mtr_match_item){.group = group[i], .method = s->variants[r->run.variant].method,
+					 .tas = mtr_match_is_tas(r->summary.facts.family, r->summary.facts.takes_threshold),
+					 .reference = r->run.is_ref || r->summary.facts.reference,
+					 .shaded = r->status.run ? mtr_sweep_value(r, "shaded_per_frame") : NAN};
+	}
+	size_t count = mtr_match_budget(in, n, NULL, 0);
+	mtr_match_pair *p = count ? calloc(count, sizeof *p) : NULL;
+	int rc = !count || p ? TL_OK : tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	if (!rc && count)
+		mtr_match_budget(in, n, p, count);
+	free(in);
+	free(group);
+	if (rc)
+		return rc;
+	*pairs = p;
+	*np = count;
+	return TL_OK;
+}
+
+/* A Markdown cell: the value or "–". */
+static void md_cell(FILE *f, double v, const char *fmt)
+{
+	fputs(" | ", f);
+	if (isfinite(v))
+		fprintf(f, fmt, v);
+	else
+		fputs("–", f);
+}
+
+/* One row of the matched-budget table. */
+static void md_matched_row(FILE *f, const sweep_spec *s, const mtr_sweep_row *t, const mtr_sweep_row *r)
+{
+	const sweep_scene *sc = &s->scenes[r->run.scene];
+	fprintf(f, "| %s | %s | %s | %s", sc->name, sc->cameras[r->run.camera].name, s->variants[t->run.variant].variant,
+		t == r ? "**TAS**" : s->variants[r->run.variant].variant);
+	md_cell(f, 100 * mtr_sweep_value(r, "shaded_fraction"), "%.2f");
+	md_cell(f, mtr_sweep_value(r, "shaded_per_frame"), "%.1f");
+	md_cell(f, mtr_sweep_value(r, "exceed_8"), "%.6f");
+	md_cell(f, mtr_sweep_value(r, "flip_mean"), "%.5f");
+	md_cell(f, mtr_sweep_value(r, "flicker_mean"), "%.4f");
+	md_cell(f, mtr_sweep_value(r, "gpu_ms_median"), "%.3f");
+	fputs(" |\n", f);
+}
+
+/* Appends the matched-budget section to the Table 1 file at `path` (rewritten atomically). */
+static int write_matched(const sweep_spec *s, const char *path, const mtr_sweep_row *rows, size_t n, char *err,
+			 size_t err_size)
+{
+	mtr_match_pair *p;
+	size_t np;
+	int rc = mtr_sweep_matched(s, rows, n, &p, &np, err, err_size);
+	if (rc)
+		return rc;
+	char *text = NULL;
+	size_t len = 0;
+	tl_atomic a;
+	if ((rc = tl_read_file(path, 64u << 20, &text, &len, err, err_size)) ||
+	    (rc = tl_atomic_open(&a, path, err, err_size))) {
+		free(text);
+		free(p);
+		return rc;
+	}
+	fwrite(text, 1, len, a.f);
+	fprintf(a.f, "\n## Matched budget\n\nFor each TAS variant, each other method at the setting with the nearest "
+		     "clip-mean shaded samples per frame (same scene and camera path; BASELINES.md section 0). Differences "
+		     "are against ref.\n\n");
+	if (!np)
+		fprintf(a.f, "No TAS variant with another method to match in this sweep.\n");
+	else
+		fprintf(a.f, "| scene | camera | TAS variant | matched | shaded %% | shaded / frame | exceed_8 | FLIP | "
+			     "flicker | GPU ms |\n|---|---|---|---|--:|--:|--:|--:|--:|--:|\n");
+	for (size_t k = 0; k < np; k++) {
+		if (!k || p[k].tas != p[k - 1].tas)
+			md_matched_row(a.f, s, &rows[p[k].tas], &rows[p[k].tas]);
+		md_matched_row(a.f, s, &rows[p[k].tas], &rows[p[k].other]);
+	}
+	free(text);
+	free(p);
+	return tl_atomic_commit(&a, err, err_size);
 }
 
 static void cell(FILE *f, double v, const char *fmt)
@@ -271,5 +370,5 @@ int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *r
 	snprintf(path, sizeof path, "%s/table1.md", dir);
 	rc = mtr_runs_write_table1(path, sums, m, err, err_size);
 	free(sums);
-	return rc;
+	return rc ? rc : write_matched(s, path, rows, n, err, err_size);
 }

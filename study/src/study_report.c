@@ -83,6 +83,9 @@ static int group_files(const sty_report_desc *d, const char *rdir, sty_rpt_group
 		*gnuplot_note = true;
 	else if (prc)
 		rc = tl_error(err, err_size, prc, "%s", note);
+	if (prc == TL_OK && (prc = sty_rpt_budget_plot(rdir, stem, g, &g->budget, note, sizeof note)) &&
+	    prc != TL_ERR_UNSUPPORTED)
+		rc = tl_error(err, err_size, prc, "%s", note);
 	char csv[TL_PATH_MAX + 128], svg[TL_PATH_MAX + 128], gp[TL_PATH_MAX + 128];
 	snprintf(csv, sizeof csv, "%s/analysis/%s/%s/coherence.csv", d->dir, s->scenes[g->scene].name,
 		 s->scenes[g->scene].cameras[g->cam].name);

@@ -40,6 +40,7 @@ typedef struct sty_rpt_group {
 	bool drawn[STY_RPT_PLOT_COUNT];
 	bool plots_ok;
 	bool coherence;
+	bool budget;    /* plots/<stem>--budget.svg was drawn */
 } sty_rpt_group;
 
 /* One study condition as the tally states it in conditions.csv (6 decimals), with the JND interval. */
@@ -73,6 +74,16 @@ int sty_rpt_coherence_plot(const char *csv, const char *svg, const char *gp, cha
  * (heat_png, may be NULL). */
 int sty_rpt_run_images(const char *run_dir, const char *ref_dir, uint32_t f, const char *ref_png, const char *run_png,
 		       const char *heat_png, char *err, size_t err_size);
+
+/* ---- study_report_budget.c */
+/* report/data/<stem>--budget.csv and the plot of exceed_8 against shaded fraction, one curve per method (not the
+ * reference) over its settings; *drawn says whether it was drawn. TL_ERR_UNSUPPORTED without gnuplot. */
+int sty_rpt_budget_plot(const char *rdir, const char *stem, const sty_rpt_group *g, bool *drawn, char *err,
+			size_t err_size);
+/* The group's matched-budget section: the plot and the table of the pairs `p` (mtr_sweep_matched over d->rows)
+ * whose TAS run is in the group. */
+void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g, const char *stem,
+			 const mtr_match_pair *p, size_t np);
 
 /* ---- study_report_study.c */
 /* Tallies the study `db` into `out` (the tally's files) and keeps its conditions. */

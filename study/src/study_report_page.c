@@ -63,6 +63,7 @@ static const char *CSS =
 	"header p{margin:2px 0;opacity:.85}main{padding:10px 28px 40px}nav a{margin-right:12px}"
 	"section{background:#fff;border:1px solid #dde1e6;border-radius:8px;padding:14px 18px;margin:18px 0}"
 	"h2{margin:4px 0 10px;font-size:18px}h3{font-size:15px;margin:14px 0 6px}"
+	"tr.tas td{font-weight:600;background:#f1f5fb}"
 	".plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:10px}"
 	".plots figure{margin:0;border:1px solid #eceef1;border-radius:6px;padding:4px;background:#fff}"
 	".plots img{width:100%;height:auto;display:block}figcaption{font-size:12px;color:#555;text-align:center}"
@@ -330,7 +331,8 @@ static void page_group_clips(FILE *f, const sty_rpt_group *g, const sweep_scene 
 }
 
 /* One scene x camera section. */
-static void page_group(FILE *f, const sty_report_desc *d, const sty_rpt_group *g, const sty_rpt_study *study)
+static void page_group(FILE *f, const sty_report_desc *d, const sty_rpt_group *g, const sty_rpt_study *study,
+		       const mtr_match_pair *pairs, size_t np)
 {
 	const sweep_scene *sc = &d->spec->scenes[g->scene];
 	const sweep_camera *cam = &sc->cameras[g->cam];
@@ -344,6 +346,7 @@ static void page_group(FILE *f, const sty_report_desc *d, const sty_rpt_group *g
 	esc(f, cam->name);
 	fprintf(f, " <span class=\"note\">(%s camera, %u frames)</span></h2>\n", cam->motion, sc->end - sc->first);
 	page_group_plots(f, g, stem);
+	sty_rpt_budget_html(f, d, g, stem, pairs, np);
 	page_group_runs(f, d, g, stem, study);
 	page_group_clips(f, g, sc, cam);
 	fprintf(f, "</section>\n");
@@ -352,17 +355,24 @@ static void page_group(FILE *f, const sty_report_desc *d, const sty_rpt_group *g
 int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt_group *gi, size_t ng,
 		       const sty_rpt_study *study, bool gnuplot_note, bool jnd_plot, char *err, size_t err_size)
 {
-	tl_atomic page;
-	int rc = tl_atomic_open(&page, path, err, err_size);
+	mtr_match_pair *pairs;
+	size_t np;
+	int rc = mtr_sweep_matched(d->spec, d->rows, d->count, &pairs, &np, err, err_size);
 	if (rc)
 		return rc;
+	tl_atomic page;
+	if ((rc = tl_atomic_open(&page, path, err, err_size))) {
+		free(pairs);
+		return rc;
+	}
 	FILE *f = page.f;
 	page_head(f, d, gi, ng, gnuplot_note);
 	page_table1(f, d->spec, gi, ng);
 	if (d->study)
 		page_study(f, d, jnd_plot);
 	for (size_t g = 0; g < ng; g++)
-		page_group(f, d, &gi[g], study);
+		page_group(f, d, &gi[g], study, pairs, np);
+	free(pairs);
 	fprintf(f, "</main>\n<script>\n%s</script>\n</body></html>\n", SCRIPT);
 	return tl_atomic_commit(&page, err, err_size);
 }

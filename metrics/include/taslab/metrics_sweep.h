@@ -19,6 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "taslab/metrics_matched.h"
 #include "taslab/metrics_runs.h"
 #include "taslab/sweep.h"
 
@@ -52,10 +53,16 @@ int mtr_sweep_collect(const sweep_spec *s, const char *dir, mtr_sweep_row **rows
 /* A row's value by summary.csv column name (numeric columns: T, period, frames, reuse_percent, reduction_percent,
  * speedup_vs_ref, gpu_ms_median, shaded_per_frame, late_percent, and every metric column such as maxrgb_p99,
  * exceed_8, flip_mean); NAN when absent or not numeric. `exceed_T` is the exceedance at the variant's own T
- * (NAN when T is not one of 2, 4, ..., 64 or the method has no T). */
+ * (NAN when T is not one of 2, 4, ..., 64 or the method has no T). `shaded_fraction` is the clip's shaded / visible
+ * samples (0..1). */
 double mtr_sweep_value(const mtr_sweep_row *row, const char *column);
 
-/* Writes DIR/summary.csv and DIR/table1.md (atomically). */
+/* The matched-budget pairs (metrics_matched.h) of the runs that are there, per scene and camera path, by clip-mean
+ * shaded samples per frame; the pairs index `rows`. *pairs is malloc'ed (free it; NULL when *np is 0). */
+int mtr_sweep_matched(const sweep_spec *s, const mtr_sweep_row *rows, size_t n, mtr_match_pair **pairs, size_t *np,
+		      char *err, size_t err_size);
+
+/* Writes DIR/summary.csv and DIR/table1.md (atomically); table1.md ends with the matched-budget comparison. */
 int mtr_sweep_write(const sweep_spec *s, const char *dir, const mtr_sweep_row *rows, size_t n, char *err,
 		    size_t err_size);
 
