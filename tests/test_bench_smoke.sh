@@ -21,7 +21,7 @@ smokes=(
   "bench-scenes|--blocks 1 --block-frames 2 --size 64x36|^calm "
   "bench-clip|--frames 2 --size 64x36|clip encode:"
   "bench-tfr|--frames 2 --size 64x36 --no-analysis|tfr"
-  "bench-methods|--size 64x36 --frames 0:3 --paths calm:walk|calm/walk"
+  "bench-methods|--size 64x36 --frames 0:3 --paths calm:walk|calm / walk"
   "bench-methods|--set table1 --size 64x36 --frames 0:3 --paths calm:walk|calm / walk"
   "bench-metrics|--pairs 2 --runs 1 --compute-runs 1|metrics speed"
   "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"

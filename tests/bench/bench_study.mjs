@@ -51,9 +51,11 @@ const q = f => lat[Math.min(lat.length - 1, Math.floor(f * lat.length))];
 const exp = await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } }); // never ?token=
 if (exp.status !== 200) throw new Error(`export: HTTP ${exp.status}`);
 const csv = await exp.text();
-const rows = csv.trim().split('\n').slice(1);
+const lines = csv.trim().split('\n');
+const typeCol = lines[0].split(',').indexOf('trial_type'); // the export has every answered trial (issue 27.9)
+const rows = lines.slice(1).filter(r => typeCol < 0 || r.split(',')[typeCol] === 'test');
 const distinct = new Set(rows.map(r => r.split(',').slice(0, 2).join(','))).size;
 console.log(`${codes.length} participants, ${acked} answers acknowledged in ${secs.toFixed(2)} s: ${(acked / secs).toFixed(0)} answers/s`);
 console.log(`POST /answer latency: p50 ${q(0.5).toFixed(2)} ms, p99 ${q(0.99).toFixed(2)} ms (durable commit before the reply)`);
-console.log(`export: ${rows.length} test ratings, ${distinct} distinct (test trials only; catch trials are not exported)`);
+console.log(`export: ${rows.length} test ratings, ${distinct} distinct (test trials; the export's catch and training rows left out)`);
 process.exit(0);
