@@ -92,6 +92,11 @@ VkResult vkdev_cmd_submit_wait(vkdev *dev, VkCommandBuffer cmd);
 /* Uploads `size` bytes into a device-local buffer through a staging buffer. */
 VkResult vkdev_upload_buffer(vkdev *dev, vkdev_buffer *dst, const void *data, VkDeviceSize size);
 
+/* Writes bindings 0..n-1 (n <= 32) of a descriptor set of storage images and buffers: binding i is the storage image
+ * imgs[i] (GENERAL layout) when it is not NULL, else the whole storage buffer bufs[i]. */
+void vkdev_write_storage_set(VkDevice d, VkDescriptorSet set, uint32_t n, const vkdev_buffer *const *bufs,
+			     const vkdev_image *const *imgs);
+
 /* Image layout transition over all mips/layers (synchronization2). */
 void vkdev_barrier_image(VkCommandBuffer cmd, const vkdev_image *img, VkImageAspectFlags aspect,
 			 VkImageLayout from, VkImageLayout to, VkPipelineStageFlags2 src_stage,

@@ -547,6 +547,29 @@ VkResult vkdev_upload_buffer(vkdev *dev, vkdev_buffer *dst, const void *data, Vk
 	return r;
 }
 
+void vkdev_write_storage_set(VkDevice d, VkDescriptorSet set, uint32_t n, const vkdev_buffer *const *bufs,
+			     const vkdev_image *const *imgs)
+{
+	VkDescriptorBufferInfo bi[32];
+	VkDescriptorImageInfo ii[32];
+	VkWriteDescriptorSet w[32];
+	n = n < 32 ? n : 32;
+	for (uint32_t i = 0; i < n; i++) {
+		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = set, .dstBinding = i,
+					      .descriptorCount = 1};
+		if (imgs[i]) {
+			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
+			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+			w[i].pImageInfo = &ii[i];
+		} else {
+			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
+			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+			w[i].pBufferInfo = &bi[i];
+		}
+	}
+	vkUpdateDescriptorSets(d, n, w, 0, NULL);
+}
+
 void vkdev_barrier_image(VkCommandBuffer cmd, const vkdev_image *img, VkImageAspectFlags aspect,
 			 VkImageLayout from, VkImageLayout to, VkPipelineStageFlags2 src_stage,
 			 VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access)

@@ -211,23 +211,7 @@ static int make_set(render *r, atlas_state *s, uint32_t v, char *err, size_t err
 					NULL, NULL, NULL, NULL, &r->indices, NULL};
 	const vkdev_image *imgs[ATLAS_BINDINGS] = {[12] = &s->ids[v].image, [13] = &s->atlas, [14] = &s->scratch, [15] = &r->hdr,
 						   [17] = &s->shown};
-	VkDescriptorBufferInfo bi[ATLAS_BINDINGS];
-	VkDescriptorImageInfo ii[ATLAS_BINDINGS];
-	VkWriteDescriptorSet w[ATLAS_BINDINGS];
-	for (uint32_t i = 0; i < ATLAS_BINDINGS; i++) {
-		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set[v], .dstBinding = i,
-					      .descriptorCount = 1};
-		if (is_image_binding(i)) {
-			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-			w[i].pImageInfo = &ii[i];
-		} else {
-			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-			w[i].pBufferInfo = &bi[i];
-		}
-	}
-	vkUpdateDescriptorSets(d, ATLAS_BINDINGS, w, 0, NULL);
+	vkdev_write_storage_set(d, s->set[v], ATLAS_BINDINGS, bufs, imgs);
 	return TL_OK;
 }
 

@@ -120,23 +120,7 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 		return render_vk_error(err, err_size, "vrs: descriptor set", res);
 	const vkdev_image *imgs[VRS_BINDINGS] = {NULL, &s->hc, &s->hc2, &s->hpos, &s->haux, NULL};
 	const vkdev_buffer *bufs[VRS_BINDINGS] = {&s->index, NULL, NULL, NULL, NULL, &s->dbg};
-	VkDescriptorBufferInfo bi[VRS_BINDINGS];
-	VkDescriptorImageInfo ii[VRS_BINDINGS];
-	VkWriteDescriptorSet w[VRS_BINDINGS];
-	for (uint32_t i = 0; i < VRS_BINDINGS; i++) {
-		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->set, .dstBinding = i,
-					      .descriptorCount = 1};
-		if (imgs[i]) {
-			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-			w[i].pImageInfo = &ii[i];
-		} else {
-			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-			w[i].pBufferInfo = &bi[i];
-		}
-	}
-	vkUpdateDescriptorSets(d, VRS_BINDINGS, w, 0, NULL);
+	vkdev_write_storage_set(d, s->set, VRS_BINDINGS, bufs, imgs);
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, p->set_layout, s->set_layout};
 	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
 	VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 3,

@@ -26,25 +26,9 @@ static int make_set(render *r, vbuf_pass *v, char *err, size_t err_size)
 					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &v->set_layout};
 	if ((res = vkAllocateDescriptorSets(d, &ai, &v->set)))
 		return render_vk_error(err, err_size, "vbuf: descriptor set", res);
-	const vkdev_buffer *bufs[6] = {&r->vertices, &r->indices, &v->objinfo, &v->list, &v->counters, &v->rates};
+	const vkdev_buffer *bufs[VBUF_BINDINGS] = {&r->vertices, &r->indices, &v->objinfo, &v->list, &v->counters, &v->rates};
 	const vkdev_image *imgs[VBUF_BINDINGS] = {[6] = &v->ids.image, [7] = &v->svals, [8] = &r->hdr};
-	VkDescriptorBufferInfo bi[VBUF_BINDINGS];
-	VkDescriptorImageInfo ii[VBUF_BINDINGS];
-	VkWriteDescriptorSet w[VBUF_BINDINGS];
-	for (uint32_t i = 0; i < VBUF_BINDINGS; i++) {
-		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = v->set, .dstBinding = i,
-					      .descriptorCount = 1};
-		if (is_image(i)) {
-			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, imgs[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-			w[i].pImageInfo = &ii[i];
-		} else {
-			bi[i] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
-			w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-			w[i].pBufferInfo = &bi[i];
-		}
-	}
-	vkUpdateDescriptorSets(d, VBUF_BINDINGS, w, 0, NULL);
+	vkdev_write_storage_set(d, v->set, VBUF_BINDINGS, bufs, imgs);
 	return TL_OK;
 }
 
