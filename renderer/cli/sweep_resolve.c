@@ -297,7 +297,7 @@ static int expand_method(const sweep_request *r, const method_info *m, sweep_spe
 	for (size_t k = 0; k < m->option_count; k++) {
 		has_T |= m->options[k].variant == '@';
 		has_N |= m->options[k].variant == '/';
-		if (m->options[k].variant == '-' && nflags < 8)
+		if (m->options[k].variant == '-' && m->options[k].type == METHOD_OPT_BOOL && nflags < 8)
 			flags[nflags++] = m->options[k].name;
 	}
 	if (has_T && !r->threshold_count)

@@ -162,10 +162,20 @@ static int describe_methods(sty *s, char *err, size_t err_size)
 		method_facts(m[i], &f);
 		rc = sty_describe_method(s, m[i]->name, &f, err, err_size);
 		for (size_t k = 0; k < m[i]->option_count && !rc; k++)
-			if (m[i]->options[k].variant == '-') {
+			if (m[i]->options[k].variant == '-' && m[i]->options[k].type == METHOD_OPT_BOOL) {
 				char name[64];
 				snprintf(name, sizeof name, "%s-%s", m[i]->name, m[i]->options[k].name);
 				rc = sty_describe_method(s, name, &f, err, err_size);
+			} else if (m[i]->options[k].variant == '-' && m[i]->options[k].allowed) {
+				/* a whole-number '-' option: one method name per allowed value but the default (ref-ssaa2) */
+				const method_option *o = &m[i]->options[k];
+				for (size_t v = 0; o->allowed[v] && !rc; v++) {
+					char name[64];
+					if ((double)o->allowed[v] == o->def)
+						continue;
+					snprintf(name, sizeof name, "%s-%s%u", m[i]->name, o->name, o->allowed[v]);
+					rc = sty_describe_method(s, name, &f, err, err_size);
+				}
 			}
 	}
 	return rc;

@@ -24,7 +24,10 @@
 	X(castexel)                                                                                                    \
 	X(mas)                                                                                                         \
 	X(fovea)                                                                                                       \
-	X(taas)
+	X(taas)                                                                                                        \
+	X(rrc_random)                                                                                                  \
+	X(rrc_interleaved)                                                                                             \
+	X(warp)
 
 #define DECLARE(name) extern const render_method render_method_##name;
 METHODS(DECLARE)
@@ -273,12 +276,34 @@ int method_config_parse_variant(method_config *c, const char *variant, char *err
 			*next = 0;
 		size_t oi = 0;
 		const method_option *o = find_option(m, f + 1, &oi);
+		/* a whole-number option written as -NAMEvalue ("ref-ssaa2") */
+		char oname[64], *digits = NULL;
+		if (!o) {
+			snprintf(oname, sizeof oname, "%s", f + 1);
+			size_t len = strlen(oname);
+			while (len > 0 && oname[len - 1] >= '0' && oname[len - 1] <= '9')
+				len--;
+			if (oname[len]) {
+				digits = f + 1 + len;
+				oname[len] = 0;
+				o = find_option(m, oname, &oi);
+				if (o && o->type != METHOD_OPT_UINT)
+					o = NULL;
+			}
+		} else if (o->type != METHOD_OPT_BOOL) {
+			o = NULL; /* "ref-ssaa": the value is part of the token */
+		}
 		if (!o || o->variant != '-')
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s has no '-%s' form", variant, m->name, f + 1);
 		if (c->given & (1u << oi)) /* "tasa-oracle-oracle": one spelling per variant (issue 31.9) */
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': '-%s' is given twice", variant, f + 1);
-		if ((rc = method_config_set(c, o->name, NULL, err, err_size)))
+		if (digits) {
+			char why[256];
+			if (method_config_set(c, o->name, digits, why, sizeof why))
+				return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s", variant, why);
+		} else if ((rc = method_config_set(c, o->name, NULL, err, err_size))) {
 			return rc;
+		}
 		if (!next)
 			break;
 		*next = '-';
@@ -312,8 +337,10 @@ void method_config_name(const method_config *c, char *out, size_t out_size)
 	size_t len = (size_t)snprintf(out, out_size, "%s", c->method ? c->method->name : "?");
 	for (size_t i = 0; c->method && i < c->method->option_count && len < out_size; i++) {
 		const method_option *o = &c->method->options[i];
-		if (o->variant == '-' && get_number(c, o) != 0.0)
+		if (o->variant == '-' && o->type == METHOD_OPT_BOOL && get_number(c, o) != 0.0)
 			len += (size_t)snprintf(out + len, out_size - len, "-%s", o->name);
+		else if (o->variant == '-' && o->type == METHOD_OPT_UINT && get_number(c, o) != o->def)
+			len += (size_t)snprintf(out + len, out_size - len, "-%s%g", o->name, get_number(c, o));
 	}
 }
 
@@ -385,7 +412,7 @@ void method_option_describe(const method_option *o, char *out, size_t out_size)
 	if (o->variant == '@' || o->variant == '/')
 		PUT("as %c%s", o->variant, o->arg ? o->arg : "");
 	else if (o->variant == '-')
-		PUT("as -%s", o->name);
+		PUT("as -%s%s", o->name, o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "");
 	if (o->type != METHOD_OPT_BOOL) { /* a flag has no default or range to tell */
 		const char *sep = len ? "; " : "";
 		if (isnan(o->def))

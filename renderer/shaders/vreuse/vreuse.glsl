@@ -1,0 +1,94 @@
+// vreuse.glsl - the per-pixel cache of temporal reuse on the compacted sample path (renderer/src/methods/vreuse.c;
+// BASELINES.md A2, A6). Needs common/common.glsl and vbuf/vbuf.glsl first.
+//
+// The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: the colour as
+// shown (before BLEND) and per pixel (object + 1, view distance bits). Compiled per method: RRC_RANDOM,
+// RRC_INTERLEAVED, WARP.
+#ifndef TASLAB_VREUSE_GLSL
+#define TASLAB_VREUSE_GLSL
+
+layout(set = 2, binding = 0, rgba16f) uniform image2D cache_col;
+layout(set = 2, binding = 1, rgba32ui) uniform uimage2D cache_rec;
+layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record
+layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded this frame, 2 a hole (warp)
+layout(std430, set = 2, binding = 4) buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
+
+const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
+
+// The surface point of pixel p from the ids pass (object, triangle, perspective-correct barycentrics).
+vec3 vreuse_point(uvec4 id)
+{
+	Vertex A, B, C;
+	vbuf_triangle(id.x - 1u, id.y, A, B, C);
+	float b1 = uintBitsToFloat(id.z), b2 = uintBitsToFloat(id.w);
+	return A.p * (1.0 - b1 - b2) + B.p * b1 + C.p * b2;
+}
+
+// Where the surface point (object, p_obj) is in the frame of `slot`, in pixels, and its view distance there.
+bool vreuse_project(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, out float dist)
+{
+	vec4 w = object_at(slot, object).world * vec4(p_obj, 1.0);
+	vec4 c = states[slot].view_proj * w;
+	dist = distance(w.xyz, states[slot].camera_time.xyz);
+	f = vec2(0.0);
+	if (c.w <= 0.0)
+		return false;
+	f = (c.xy / c.w * 0.5 + 0.5) * vec2(size);
+	return !(any(lessThan(f, vec2(0.0))) || any(greaterThanEqual(f, vec2(size))));
+}
+
+// The cache lookup of TAS-METHODS section 1 (the rule rrc uses): the four taps around f - 0.5, fractions quantised
+// to 1/64 (a static view gives weights exactly 0 and 1: reuse is bit-exact), each tap valid when it holds the same
+// object at a view distance within 2 %, invalid taps weighted 0 and the rest renormalised. False: a miss.
+bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
+{
+	ivec2 size = imageSize(cache_rec);
+	vec2 f;
+	float dist;
+	colour = vec3(0.0);
+	if (!vreuse_project(slot, object, p_obj, size, f, dist))
+		return false;
+	vec2 g = f - 0.5;
+	vec2 x0 = floor(g);
+	vec2 fr = round((g - x0) * 64.0) / 64.0;
+	x0 += step(1.0, fr);
+	fr = fr - step(1.0, fr);
+	float wsum = 0.0;
+	vec3 acc = vec3(0.0);
+	for (int k = 0; k < 4; k++) {
+		ivec2 o = ivec2(k & 1, k >> 1);
+		ivec2 q = ivec2(x0) + o;
+		float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
+		if (w <= 0.0 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
+			continue;
+		uvec4 rec = imageLoad(cache_rec, q);
+		if (rec.x != object + 1u || abs(uintBitsToFloat(rec.y) - dist) > 0.02 * dist)
+			continue;
+		acc += w * imageLoad(cache_col, q).rgb;
+		wsum += w;
+	}
+	if (wsum <= 0.0)
+		return false;
+	colour = wsum == 1.0 ? acc : acc / wsum;
+	return true;
+}
+
+// Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other.
+ivec2 vreuse_level_size(uint l)
+{
+	ivec2 s = imageSize(ids);
+	for (uint k = 0u; k < l; k++)
+		s = (s + 1) / 2;
+	return s;
+}
+uint vreuse_level_base(uint l)
+{
+	uint base = 0u;
+	for (uint k = 0u; k < l; k++) {
+		ivec2 s = vreuse_level_size(k);
+		base += uint(s.x * s.y);
+	}
+	return base;
+}
+
+#endif

@@ -1,0 +1,357 @@
+/* vreuse.c — temporal reuse on the compacted sample path (vreuse.h; BASELINES.md A2, A6): the per-pixel cache, its
+ * reverse reprojection, the decide / resolve / pull-push passes (shaders/vreuse/) and the frames of rrc-random,
+ * rrc-interleaved and warp. */
+#include "vreuse.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const vreuse_rrc_passes[8] = {"shadow", "ids", "decide", "shade", "resolve", "blend", "display", "readback"};
+const char *const vreuse_warp_passes[9] = {"shadow", "depth", "shade", "ids", "warp", "fill", "blend", "display",
+					   "readback"};
+
+enum { VREUSE_BINDINGS = 5 };
+/* decide's aux[1] flags */
+enum { FLAG_HAVE_CACHE = 1u, FLAG_STORE_ONLY = 2u };
+
+typedef struct vreuse_state {
+	vreuse_variant v;
+	vbuf_pass p;
+	vkdev_image cache_col, cache_rec, rec_new, flag;
+	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
+	uint32_t levels;
+	VkDescriptorSetLayout set_layout;
+	VkDescriptorSet set;
+	VkPipelineLayout layout;
+	VkPipeline decide, resolve, pull, push;
+	int64_t last_frame;
+	bool have_cache;   /* rrc: the cache holds frame t-1 */
+	bool key;          /* warp: this frame is shaded in full */
+	uint32_t key_frame;
+	bool shadows;      /* the frame renders shadow maps */
+} vreuse_state;
+
+static vreuse_state *state_of(render *r) { return r->method_state; }
+
+static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *out, char *err, size_t err_size)
+{
+	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, fmt,
+					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+					  VK_IMAGE_ASPECT_COLOR_BIT, false, name, out);
+	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
+}
+
+static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
+{
+	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP"};
+	char defs[64];
+	snprintf(defs, sizeof defs, "#define %s 1\n", mode_define[s->v.mode]);
+	uint32_t *spv = NULL;
+	size_t n = 0;
+	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
+	if (rc)
+		return rc;
+	VkResult res = render_make_compute(r, spv, n, s->layout, out);
+	free(spv);
+	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+}
+
+int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
+{
+	vreuse_state *s = calloc(1, sizeof *s);
+	if (!s)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	r->method_state = s;
+	s->v = *v;
+	s->last_frame = -1;
+	int rc = vbuf_init(r, &s->p, false, err, err_size);
+	if (rc)
+		return rc;
+	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vreuse cache colour", &s->cache_col, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse cache record", &s->cache_rec, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse record", &s->rec_new, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32_UINT, "vreuse flags", &s->flag, err, err_size)))
+		return rc;
+	/* pyramid levels down to 1x1 */
+	uint32_t w = r->desc.width, h = r->desc.height;
+	VkDeviceSize texels = 0;
+	for (s->levels = 1;; s->levels++) {
+		texels += (VkDeviceSize)w * h;
+		if (w == 1 && h == 1)
+			break;
+		w = (w + 1) / 2, h = (h + 1) / 2;
+	}
+	VkDevice d = r->dev->device;
+	VkResult res = vkdev_buffer_create(r->dev, texels * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+					   "vreuse pull-push pyramid", &s->pyr);
+	if (res)
+		return render_vk_error(err, err_size, "vreuse pyramid", res);
+	VkDescriptorSetLayoutBinding b[VREUSE_BINDINGS];
+	for (uint32_t i = 0; i < VREUSE_BINDINGS; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+						      1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
+	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+					      .bindingCount = VREUSE_BINDINGS, .pBindings = b};
+	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
+		return render_vk_error(err, err_size, "vreuse: descriptor set layout", res);
+	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
+	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
+		return render_vk_error(err, err_size, "vreuse: descriptor set", res);
+	const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, NULL};
+	const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr};
+	vkdev_write_storage_set(d, s->set, VREUSE_BINDINGS, bufs, imgs);
+	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
+	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
+	VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 3,
+					  .pSetLayouts = sets, .pushConstantRangeCount = 1, .pPushConstantRanges = &pcr};
+	if ((res = vkCreatePipelineLayout(d, &pli, NULL, &s->layout)))
+		return render_vk_error(err, err_size, "vreuse: pipeline layout", res);
+	if ((rc = make_compute(r, s, "vreuse/decide.comp.in", &s->decide, err, err_size)) ||
+	    (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size)) ||
+	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
+	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
+		return rc;
+	/* the cache starts empty (object 0) in GENERAL layout */
+	VkCommandBuffer cmd;
+	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
+		return render_vk_error(err, err_size, "command buffer", res);
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	const vkdev_image *im[4] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag};
+	for (int i = 0; i < 4; i++) {
+		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	}
+	vbuf_barrier(cmd);
+	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
+		return render_vk_error(err, err_size, "vreuse setup", res);
+	return TL_OK;
+}
+
+int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size)
+{
+	vreuse_state *s = state_of(r);
+	bool consecutive = s->last_frame >= 0 && (int64_t)frame == s->last_frame + 1;
+	double fps = (double)r->desc.fps;
+	render_update_state(r, 0, (double)frame / fps);
+	if (s->v.mode == VREUSE_WARP) {
+		/* [S] sec. 5.7: shade fully when t mod N = 0; the first frame of a run (or after a jump) has no keyframe
+		 * to extrapolate from and is shaded too [P] */
+		s->key = frame % s->v.period == 0 || !consecutive;
+		if (s->key)
+			s->key_frame = frame;
+		render_update_state(r, 1, (double)s->key_frame / fps);
+		s->shadows = s->key || r->blend_count; /* BLEND surfaces are shaded every frame */
+	} else {
+		s->have_cache = consecutive;
+		render_update_state(r, 1, (double)(frame ? frame - 1 : 0) / fps);
+		s->shadows = true;
+	}
+	s->last_frame = frame;
+	return s->shadows ? render_shadow_plan(r, 0, err, err_size) : TL_OK;
+}
+
+static void bind(render *r, vreuse_state *s, VkCommandBuffer cmd, VkPipeline pipe, const uint32_t aux[4])
+{
+	VkDescriptorSet sets[3] = {r->scene_set, s->p.set, s->set};
+	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
+	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->layout, 0, 3, sets, 0, NULL);
+	gpu_push pc = {0, 0, (uint32_t)r->scene->object_count, 0, {aux[0], aux[1], aux[2], aux[3]}};
+	vkCmdPushConstants(cmd, s->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+}
+
+static void dispatch_pixels(render *r, VkCommandBuffer cmd)
+{
+	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+}
+
+static void clear_to_sky(render *r, VkCommandBuffer cmd)
+{
+	const scene *sc = r->scene;
+	VkClearColorValue sky = {{sc->sky[0] * sc->exposure, sc->sky[1] * sc->exposure, sc->sky[2] * sc->exposure, 0.0f}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	vkCmdClearColorImage(cmd, r->hdr.image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
+	vbuf_barrier(cmd);
+}
+
+/* The per-pixel pass over the ids: reprojection, decision, appends, the record of this frame (decide.comp.in). */
+static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame, uint32_t flags)
+{
+	uint32_t aux[4] = {1, flags, frame, s->v.period | s->v.group << 8};
+	bind(r, s, cmd, s->decide, aux);
+	dispatch_pixels(r, cmd);
+	vbuf_barrier(cmd);
+	vbuf_bind(r, &s->p, cmd, s->p.args, 0, NULL);
+	vkCmdDispatch(cmd, 1, 1, 1);
+	vbuf_barrier(cmd);
+}
+
+/* The resolve (the shaded pixels' values into the HDR target) and the cache := the frame's opaque values (before
+ * BLEND) and its record (resolve.comp.in). */
+static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
+{
+	uint32_t aux[4] = {0, 0, 0, 0};
+	bind(r, s, cmd, s->resolve, aux);
+	dispatch_pixels(r, cmd);
+	vbuf_barrier(cmd);
+}
+
+/* Pull-push ([S] sec. 3.3): the valid pixels averaged up a pyramid (weights clamped to 1), then pushed down into the
+ * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). */
+static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
+{
+	for (uint32_t l = 0; l < s->levels; l++) {
+		uint32_t aux[4] = {l, 0, 0, 0};
+		bind(r, s, cmd, s->pull, aux);
+		uint32_t w = r->desc.width, h = r->desc.height;
+		for (uint32_t k = 0; k < l; k++)
+			w = (w + 1) / 2, h = (h + 1) / 2;
+		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+		vbuf_barrier(cmd);
+	}
+	for (uint32_t l = s->levels - 1; l-- > 0;) {
+		uint32_t aux[4] = {l, 0, 0, 0};
+		bind(r, s, cmd, s->push, aux);
+		uint32_t w = r->desc.width, h = r->desc.height;
+		for (uint32_t k = 0; k < l; k++)
+			w = (w + 1) / 2, h = (h + 1) / 2;
+		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+		vbuf_barrier(cmd);
+	}
+}
+
+static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
+{
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+			    VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+}
+
+static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
+{
+	vbuf_pass *p = &s->p;
+	ids_pass_record(r, &p->ids, cmd, 0);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	clear_to_sky(r, cmd);
+	record_decide(r, s, cmd, frame, s->have_cache ? FLAG_HAVE_CACHE : 0);
+	render_ts(r, cmd);
+	vbuf_record_shade(r, p, cmd, 0);
+	render_ts(r, cmd);
+	record_resolve(r, s, cmd);
+	hdr_to_attachment(r, cmd);
+}
+
+static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
+{
+	vbuf_pass *p = &s->p;
+	if (s->key) { /* ref's depth pre-pass and shading (warp/1 is ref), its counter zeroed first */
+		vkCmdFillBuffer(cmd, r->shade_count.buffer, 0, VK_WHOLE_SIZE, 0);
+		vbuf_barrier(cmd);
+		render_pass_depth(r, cmd, 0);
+	}
+	render_ts(r, cmd);
+	if (s->key) {
+		render_pass_scene(r, cmd, 0, &(render_scene_pass){.pipe = &r->shade_pipe, .hdr = RENDER_HDR_CLEAR, .query = 1});
+		vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+				    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+				    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	} else if (r->stats_pool) { /* the frame's pipeline statistics: no shading pass, its compute passes */
+		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
+		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
+	}
+	render_ts(r, cmd);
+	ids_pass_record(r, &p->ids, cmd, 0);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	if (s->key) {
+		record_decide(r, s, cmd, frame, FLAG_STORE_ONLY);
+		record_resolve(r, s, cmd);
+	} else {
+		clear_to_sky(r, cmd);
+		record_decide(r, s, cmd, frame, FLAG_HAVE_CACHE);
+	}
+	render_ts(r, cmd);
+	if (!s->key) {
+		record_fill(r, s, cmd);
+		if (r->stats_pool)
+			vkCmdEndQuery(cmd, r->stats_pool, 0);
+	}
+	hdr_to_attachment(r, cmd);
+}
+
+void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
+{
+	vreuse_state *s = state_of(r);
+	vbuf_record_begin(r, &s->p, cmd);
+	render_ts(r, cmd);
+	if (s->shadows)
+		render_pass_shadows(r, cmd, 0);
+	render_ts(r, cmd);
+	if (s->v.mode == VREUSE_WARP)
+		record_warp(r, s, cmd, frame);
+	else
+		record_rrc(r, s, cmd, frame);
+	render_ts(r, cmd);
+	if (r->blend_count)
+		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
+	render_ts(r, cmd);
+	render_pass_display(r, cmd);
+	render_ts(r, cmd);
+	render_pass_readback(r, cmd);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+}
+
+static void put_extra(frame_stats *st, const char *name, double v)
+{
+	if (st->extra_count < FRAME_MAX_EXTRA) {
+		st->extra_names[st->extra_count] = name;
+		st->extra[st->extra_count++] = v;
+	}
+}
+
+void vreuse_collect(render *r, frame_stats *st)
+{
+	vreuse_state *s = state_of(r);
+	const uint32_t *c = s->p.counters.mapped;
+	/* warp's key frames shade with ref's pass (its counter); every other shading runs on the path (its counter) */
+	bool key = s->v.mode == VREUSE_WARP && s->key;
+	st->shaded_samples = key ? (int64_t)*(const uint32_t *)r->shade_count.mapped : c[VBUF_C_SHADED];
+	st->reused_samples = st->visible_samples >= 0 ? st->visible_samples - st->shaded_samples : -1;
+	st->visible_units = st->visible_samples;
+	st->shaded_units = st->shaded_samples;
+	st->new_units = c[VBUF_C_METHOD]; /* cache misses (rrc: shaded; warp: holes) */
+	put_extra(st, "filled_samples", (double)c[VBUF_C_FILLED]);
+	put_extra(st, "listed_samples", (double)c[VBUF_C_LISTED]);
+	put_extra(st, "key_frame", s->v.mode == VREUSE_WARP ? (double)key : NAN);
+}
+
+void vreuse_finish(render *r)
+{
+	vreuse_state *s = state_of(r);
+	if (!s)
+		return;
+	VkDevice d = r->dev->device;
+	VkPipeline pp[4] = {s->decide, s->resolve, s->pull, s->push};
+	for (int i = 0; i < 4; i++)
+		if (pp[i])
+			vkDestroyPipeline(d, pp[i], NULL);
+	if (s->layout)
+		vkDestroyPipelineLayout(d, s->layout, NULL);
+	if (s->set_layout)
+		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
+	vkdev_image *im[4] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag};
+	for (int i = 0; i < 4; i++)
+		vkdev_image_destroy(r->dev, im[i]);
+	vkdev_buffer_destroy(r->dev, &s->pyr);
+	vbuf_finish(r, &s->p);
+	free(s);
+	r->method_state = NULL;
+}

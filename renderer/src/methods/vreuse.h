@@ -1,0 +1,40 @@
+/* vreuse.h (private) — temporal reuse on the compacted sample path (BASELINES.md A2, A6; passes/vbuf.h): the
+ * survey's refresh patterns that a stencil cannot save on lavapipe (`rrc-random/N`, `rrc-interleaved/N`) and frame
+ * extrapolation (`warp/N`). A per-pixel cache (colour as shown, object + 1 and view distance) of an earlier frame is
+ * reverse-reprojected per pixel of frame t (the ids pass gives its surface point); the methods decide per pixel
+ * which samples to shade, the listed samples are shaded by the path's indirect shade, the rest show the cache
+ * (bilinear with per-tap validity, TAS-METHODS section 1) or, for warp, are filled by pull-push.
+ *
+ * Frame (rrc variants; state slot 0 = t, slot 1 = t-1): shadow, ids, decide (reproject, decide, append; the
+ * dispatch arguments), shade (indirect), resolve (shaded values into the HDR target; the cache stored), blend,
+ * display, readback.
+ * Frame (warp; slot 1 = the keyframe): key frames are ref's passes (depth pre-pass, shading), then ids and a store
+ * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes), blend, display,
+ * readback - no shading of opaque surfaces is launched. */
+#ifndef TASLAB_VREUSE_H
+#define TASLAB_VREUSE_H
+
+#include "../passes/vbuf.h"
+
+typedef enum vreuse_mode { VREUSE_RRC_RANDOM = 1, VREUSE_RRC_INTERLEAVED, VREUSE_WARP } vreuse_mode;
+
+typedef struct vreuse_variant {
+	vreuse_mode mode;
+	uint32_t period; /* N */
+	uint32_t group;  /* rrc variants: 0 per pixel, 1 2x2, 2 4x2 */
+} vreuse_variant;
+
+int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size);
+int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size);
+void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame);
+void vreuse_collect(render *r, frame_stats *st);
+void vreuse_finish(render *r);
+
+extern const char *const vreuse_rrc_passes[8];
+extern const char *const vreuse_warp_passes[9];
+
+#define VREUSE_FRAME_OPS                                                                                           \
+	.state_ring = 2, .prepare = vreuse_prepare, .record = vreuse_record, .collect = vreuse_collect, \
+	.finish = vreuse_finish
+
+#endif
