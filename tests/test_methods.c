@@ -141,7 +141,9 @@ static void test_options(void **state)
 	assert_true(o[2].type == RUN_VALUE_BOOL && !o[2].boolean); /* truth */
 	assert_true(o[1].type == RUN_VALUE_INTEGER && o[1].number == 3); /* a uint option: a JSON integer (24.8) */
 	assert_int_equal(method_config_init(&c, "ref", err, sizeof err), TL_OK);
-	assert_int_equal(method_config_run_options(&c, o, 8), 0);
+	assert_int_equal(method_config_run_options(&c, o, 8), 1); /* --ssaa K (BASELINES.md A3), default 1 */
+	assert_string_equal(o[0].key, "ssaa");
+	assert_true(o[0].type == RUN_VALUE_INTEGER && o[0].number == 1);
 	assert_int_equal(method_config_set(&c, "threshold", "8", err, sizeof err), TL_ERR_ARG);
 	assert_non_null(strstr(err, "it applies to: tfr, tarc"));
 	/* tarc: the cross-option check (method_info.check) */
