@@ -3,7 +3,7 @@
 //
 // The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: the colour as
 // shown (before BLEND) and per pixel (object + 1, view distance bits). Compiled per method: RRC_RANDOM,
-// RRC_INTERLEAVED, WARP.
+// RRC_INTERLEAVED, WARP, AMSS.
 #ifndef TASLAB_VREUSE_GLSL
 #define TASLAB_VREUSE_GLSL
 
@@ -12,6 +12,9 @@ layout(set = 2, binding = 1, rgba32ui) uniform uimage2D cache_rec;
 layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record
 layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded this frame, 2 a hole (warp)
 layout(std430, set = 2, binding = 4) buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
+// amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
+layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
+layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 

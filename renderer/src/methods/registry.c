@@ -27,7 +27,8 @@
 	X(taas)                                                                                                        \
 	X(rrc_random)                                                                                                  \
 	X(rrc_interleaved)                                                                                             \
-	X(warp)
+	X(warp)                                                                                                        \
+	X(amss)
 
 #define DECLARE(name) extern const render_method render_method_##name;
 METHODS(DECLARE)

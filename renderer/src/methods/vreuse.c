@@ -12,7 +12,7 @@ const char *const vreuse_rrc_passes[8] = {"shadow", "ids", "decide", "shade", "r
 const char *const vreuse_warp_passes[9] = {"shadow", "depth", "shade", "ids", "warp", "fill", "blend", "display",
 					   "readback"};
 
-enum { VREUSE_BINDINGS = 5 };
+enum { VREUSE_BINDINGS = 7 };
 /* decide's aux[1] flags */
 enum { FLAG_HAVE_CACHE = 1u, FLAG_STORE_ONLY = 2u };
 
@@ -21,11 +21,13 @@ typedef struct vreuse_state {
 	vbuf_pass p;
 	vkdev_image cache_col, cache_rec, rec_new, flag;
 	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
+	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
+	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
 	uint32_t levels;
 	VkDescriptorSetLayout set_layout;
-	VkDescriptorSet set;
+	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push;
+	VkPipeline decide, resolve, pull, push, amss, jshade;
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
 	bool key;          /* warp: this frame is shaded in full */
@@ -45,7 +47,7 @@ static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *ou
 
 static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
 {
-	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP"};
+	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP", "AMSS"};
 	char defs[64];
 	snprintf(defs, sizeof defs, "#define %s 1\n", mode_define[s->v.mode]);
 	uint32_t *spv = NULL;
@@ -76,6 +78,14 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return rc;
 	/* pyramid levels down to 1x1 */
 	uint32_t w = r->desc.width, h = r->desc.height;
+	bool amss = v->mode == VREUSE_AMSS;
+	for (int i = 0; i < 2; i++) {
+		VkResult r2 = vkdev_image_create(r->dev, amss ? 2 * w : 1, amss ? 2 * h : 1, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
+						 VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+						 VK_IMAGE_ASPECT_COLOR_BIT, false, "amss sub-pixel buffer", &s->sub[i]);
+		if (r2)
+			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
+	}
 	VkDeviceSize texels = 0;
 	for (s->levels = 1;; s->levels++) {
 		texels += (VkDeviceSize)w * h;
@@ -96,13 +106,17 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					      .bindingCount = VREUSE_BINDINGS, .pBindings = b};
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "vreuse: descriptor set layout", res);
+	VkDescriptorSetLayout two[2] = {s->set_layout, s->set_layout};
 	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
-					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
-	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
+					  .descriptorPool = r->pool, .descriptorSetCount = 2, .pSetLayouts = two};
+	if ((res = vkAllocateDescriptorSets(d, &ai, s->set)))
 		return render_vk_error(err, err_size, "vreuse: descriptor set", res);
-	const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, NULL};
-	const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr};
-	vkdev_write_storage_set(d, s->set, VREUSE_BINDINGS, bufs, imgs);
+	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's */
+		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, NULL,
+							    &s->sub[1 - i], &s->sub[i]};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL};
+		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
+	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
 	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
 	VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 3,
@@ -114,14 +128,18 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
 		return rc;
+	if (amss && ((rc = make_compute(r, s, "vreuse/amss.comp.in", &s->amss, err, err_size)) ||
+		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
+					     err_size))))
+		return rc;
 	/* the cache starts empty (object 0) in GENERAL layout */
 	VkCommandBuffer cmd;
 	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[4] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag};
-	for (int i = 0; i < 4; i++) {
+	const vkdev_image *im[6] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1]};
+	for (int i = 0; i < 6; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -148,6 +166,7 @@ int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size)
 		s->shadows = s->key || r->blend_count; /* BLEND surfaces are shaded every frame */
 	} else {
 		s->have_cache = consecutive;
+		s->parity ^= 1u;
 		render_update_state(r, 1, (double)(frame ? frame - 1 : 0) / fps);
 		s->shadows = true;
 	}
@@ -157,7 +176,7 @@ int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size)
 
 static void bind(render *r, vreuse_state *s, VkCommandBuffer cmd, VkPipeline pipe, const uint32_t aux[4])
 {
-	VkDescriptorSet sets[3] = {r->scene_set, s->p.set, s->set};
+	VkDescriptorSet sets[3] = {r->scene_set, s->p.set, s->set[s->parity]};
 	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
 	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->layout, 0, 3, sets, 0, NULL);
 	gpu_push pc = {0, 0, (uint32_t)r->scene->object_count, 0, {aux[0], aux[1], aux[2], aux[3]}};
@@ -286,6 +305,36 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	hdr_to_attachment(r, cmd);
 }
 
+/* amss: every covered pixel shaded once at the frame's sub-pixel offset (k = t mod 4: (-1/4, -1/4), (+1/4, -1/4),
+ * (-1/4, +1/4), (+1/4, +1/4)), then combined with the reprojected sub-pixel buffer (amss.comp.in), then stored. */
+static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
+{
+	vbuf_pass *p = &s->p;
+	ids_pass_record(r, &p->ids, cmd, 0);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	clear_to_sky(r, cmd);
+	record_decide(r, s, cmd, frame, s->have_cache ? FLAG_HAVE_CACHE : 0);
+	render_ts(r, cmd);
+	uint32_t k = frame % 4;
+	float off[2] = {k & 1 ? 0.25f : -0.25f, k & 2 ? 0.25f : -0.25f};
+	uint32_t jit[4] = {0, 0, 0, 0};
+	memcpy(&jit[0], &off[0], 4);
+	memcpy(&jit[1], &off[1], 4);
+	vbuf_bind(r, p, cmd, s->jshade, 0, jit);
+	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	uint32_t abits;
+	memcpy(&abits, &s->v.alpha, 4);
+	uint32_t aux[4] = {k, abits, s->v.buffers, s->have_cache ? 1u : 0u};
+	bind(r, s, cmd, s->amss, aux);
+	dispatch_pixels(r, cmd);
+	vbuf_barrier(cmd);
+	record_resolve(r, s, cmd);
+	hdr_to_attachment(r, cmd);
+}
+
 void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 {
 	vreuse_state *s = state_of(r);
@@ -296,6 +345,8 @@ void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	if (s->v.mode == VREUSE_WARP)
 		record_warp(r, s, cmd, frame);
+	else if (s->v.mode == VREUSE_AMSS)
+		record_amss(r, s, cmd, frame);
 	else
 		record_rrc(r, s, cmd, frame);
 	render_ts(r, cmd);
@@ -339,16 +390,16 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[4] = {s->decide, s->resolve, s->pull, s->push};
-	for (int i = 0; i < 4; i++)
+	VkPipeline pp[6] = {s->decide, s->resolve, s->pull, s->push, s->amss, s->jshade};
+	for (int i = 0; i < 6; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
 		vkDestroyPipelineLayout(d, s->layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
-	vkdev_image *im[4] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag};
-	for (int i = 0; i < 4; i++)
+	vkdev_image *im[6] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1]};
+	for (int i = 0; i < 6; i++)
 		vkdev_image_destroy(r->dev, im[i]);
 	vkdev_buffer_destroy(r->dev, &s->pyr);
 	vbuf_finish(r, &s->p);

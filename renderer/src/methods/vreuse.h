@@ -10,18 +10,22 @@
  * display, readback.
  * Frame (warp; slot 1 = the keyframe): key frames are ref's passes (depth pre-pass, shading), then ids and a store
  * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes), blend, display,
- * readback - no shading of opaque surfaces is launched. */
+ * readback - no shading of opaque surfaces is launched.
+ * Frame (amss; slot 1 = t-1): as the rrc variants, every covered pixel shaded once at the frame's sub-pixel offset;
+ * the "resolve" interval combines it with the reprojected 2x2 sub-pixel buffer (amss.comp.in). */
 #ifndef TASLAB_VREUSE_H
 #define TASLAB_VREUSE_H
 
 #include "../passes/vbuf.h"
 
-typedef enum vreuse_mode { VREUSE_RRC_RANDOM = 1, VREUSE_RRC_INTERLEAVED, VREUSE_WARP } vreuse_mode;
+typedef enum vreuse_mode { VREUSE_RRC_RANDOM = 1, VREUSE_RRC_INTERLEAVED, VREUSE_WARP, VREUSE_AMSS } vreuse_mode;
 
 typedef struct vreuse_variant {
 	vreuse_mode mode;
 	uint32_t period; /* N */
 	uint32_t group;  /* rrc variants: 0 per pixel, 1 2x2, 2 4x2 */
+	uint32_t buffers; /* amss: 1 or 4 */
+	float alpha;      /* amss: the weight of the new sample */
 } vreuse_variant;
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size);

@@ -1,0 +1,47 @@
+/* amss.c — `amss`: amortized supersampling ([S] secs. 3.5, 5.3, after Yang, Nehab, Sander 2009; BASELINES.md A3):
+ * one jittered sample per pixel per frame. `--buffers 1`: f_t = a s_t + (1 - a) f_{t-1}(pi(p)) (eq. 2), a recursive
+ * filter whose variance ratio is a / (2 - a) (a = 2/5: 1/4). `--buffers 4` (default): a 2x2 sub-pixel buffer updated
+ * round-robin, quadrant k = t mod 4 at offset (+-1/4, +-1/4) px taking the new sample, the others reprojected (a tent
+ * of one subsample's radius over the previous frame's subsamples); the output is the quadrant mean, so a static view
+ * converges to `ref --ssaa 2` (75 % fewer shadings per frame). Shaded on the compacted sample path (vreuse.h). */
+#include "vreuse.h"
+
+#include <stddef.h>
+
+typedef struct amss_options {
+	uint32_t buffers;
+	float alpha;
+} amss_options;
+
+static const uint32_t buffer_counts[] = {1, 4, 0};
+
+static const method_option amss_option_table[] = {
+	{.name = "buffers", .arg = "B", .help = "1: one value per pixel (eq. 2); 4: a 2x2 sub-pixel buffer refreshed round-robin",
+	 .type = METHOD_OPT_UINT, .offset = offsetof(amss_options, buffers), .def = 4, .allowed = buffer_counts},
+	{.name = "alpha", .arg = "A", .help = "weight of the new sample in its quadrant (eq. 2; a miss or an empty "
+					      "quadrant uses 1)",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(amss_options, alpha), .def = 0.4, .min = 1e-6, .max = 1},
+};
+
+static int amss_init(render *r, char *err, size_t err_size)
+{
+	const amss_options *o = (const amss_options *)r->config.values.bytes;
+	vreuse_variant v = {.mode = VREUSE_AMSS, .buffers = o->buffers, .alpha = o->alpha};
+	return vreuse_init(r, &v, err, err_size);
+}
+
+const render_method render_method_amss = {
+	.info = {.name = "amss",
+		 .summary = "amortized supersampling: one jittered sample per pixel per frame into a reprojected 2x2 "
+			    "sub-pixel history ([S] 3.5)",
+		 .available = true,
+		 .family = "amortized",
+		 .baseline = "vref",
+		 .options = amss_option_table,
+		 .option_count = sizeof amss_option_table / sizeof amss_option_table[0],
+		 .options_size = sizeof(amss_options)},
+	.pass_names = vreuse_rrc_passes,
+	.pass_count = sizeof vreuse_rrc_passes / sizeof vreuse_rrc_passes[0],
+	.init = amss_init,
+	VREUSE_FRAME_OPS,
+};

@@ -1,0 +1,108 @@
+/* test_alt_refresh.c — the survey's random and interleaved refresh (BASELINES.md A2; section C) on lavapipe with the
+ * validation layer (any message fails):
+ *  R5  static view, N in {2, 4, 8}, rrc-random and rrc-interleaved (and rrc-random --group 2x2): the shaded count of
+ *      every frame after the first equals a CPU count of eq. 1's refresh set (no misses on a static view: new_units
+ *      0), so every covered pixel is shaded exactly once in N consecutive frames; frames equal vref (display, HDR);
+ *  R6  N = 1 equals vref and shades every covered pixel. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "test_vk.h"
+
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/vkdev.h"
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static float half_to_float(uint16_t h)
+{
+	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
+	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
+	return h & 0x8000u ? -v : v;
+}
+
+/* ---- R5, R6 ---- */
+
+/* The CPU replica of decide.comp.in's refresh rule (eq. 1 with the A2 patterns). */
+static uint32_t pcg(uint32_t v)
+{
+	uint32_t st = v * 747796405u + 2891336453u;
+	uint32_t word = ((st >> ((st >> 28u) + 4u)) ^ st) * 277803737u;
+	return (word >> 22u) ^ word;
+}
+
+static bool refresh_due(bool random, uint32_t x, uint32_t y, uint32_t w, uint32_t t, uint32_t n, uint32_t gx,
+			uint32_t gy)
+{
+	x /= gx, y /= gy;
+	if (random)
+		return (t + pcg(x + (w + gx - 1) / gx * y) % n) % n == 0;
+	uint32_t a = n == 8 ? 4 : n == 4 ? 2 : n, b = n / a, k = t % n;
+	return x % a == k % a && y % b == k / a;
+}
+
+static void test_refresh_patterns(void **state)
+{
+	(void)state;
+	double t0 = now_s();
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("tfr_static");
+	enum { W = 48, H = 32, F = 9 };
+	tu_clip v = tu_render_clip(dev, s, 0, "vref", NULL, NULL, W, H, F, false);
+	const char *const g22[] = {"group=2x2", NULL};
+	for (int random = 0; random <= 1; random++)
+		for (uint32_t n = random ? 1 : 2; n <= 8; n *= 2)
+			for (int grouped = 0; grouped <= (random && n == 4); grouped++) {
+				char var[32];
+				snprintf(var, sizeof var, "%s/%u", random ? "rrc-random" : "rrc-interleaved", n);
+				uint32_t frames = n + 1;
+				tu_clip c = tu_render_clip(dev, s, 0, var, grouped ? g22 : NULL, NULL, W, H, frames, false);
+				int64_t over_n = 0;
+				for (uint32_t f = 0; f < frames; f++) {
+					int64_t want = 0;
+					for (uint32_t y = 0; y < H; y++)
+						for (uint32_t x = 0; x < W; x++)
+							want += half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f &&
+								(f == 0 || refresh_due(random, x, y, W, f, n, grouped ? 2 : 1,
+										       grouped ? 2 : 1));
+					if (c.st[f].shaded_samples != want)
+						fail_msg("R5 %s%s frame %u: shaded %lld, eq. 1 on the CPU %lld", var,
+							 grouped ? " --group 2x2" : "", f, (long long)c.st[f].shaded_samples,
+							 (long long)want);
+					assert_int_equal(c.st[f].visible_samples, v.st[f].visible_samples);
+					assert_int_equal(c.st[f].new_units, f == 0 ? c.st[f].visible_samples : 0);
+					if (f >= 1 && f <= n)
+						over_n += c.st[f].shaded_samples;
+				}
+				/* every covered pixel exactly once in N consecutive frames (frames 1..N) */
+				assert_int_equal(over_n, v.st[1].visible_samples);
+				tu_clip vv = v;
+				vv.n = frames;
+				tu_assert_same_frames(&c, &vv, true);
+				printf("R5 %s%s: shaded %lld of %lld at frame 1, frames = vref\n", var,
+				       grouped ? " --group 2x2" : "", (long long)c.st[1].shaded_samples,
+				       (long long)c.st[1].visible_samples);
+				tu_clip_free(&c);
+			}
+	tu_clip_free(&v);
+	scene_destroy(&s);
+	vkdev_destroy(&dev);
+	printf("(%.1f s)\n", now_s() - t0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_refresh_patterns),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
