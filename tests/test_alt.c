@@ -159,7 +159,8 @@ static void test_bad_variants(void **state)
 {
 	(void)state;
 	const char *bad[] = {"warp", "warp/0", "warp/17", "rrc-random", "rrc-random/3", "rrc-interleaved/16",
-			     "ref-ssaa5", "ref-ssaa", "ref-ssaa0", "ref-ssaa2-ssaa2", "warp-ssaa2/2", "ref@8"};
+			     "ref-ssaa5", "ref-ssaa", "ref-ssaa0", "ref-ssaa2-ssaa2", "warp-ssaa2/2", "ref@8",
+			     "stu", "stu/3", "stu/1", "amss/4", "amss@2"};
 	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		method_config c;
 		char err[512] = "";

@@ -28,7 +28,8 @@
 	X(rrc_random)                                                                                                  \
 	X(rrc_interleaved)                                                                                             \
 	X(warp)                                                                                                        \
-	X(amss)
+	X(amss)                                                                                                        \
+	X(stu)
 
 #define DECLARE(name) extern const render_method render_method_##name;
 METHODS(DECLARE)

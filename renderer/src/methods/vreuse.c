@@ -27,7 +27,7 @@ typedef struct vreuse_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push, amss, jshade;
+	VkPipeline decide, resolve, pull, push, amss, jshade, stu_grad, stu;
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
 	bool key;          /* warp: this frame is shaded in full */
@@ -45,11 +45,12 @@ static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *ou
 	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
 }
 
-static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
+static int make_compute_x(render *r, vreuse_state *s, const char *path, const char *extra, VkPipeline *out, char *err,
+			  size_t err_size)
 {
-	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP", "AMSS"};
-	char defs[64];
-	snprintf(defs, sizeof defs, "#define %s 1\n", mode_define[s->v.mode]);
+	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP", "AMSS", "STU"};
+	char defs[96];
+	snprintf(defs, sizeof defs, "#define %s 1\n%s", mode_define[s->v.mode], extra);
 	uint32_t *spv = NULL;
 	size_t n = 0;
 	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
@@ -58,6 +59,11 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
 	VkResult res = render_make_compute(r, spv, n, s->layout, out);
 	free(spv);
 	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+}
+
+static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
+{
+	return make_compute_x(r, s, path, "", out, err, err_size);
 }
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
@@ -78,9 +84,10 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return rc;
 	/* pyramid levels down to 1x1 */
 	uint32_t w = r->desc.width, h = r->desc.height;
-	bool amss = v->mode == VREUSE_AMSS;
+	bool amss = v->mode == VREUSE_AMSS, stu = v->mode == VREUSE_STU;
+	uint32_t sw = amss ? 2 * w : stu ? w : 1, sh = amss ? 2 * h : stu ? h : 1;
 	for (int i = 0; i < 2; i++) {
-		VkResult r2 = vkdev_image_create(r->dev, amss ? 2 * w : 1, amss ? 2 * h : 1, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
+		VkResult r2 = vkdev_image_create(r->dev, sw, sh, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 						 VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 						 VK_IMAGE_ASPECT_COLOR_BIT, false, "amss sub-pixel buffer", &s->sub[i]);
 		if (r2)
@@ -131,6 +138,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	if (amss && ((rc = make_compute(r, s, "vreuse/amss.comp.in", &s->amss, err, err_size)) ||
 		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
 					     err_size))))
+		return rc;
+	if (stu && ((rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_GRAD 1\n", &s->stu_grad, err, err_size)) ||
+		    (rc = make_compute(r, s, "vreuse/stu.comp.in", &s->stu, err, err_size))))
 		return rc;
 	/* the cache starts empty (object 0) in GENERAL layout */
 	VkCommandBuffer cmd;
@@ -335,6 +345,29 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	hdr_to_attachment(r, cmd);
 }
 
+/* stu: the phase pixels shaded, then the gradient at the phase pixels and the combination of the others. */
+static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
+{
+	vbuf_pass *p = &s->p;
+	ids_pass_record(r, &p->ids, cmd, 0);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+	clear_to_sky(r, cmd);
+	record_decide(r, s, cmd, frame, s->have_cache ? FLAG_HAVE_CACHE : 0);
+	render_ts(r, cmd);
+	vbuf_record_shade(r, p, cmd, 0);
+	render_ts(r, cmd);
+	uint32_t aux[4] = {0, 0, 0, s->have_cache ? 1u : 0u};
+	bind(r, s, cmd, s->stu_grad, aux);
+	dispatch_pixels(r, cmd);
+	vbuf_barrier(cmd);
+	bind(r, s, cmd, s->stu, aux);
+	dispatch_pixels(r, cmd);
+	vbuf_barrier(cmd);
+	record_resolve(r, s, cmd);
+	hdr_to_attachment(r, cmd);
+}
+
 void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 {
 	vreuse_state *s = state_of(r);
@@ -347,6 +380,8 @@ void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 		record_warp(r, s, cmd, frame);
 	else if (s->v.mode == VREUSE_AMSS)
 		record_amss(r, s, cmd, frame);
+	else if (s->v.mode == VREUSE_STU)
+		record_stu(r, s, cmd, frame);
 	else
 		record_rrc(r, s, cmd, frame);
 	render_ts(r, cmd);
@@ -390,8 +425,8 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[6] = {s->decide, s->resolve, s->pull, s->push, s->amss, s->jshade};
-	for (int i = 0; i < 6; i++)
+	VkPipeline pp[8] = {s->decide, s->resolve, s->pull, s->push, s->amss, s->jshade, s->stu_grad, s->stu};
+	for (int i = 0; i < 8; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)

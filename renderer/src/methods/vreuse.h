@@ -12,13 +12,15 @@
  * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes), blend, display,
  * readback - no shading of opaque surfaces is launched.
  * Frame (amss; slot 1 = t-1): as the rrc variants, every covered pixel shaded once at the frame's sub-pixel offset;
- * the "resolve" interval combines it with the reprojected 2x2 sub-pixel buffer (amss.comp.in). */
+ * the "resolve" interval combines it with the reprojected 2x2 sub-pixel buffer (amss.comp.in).
+ * Frame (stu; slot 1 = t-1): the interleaved phase pixels shaded; the "resolve" interval holds the gradient and the
+ * spatio-temporal combination of the others (stu.comp.in). */
 #ifndef TASLAB_VREUSE_H
 #define TASLAB_VREUSE_H
 
 #include "../passes/vbuf.h"
 
-typedef enum vreuse_mode { VREUSE_RRC_RANDOM = 1, VREUSE_RRC_INTERLEAVED, VREUSE_WARP, VREUSE_AMSS } vreuse_mode;
+typedef enum vreuse_mode { VREUSE_RRC_RANDOM = 1, VREUSE_RRC_INTERLEAVED, VREUSE_WARP, VREUSE_AMSS, VREUSE_STU } vreuse_mode;
 
 typedef struct vreuse_variant {
 	vreuse_mode mode;
