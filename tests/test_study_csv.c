@@ -123,7 +123,7 @@ static void test_import_rules(void **state)
 		{"P1,0,calm,still,stationary,rrc,, 4,1,1,-1,5", "period ' 4'"},
 		{"P1,0,calm,still,stationary,rrc,,4.0,1,1,-1,5", "period '4.0'"},
 		{"P1,0,calm,still,stationary,rrc,,4,1,1,-1", "expected 12 columns"},
-		{"P1,0,calm,still,stationary,warp,8,,1,1,-1,5", "is not one of"},
+		{"P1,0,calm,still,stationary,nosuch,8,,1,1,-1,5", "is not one of"},
 		{"P1,0,calm,still,stationary,tfr,300,,1,1,-1,5", "T '300'"},
 		{"P1,0,calm,still,stationary,tfr, 8,,1,1,-1,5", "T ' 8'"},
 		{"=HYPERLINK(\"http://x\"),0,calm,still,stationary,tfr,8,,1,1,-1,5", "formula"},
