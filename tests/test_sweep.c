@@ -277,7 +277,7 @@ static void test_resolve(void **state)
 
 	/* bad input: one line naming what is wrong (a later option replaces an earlier one, as on the command line) */
 	resolve_fails(O " --variants tfr@8,rrc/4", "no ref");
-	resolve_fails(O " --variants ref,warp@8", "unknown method 'warp'");
+	resolve_fails(O " --variants ref,nosuch@8", "unknown method 'nosuch'");
 	resolve_fails(O " --variants ref,tfr@8,tfr@8", "'tfr@8' is listed twice");
 	resolve_fails(O " --variants ref,ref@8", "variants:");
 	/* issue 31.9: was accepted as tarc-oracle@8 */
@@ -293,7 +293,7 @@ static void test_resolve(void **state)
 	resolve_fails(O " --metrics maxrgb,vmaf", "unknown metric 'vmaf'");
 	resolve_fails("--scenes turntable --cameras orbit --methods tfr,tarc,rrc --periods 2",
 		      "tfr has a threshold: give --thresholds");
-	resolve_fails(M " --methods tfr,warp", "unknown method 'warp'");
+	resolve_fails(M " --methods tfr,nosuch", "unknown method 'nosuch'");
 	resolve_fails("--scenes turntable --frames 10:14 --size 48x32", "--variants");
 	resolve_fails("--variants ref,tfr@8 --frames 10:14 --size 48x32", "--scenes is required");
 #undef O

@@ -62,8 +62,8 @@ static void test_bad_input(void **state)
 	expect_bad(args, "nowhere", sw);
 	snprintf(args, sizeof args, "%s --cameras helicopter --variants ref --out %s", "--scenes turntable", sw);
 	expect_bad(args, "helicopter", sw);
-	snprintf(args, sizeof args, COMMON " --variants ref,warp@3 --out %s", sw);
-	expect_bad(args, "unknown method 'warp'", sw);
+	snprintf(args, sizeof args, COMMON " --variants ref,nosuch@3 --out %s", sw);
+	expect_bad(args, "unknown method 'nosuch'", sw);
 	snprintf(args, sizeof args, COMMON " --variants tfr@8 --out %s", sw);
 	expect_bad(args, "no ref", sw);
 	snprintf(args, sizeof args, COMMON " --variants ref --frames 5:2 --out %s", sw);
