@@ -32,6 +32,8 @@ typedef struct pair_opts {
 	const char *variants, *out;
 	method_config configs[32]; /* the parsed variants (validate) */
 	size_t count;
+	bool stereo;               /* --stereo: both eyes, side-by-side clips (STEREO.md) */
+	double ipd;                /* --ipd M; negative until given */
 } pair_opts;
 
 typedef struct tonemap_opts {

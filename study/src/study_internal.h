@@ -20,6 +20,7 @@ struct sty {
 	char stimuli[TL_PATH_MAX];
 	char token[33];
 	char served_url[256];
+	char display[16];            /* "stereo": the sets' clips are side by side (pairs.json display); "" mono */
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
 	struct sty_batch {    /* group commit of the server's writes (study_commit.c), under lock */
 		bool open, leading;   /* a transaction is open; a request is gathering it before its commit */

@@ -30,6 +30,10 @@ int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size
 			      s->camera_motion, "fps", s->fps, "frames", (json_int_t)s->first_frame, (json_int_t)s->last_frame, "size",
 			      (int)s->width, (int)s->height, "display_transform", s->display_transform, "reference", "run",
 			      s->ref_run, "clip", s->ref_clip, "conditions", conds);
+	if (m && s->views > 1) { /* STEREO.md: studies add display=stereo; mono sets are written as before */
+		json_object_set_new(m, "display", json_string("stereo"));
+		json_object_set_new(m, "ipd", json_real(s->ipd));
+	}
 	if (m && s->ref_method[0])
 		json_object_set_new(json_object_get(m, "reference"), "method", json_string(s->ref_method));
 	int rc = tl_json_write(path, m, err, err_size);
@@ -94,6 +98,17 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 		if (a < 0 || b < a || b > 0xffffffffLL || (sz && (w < 1 || h < 1 || w > 16384 || h > 16384)))
 			bad = "frames or size out of range";
 		s->first_frame = (uint32_t)a, s->last_frame = (uint32_t)b, s->width = (uint32_t)w, s->height = (uint32_t)h;
+		json_t *disp = json_object_get(j, "display"), *ipd = json_object_get(j, "ipd");
+		s->views = 1;
+		if (disp && !(json_is_string(disp) && (!strcmp(json_string_value(disp), "stereo") ||
+						       !strcmp(json_string_value(disp), "mono"))))
+			bad = "display must be \"stereo\" or \"mono\"";
+		else if (disp && !strcmp(json_string_value(disp), "stereo")) {
+			s->views = 2;
+			s->ipd = json_number_value(ipd);
+			if (!json_is_number(ipd) || !(s->ipd >= 0.0 && s->ipd <= 1.0))
+				bad = "a stereo set needs ipd in metres (0..1)";
+		}
 	}
 	size_t n = bad ? 0 : json_array_size(conds);
 	if (n && !(s->conditions = calloc(n, sizeof *s->conditions)))

@@ -117,6 +117,7 @@ typedef struct sty_trial {
 	char clip_a[48], clip_b[48];   /* opaque clip names ("<32 hex digits>.webm"), served as /clips/<name> */
 	char kind[16];                 /* test, catch, training */
 	bool break_before;
+	bool stereo;                   /* the study's clips show both eyes side by side (pairs.json "display": "stereo") */
 	bool done;                     /* all trials answered (the other fields are unset) */
 } sty_trial;
 

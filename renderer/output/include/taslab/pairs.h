@@ -3,6 +3,7 @@
  *
  *   { "taslab_pairs": 1, "scene", "scene_path", "camera", "camera_motion", "fps", "frames": [first, last],
  *     "size": [w, h], "display_transform", "reference": {"run", "clip", "method"},
+ *     stereo sets only: "display": "stereo", "ipd" (metres; clips side by side, 2w x h, left | right; size per eye),
  *     "conditions": [ {"id", "method", "variant", "T", "period", "method_facts", "run", "clip", "inspect"}, ... ] }
  *
  * "method_facts" (run.h run_method_facts) says what the study needs to know of a condition's method: whether it is
@@ -39,7 +40,9 @@ typedef struct pairs_set {
 	char scene[64], camera[64], camera_motion[16];
 	char scene_path[1024], display_transform[256];
 	double fps;
-	uint32_t first_frame, last_frame, width, height;
+	uint32_t first_frame, last_frame, width, height; /* stereo: size per eye */
+	uint32_t views;       /* 2: "display": "stereo" (side-by-side clips, STEREO.md); 1 (or 0 when written): mono */
+	double ipd;           /* stereo: metres */
 	char ref_run[256], ref_clip[256];
 	char ref_method[32];  /* reference.method: the reference's method name ("" when the file has none) */
 	pairs_condition *conditions; /* malloc'ed by pairs_read; borrowed by pairs_write */
