@@ -139,6 +139,8 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	/* the study: joined table and JND against the chosen metric */
 	if (!rc && d->study)
 		rc = sty_rpt_study_files(d, rdir, &study, &jnd_plot, err, err_size);
+	if (!rc)
+		rc = sty_rpt_stereo_csv(d, err, err_size);
 	snprintf(path, sizeof path, "%s/index.html", rdir);
 	if (!rc)
 		rc = sty_rpt_page_write(d, path, gi, ng, &study, gnuplot_note, jnd_plot, err, err_size);

@@ -98,6 +98,10 @@ int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, const sty_rp
 
 /* ---- study_report_page.c */
 /* Writes report/index.html (the page) into `path`. */
+/* study_report_stereo.c: SWEEP/stereo_vs_mono.csv (with d->mono_spec; TL_OK without) and the page's "Stereo"
+ * section (a stereo sweep only). */
+int sty_rpt_stereo_csv(const sty_report_desc *d, char *err, size_t err_size);
+void sty_rpt_page_stereo(FILE *f, const sty_report_desc *d);
 int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt_group *gi, size_t ng,
 		       const sty_rpt_study *study, bool gnuplot_note, bool jnd_plot, char *err, size_t err_size);
 

@@ -368,6 +368,7 @@ int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt
 	FILE *f = page.f;
 	page_head(f, d, gi, ng, gnuplot_note);
 	page_table1(f, d->spec, gi, ng);
+	sty_rpt_page_stereo(f, d);
 	if (d->study)
 		page_study(f, d, jnd_plot);
 	for (size_t g = 0; g < ng; g++)
