@@ -55,7 +55,7 @@ static void check_gpu_cpu_within(const char *config, const char *display, const 
 	if (colour_create(&cd, &c, err, sizeof err))
 		fail_msg("%s", err);
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	float *cpu, *gpu, *in;
@@ -114,7 +114,7 @@ static void test_glsl_rewrite_bit_identical(void **state)
 	assert_int_equal(colour_glsl_rewritten(orig), 0);
 	assert_string_not_equal(colour_glsl(fast), colour_glsl(orig));
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	float *a, *b;
@@ -375,7 +375,7 @@ static void test_lut_nonfinite(void **state)
 	if (colour_create(&cd, &c, err, sizeof err))
 		fail_msg("%s", err);
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	double worst = -1;

@@ -110,7 +110,7 @@ static void test_methods(void **state)
 		assert_true(methods < 32);
 		snprintf(folders[methods++], sizeof folders[0], "%s", folder);
 		snprintf(cmd, sizeof cmd,
-			 "%s render --scene turntable --camera orbit --size 48x32 --frames 0:4 --method %s --device lavapipe "
+			 "%s render --scene turntable --camera orbit --size 48x32 --frames 0:4 --method %s --device " TASLAB_TEST_DEVICE " "
 			 "--validation --no-exr --quiet --out %s/%s",
 			 TASLAB_BINARY, token, dir, folder);
 		if (tu_run(cmd, out, sizeof out))

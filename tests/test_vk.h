@@ -12,7 +12,7 @@
 struct scene;
 struct vkdev;
 struct colour;
-/* Loads scenes/NAME.json and opens lavapipe with the validation layer; 0 or -1 (message printed). */
+/* Loads scenes/NAME.json and opens the test device (lavapipe by default) with the validation layer; 0 or -1 (message printed). */
 int tu_open_scene_and_device(const char *name, struct scene **scn, struct vkdev **dev);
 /* Frees both; returns -1 when the device saw any validation message, so a group teardown fails. */
 int tu_close_scene_and_device(struct scene **scn, struct vkdev **dev);
@@ -28,7 +28,7 @@ typedef struct tu_clip {
 
 /* tests/data/NAME.json, or a path below the source tree when NAME contains '/'; fails the test on error. */
 struct scene *tu_load_scene(const char *name);
-/* lavapipe with the validation layer; fails the test on error. */
+/* The test device (TASLAB_TEST_DEVICE, lavapipe by default) with the validation layer; fails the test on error. */
 struct vkdev *tu_lavapipe(void);
 int tu_camera_index(const struct scene *s, const char *name);
 /* Renders frames [0, n) of a variant token with extra options ("name=value" or a flag name, NULL-terminated),
