@@ -219,6 +219,7 @@ static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visib
 	if (r->ts_pool)
 		vkCmdResetQueryPool(cmd, r->ts_pool, 0, FRAME_MAX_PASSES + 1);
 	r->ts_count = 0;
+	r->stats_recorded = false;
 	if (r->method->record_pre) {
 		r->method->record_pre(r, cmd, frame);
 		if ((res = render_cmd_submit_wait(r)))
@@ -248,7 +249,7 @@ static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visib
 	st->shaded_samples = st->reused_samples = st->visible_units = st->shaded_units = st->new_units = -1;
 	st->allocated_samples = st->late_samples = -1;
 	st->fs_invocations = st->cs_invocations = -1;
-	if (r->stats_pool) {
+	if (r->stats_pool && r->stats_recorded) {
 		uint64_t v[2];
 		if (vkGetQueryPoolResults(r->dev->device, r->stats_pool, 0, 1, sizeof v, v, sizeof v,
 					  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
