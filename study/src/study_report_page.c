@@ -67,6 +67,7 @@ static const char *CSS =
 	".plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:10px}"
 	".plots figure{margin:0;border:1px solid #eceef1;border-radius:6px;padding:4px;background:#fff}"
 	".plots img{width:100%;height:auto;display:block}figcaption{font-size:12px;color:#555;text-align:center}"
+	"figure.wide{margin:0;max-width:960px}figure.wide img{width:100%;height:auto;display:block}"
 	"table{border-collapse:collapse;font-size:13px;margin:6px 0}th,td{border-bottom:1px solid #e3e6ea;padding:3px 8px;"
 	"text-align:right;vertical-align:middle}th{background:#f0f2f5;position:sticky;top:0}td.l,th.l{text-align:left}"
 	"td{white-space:nowrap}td img{max-width:104px;height:auto;display:block;image-rendering:pixelated}"
@@ -226,7 +227,7 @@ static void page_study(FILE *f, const sty_report_desc *d, const sty_rpt_study *t
 	}
 	fprintf(f, "<h3>Fig. 3: quality against T</h3>\n");
 	if (t->fig3)
-		fprintf(f, "<figure class=\"plots\"><img src=\"plots/fig3.svg\" alt=\"Fig. 3: Q and p_ref against T\">"
+		fprintf(f, "<figure class=\"wide\"><img src=\"plots/fig3.svg\" alt=\"Fig. 3: Q and p_ref against T\">"
 			   "<figcaption>As the paper's Fig. 3 (sec. 3): Q with its 95%% t interval (cut to −2..2) and p_ref "
 			   "with its 95%% Wilson interval, per method, pooled over scenes and camera paths; dashed: 1 JND "
 			   "(p_ref = 75%%). Data: <a href=\"data/fig3.csv\">data/fig3.csv</a>.</figcaption></figure>\n");
@@ -235,7 +236,9 @@ static void page_study(FILE *f, const sty_report_desc *d, const sty_rpt_study *t
 									  "its data are in data/fig3.csv."
 									: "No rated condition has a threshold T: no Fig. 3.");
 	if (jnd_plot)
-		fprintf(f, "<figure class=\"plots\"><img src=\"plots/jnd.svg\" alt=\"JND against %s\"></figure>\n", jnd_metric);
+		fprintf(f, "<h3>JND against %s</h3><figure class=\"wide\" style=\"max-width:720px\"><img src=\"plots/jnd.svg\" "
+			   "alt=\"JND against %s\"></figure>\n",
+			jnd_metric, jnd_metric);
 	else
 		fprintf(f, "<p class=\"note\">No condition of the study matches a run with %s: no JND plot.</p>\n", jnd_metric);
 	fprintf(f, "</section>\n");

@@ -173,7 +173,7 @@ static int fig3_files(const char *rdir, sty_rpt_study *t, char *err, size_t err_
 		   "camera paths, 95%% intervals)'\n"
 		   "set grid\nset logscale x 2\nset offsets graph 0.08, graph 0.08, 0, 0\nset key top left\n"
 		   "set xlabel 'T (largest reused colour difference, 8-bit code values)'\n"
-		   "set ylabel 'Q (0 = no difference, +2 = reference much better)'\nset yrange [-2<*:*<2]\n"
+		   "set ylabel 'Q (0 = no difference, +2 = reference much better)'\nset yrange [-2<*<-0.5:0.5<*<2]\n"
 		   "set arrow 1 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#888888'\n"
 		   "plot for [m in series] '%s/data/fig3.csv' using (strcol(1) eq m ? $3 : 1/0):"
 		   "(strcol(1) eq m ? $6 : 1/0):7:8 every ::1 with yerrorlines pt 7 title m\n"
