@@ -48,7 +48,8 @@ typedef struct pairs_set {
 	uint32_t first_frame, last_frame, width, height;
 	char ref_run[256], ref_clip[256];
 	char ref_method[32];  /* reference.method: the reference's method name ("" when the file has none) */
-	char scene_digest[24], colour_digest[24]; /* the runs' input digests (run.h); "" when not recorded */
+	char scene_digest[24], colour_digest[24]; /* the runs' input digests (run.h; `pair` and `study pairs` record
+						    * them); "" in a set made before */
 	char sweep[1024];     /* source.sweep: the sweep folder the clips were taken from ("" : rendered by `pair`) */
 	char sweep_ref_run[256]; /* source.ref_run: the reference's run folder relative to that sweep */
 	pairs_condition *conditions; /* malloc'ed by pairs_read; borrowed by pairs_write */
