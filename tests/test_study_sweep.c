@@ -6,7 +6,7 @@
  *    stderr and on the page which of the study's conditions no run has;
  *  - it refuses (one line, exit 2, nothing of the study written) a study whose stimuli are not the sweep's runs:
  *    another size, other frames, another display transform, a clip that is not the sweep's.
- * The sweep is tiny (48x32, two frames, ref, tfr@8, tfr@16 on lavapipe with validation) so the test stays short. */
+ * The sweep is tiny (48x32, two frames, ref, tfr@8, tfr@16 on the tests' device, lavapipe, with validation) so the test stays short. */
 #define _DEFAULT_SOURCE
 #include <math.h>
 #include <stdio.h>
@@ -15,6 +15,10 @@
 #include <unistd.h>
 
 #include "test_study_util.h"
+
+#ifndef TASLAB_TEST_DEVICE /* the tests' device (tests/CMakeLists.txt, issue 32.5), lavapipe where it is not set */
+#define TASLAB_TEST_DEVICE "lavapipe"
+#endif
 
 static char out[65536];
 static char dir[4096], sw[4200], stim[4200], set[4300], db[4200];
@@ -100,7 +104,7 @@ static void test_study_on_sweep(void **state)
 	snprintf(set, sizeof set, "%s/turntable--orbit", stim);
 	snprintf(db, sizeof db, "%s/s.db", dir);
 	char args[16384], p[4600], q[4600];
-	snprintf(args, sizeof args, "sweep --scenes turntable --cameras orbit --size 48x32 --device lavapipe --validation "
+	snprintf(args, sizeof args, "sweep --scenes turntable --cameras orbit --size 48x32 --device " TASLAB_TEST_DEVICE " --validation "
 				    "--variants ref,tfr@8,tfr@16 --frames 0:2 --jobs 2 --no-report --out %s", sw);
 	if (run_cli(args))
 		fail_msg("%s", out);
