@@ -101,8 +101,9 @@ static VkResult make_instance(bool validation, bool *has_debug_utils, VkInstance
 	return vkCreateInstance(&ci, NULL, out);
 }
 
-/* The timestamp bits of the first graphics+compute queue family (the one vkdev_create takes); 0 without one. */
-static uint32_t queue_timestamp_bits(VkPhysicalDevice pd)
+/* The first graphics+compute queue family (the one taslab uses) and its timestamp bits; UINT32_MAX (bits 0) without
+ * one. */
+static uint32_t queue_family(VkPhysicalDevice pd, uint32_t *timestamp_bits)
 {
 	uint32_t qn = 0;
 	vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, NULL);
@@ -110,10 +111,13 @@ static uint32_t queue_timestamp_bits(VkPhysicalDevice pd)
 	if (qn > 16)
 		qn = 16;
 	vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, qp);
+	*timestamp_bits = 0;
 	for (uint32_t i = 0; i < qn; i++)
-		if ((qp[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qp[i].queueFlags & VK_QUEUE_COMPUTE_BIT))
-			return qp[i].timestampValidBits;
-	return 0;
+		if ((qp[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qp[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) {
+			*timestamp_bits = qp[i].timestampValidBits;
+			return i;
+		}
+	return UINT32_MAX;
 }
 
 double vkdev_ticks_ms(uint64_t begin, uint64_t end, uint32_t valid_bits, float period_ns)
@@ -153,12 +157,14 @@ VkResult vkdev_list(char *out, size_t out_size)
 		for (uint32_t h = 0; h < mp.memoryHeapCount; h++)
 			if ((mp.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) && mp.memoryHeaps[h].size > local)
 				local = mp.memoryHeaps[h].size;
+		uint32_t ts_bits;
+		queue_family(pd[i], &ts_bits);
 		size_t len = strlen(out);
 		snprintf(out + len, out_size - len,
 			 "%u: %s (%s) Vulkan %u.%u, subgroup %u, timestamps %.3g ns x %u bits, %.0f MiB device-local\n", i,
 			 p.deviceName, device_type_name(p.deviceType), VK_API_VERSION_MAJOR(p.apiVersion),
 			 VK_API_VERSION_MINOR(p.apiVersion), sg.subgroupSize, (double)p.limits.timestampPeriod,
-			 queue_timestamp_bits(pd[i]), (double)local / (1024.0 * 1024.0));
+			 ts_bits, (double)local / (1024.0 * 1024.0));
 	}
 	vkDestroyInstance(inst, NULL);
 	return VK_SUCCESS;
@@ -284,20 +290,8 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 		goto fail;
 	}
 
-	uint32_t qn = 0;
-	vkGetPhysicalDeviceQueueFamilyProperties(d->physical, &qn, NULL);
-	VkQueueFamilyProperties qp[16];
-	if (qn > 16)
-		qn = 16;
-	vkGetPhysicalDeviceQueueFamilyProperties(d->physical, &qn, qp);
-	d->queue_family = UINT32_MAX;
-	for (uint32_t i = 0; i < qn; i++)
-		if ((qp[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qp[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) {
-			d->queue_family = i;
-			d->has_timestamps = qp[i].timestampValidBits > 0 && d->props.limits.timestampComputeAndGraphics;
-			d->timestamp_valid_bits = qp[i].timestampValidBits;
-			break;
-		}
+	d->queue_family = queue_family(d->physical, &d->timestamp_valid_bits);
+	d->has_timestamps = d->timestamp_valid_bits > 0 && d->props.limits.timestampComputeAndGraphics;
 	if (d->queue_family == UINT32_MAX) {
 		snprintf(err, err_size, "device '%s' has no graphics+compute queue", d->props.deviceName);
 		r = VK_ERROR_INITIALIZATION_FAILED;
