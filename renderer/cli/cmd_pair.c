@@ -186,8 +186,15 @@ static int pair_main(void *opts, cli_ctx *ctx)
 			if ((rc = render_run(&rr, why, sizeof why)) || (rc = clip_encode_run(run, clip, &n, why, sizeof why)))
 				return tl_error(err, err_size, rc, "%s: %s", id, why);
 		}
-		if (k < 0)
+		if (k < 0) { /* the runs' input digests, so `report --study` can check the set against a sweep (issue 27.12) */
+			run_manifest m;
+			char why[1024];
+			if ((rc = run_manifest_read(run, &m, why, sizeof why)))
+				return tl_error(err, err_size, rc, "%s", why);
+			snprintf(set.scene_digest, sizeof set.scene_digest, "%s", m.scene_digest);
+			snprintf(set.colour_digest, sizeof set.colour_digest, "%s", m.colour_digest);
 			continue;
+		}
 		pairs_condition *c = &conds[set.count++];
 		memset(c, 0, sizeof *c);
 		snprintf(c->id, sizeof c->id, "%s", id);

@@ -73,6 +73,11 @@ bool sty_random_hex(char out[33]);
  * CR gets a ' in front; a cell holding , " CR or LF is quoted with "" for ". Returns buf (truncated to n). */
 const char *sty_csv_cell(const char *s, char *buf, size_t n);
 
+/* A number as every study output writes it (issue 27.10, one NaN convention): `fmt` (one double) when finite,
+ * "inf" / "-inf" when infinite, "" when undefined (NaN) — an empty CSV cell; Markdown writers show "" as "–" and
+ * JSON writers write null (and the strings "inf", "-inf"). Returns buf. */
+const char *sty_num_cell(double v, const char *fmt, char *buf, size_t n);
+
 /* True when a text value would be read as a formula by a spreadsheet (first character = + - @ TAB CR). */
 int sty_csv_formula(const char *s);
 
