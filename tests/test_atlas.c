@@ -157,7 +157,13 @@ static void test_convergence_and_gradients(void **state)
 		print_message("density %d: mean max-RGB %.4f, p99 %.0f\n", 1 << k, mean[k], p99[k]);
 		tu_clip_free(&sa);
 	}
-	assert_true(mean[1] < mean[0] && mean[2] < mean[1]);
+	/* lavapipe: strictly better with each doubling. A GPU's bilinear filter (fixed-point weights) leaves a floor of
+	 * about 0.03 code values that density 2 already reaches (H200: 0.0381, 0.0277, 0.0288): there density 4 must
+	 * stay within 10 % of density 2 */
+	if (TU_ON_LAVAPIPE)
+		assert_true(mean[1] < mean[0] && mean[2] < mean[1]);
+	else
+		assert_true(mean[1] < mean[0] && mean[2] <= 1.1 * mean[1]);
 	assert_true(p99[2] <= 2);
 	tu_clip_free(&ref);
 	scene_destroy(&s);

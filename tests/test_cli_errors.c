@@ -77,7 +77,7 @@ static void test_bad_inputs(void **state)
 	f = fopen(bad, "w");
 	fclose(f);
 	snprintf(run, sizeof run, "%s/a_file/run", dir);
-	snprintf(args, sizeof args, "--scene turntable --size 32x18 --frames 0 --device lavapipe --out %s", run);
+	snprintf(args, sizeof args, "--scene turntable --size 32x18 --frames 0 --device " TASLAB_TEST_DEVICE " --out %s", run);
 	expect_failure(args, "a_file", run);
 }
 
@@ -85,7 +85,7 @@ static void render_ok(const char *run)
 {
 	char cmd[8192];
 	snprintf(cmd, sizeof cmd,
-		 "%s render --scene turntable --camera orbit --size 64x36 --frames 20:22 --device lavapipe --validation "
+		 "%s render --scene turntable --camera orbit --size 64x36 --frames 20:22 --device " TASLAB_TEST_DEVICE " --validation "
 		 "--quiet --out %s", TASLAB_BINARY, run);
 	int st = tu_run(cmd, out, sizeof out);
 	if (st != 0)
@@ -151,9 +151,9 @@ static void test_good_run_reproducible(void **state)
 static void test_analyze_out_first(void **state)
 {
 	(void)state;
-	tu_expect_cli_error("analyze coherence --scene turntable --size 32x18 --frames 10,20 --device lavapipe --no-plots "
+	tu_expect_cli_error("analyze coherence --scene turntable --size 32x18 --frames 10,20 --device " TASLAB_TEST_DEVICE " --no-plots "
 			    "--out /proc/self", "--out /proc/self: cannot write there");
-	tu_expect_cli_error("analyze predictors --scene turntable --size 32x18 --frames 10 --device lavapipe --no-plots "
+	tu_expect_cli_error("analyze predictors --scene turntable --size 32x18 --frames 10 --device " TASLAB_TEST_DEVICE " --no-plots "
 			    "--out /proc/self/taslab", "/proc/self/taslab");
 }
 
@@ -187,7 +187,7 @@ static void test_oiio_module(void **state)
 	const char *dir = tu_tmpdir("cli_oiio");
 	char cmd[8192], p[4096];
 	const char *env = "TASLAB_OIIO_MODULE=/nonexistent/taslab_oiio.so";
-	snprintf(cmd, sizeof cmd, "%s %s render --scene turntable --size 32x18 --frames 20 --device lavapipe --quiet --out %s/exr",
+	snprintf(cmd, sizeof cmd, "%s %s render --scene turntable --size 32x18 --frames 20 --device " TASLAB_TEST_DEVICE " --quiet --out %s/exr",
 		 env, TASLAB_BINARY, dir);
 	int st = tu_run(cmd, out, sizeof out);
 	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, "000020.exr") || !strstr(out, "TASLAB_OIIO_MODULE") ||
@@ -197,7 +197,7 @@ static void test_oiio_module(void **state)
 	assert_false(tu_file_exists(p));
 	for (int i = 0; i < 2; i++) {
 		snprintf(cmd, sizeof cmd,
-			 "%s %s render --scene turntable --size 32x18 --frames 20:22 --device lavapipe --no-exr --quiet %s "
+			 "%s %s render --scene turntable --size 32x18 --frames 20:22 --device " TASLAB_TEST_DEVICE " --no-exr --quiet %s "
 			 "--out %s/png%d",
 			 env, TASLAB_BINARY, i ? "--trivial-shading" : "", dir, i);
 		st = tu_run(cmd, out, sizeof out);

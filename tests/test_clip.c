@@ -20,7 +20,7 @@ static int setup(void **state)
 	(void)state;
 	char cmd[8192];
 	snprintf(run, sizeof run, "%s/run", tu_tmpdir("clip"));
-	snprintf(cmd, sizeof cmd, "%s render --scene turntable --camera orbit --size 64x36 --frames 10:14 --device lavapipe "
+	snprintf(cmd, sizeof cmd, "%s render --scene turntable --camera orbit --size 64x36 --frames 10:14 --device " TASLAB_TEST_DEVICE " "
 		 "--validation --quiet --out %s", TASLAB_BINARY, run);
 	return tu_run(cmd, out, sizeof out) == 0 ? 0 : (fprintf(stderr, "%s\n", out), -1);
 }
@@ -247,7 +247,7 @@ static void test_pair(void **state)
 	(void)state;
 	char cmd[8192], p[4096], err[1024];
 	const char *dir = tu_tmpdir("pair");
-	snprintf(cmd, sizeof cmd, "%s pair --scene turntable --camera overview --frames 5:8 --size 48x27 --device lavapipe "
+	snprintf(cmd, sizeof cmd, "%s pair --scene turntable --camera overview --frames 5:8 --size 48x27 --device " TASLAB_TEST_DEVICE " "
 		 "--validation --variants ref --out %s/set", TASLAB_BINARY, dir);
 	if (tu_run(cmd, out, sizeof out))
 		fail_msg("%s", out);

@@ -55,7 +55,7 @@ static void check_gpu_cpu_within(const char *config, const char *display, const 
 	if (colour_create(&cd, &c, err, sizeof err))
 		fail_msg("%s", err);
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	float *cpu, *gpu, *in;
@@ -114,7 +114,7 @@ static void test_glsl_rewrite_bit_identical(void **state)
 	assert_int_equal(colour_glsl_rewritten(orig), 0);
 	assert_string_not_equal(colour_glsl(fast), colour_glsl(orig));
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	float *a, *b;
@@ -130,10 +130,20 @@ static void test_glsl_rewrite_bit_identical(void **state)
 	if (colour_apply_gpu(dev, fast, a, total, err, sizeof err) || colour_apply_gpu(dev, orig, b, total, err, sizeof err))
 		fail_msg("%s", err);
 	size_t differ = 0;
-	for (size_t i = 0; i < total * 4; i++)
+	double worst = 0.0;
+	for (size_t i = 0; i < total * 4; i++) {
 		differ += memcmp(&a[i], &b[i], sizeof a[i]) != 0;
-	fprintf(stderr, "curve rewrite: %zu of %zu GPU values differ from OCIO's GLSL\n", differ, total * 4);
-	assert_int_equal(differ, 0);
+		double d = fabs((double)a[i] - (double)b[i]);
+		worst = d > worst ? d : worst;
+	}
+	fprintf(stderr, "curve rewrite: %zu of %zu GPU values differ from OCIO's GLSL (max %.3g code values)\n", differ,
+		total * 4, worst * 255.0);
+	/* bit-identical on lavapipe; a GPU compiles the two shaders' arithmetic differently (FMA): within 0.001 code
+	 * values, far below the 0.01 of GPU vs CPU that render_create checks */
+	if (TU_ON_LAVAPIPE)
+		assert_int_equal(differ, 0);
+	else
+		assert_true(worst * 255.0 <= 0.001);
 	assert_int_equal(vkdev_validation_messages(dev), 0);
 	free(a);
 	free(b);
@@ -375,7 +385,7 @@ static void test_lut_nonfinite(void **state)
 	if (colour_create(&cd, &c, err, sizeof err))
 		fail_msg("%s", err);
 	vkdev *dev = NULL;
-	vkdev_desc vd = {.device = "lavapipe", .validation = true};
+	vkdev_desc vd = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&vd, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	double worst = -1;

@@ -277,7 +277,7 @@ static void test_every_model_renders(void **state)
 				       "InterpolationTest", "MetalRoughSpheresNoTextures"};
 	vkdev *dev = NULL;
 	char err[1024];
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	vkdev_desc d = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&d, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	for (size_t i = 0; i < sizeof models / sizeof models[0]; i++) {

@@ -19,6 +19,7 @@
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
+#include "test_util.h"
 #include "test_vk.h"
 
 #define W 96
@@ -110,7 +111,7 @@ static void test_methods(void **state)
 		assert_true(methods < 32);
 		snprintf(folders[methods++], sizeof folders[0], "%s", folder);
 		snprintf(cmd, sizeof cmd,
-			 "%s render --scene turntable --camera orbit --size 48x32 --frames 0:4 --method %s --device lavapipe "
+			 "%s render --scene turntable --camera orbit --size 48x32 --frames 0:4 --method %s --device " TASLAB_TEST_DEVICE " "
 			 "--validation --no-exr --quiet --out %s/%s",
 			 TASLAB_BINARY, token, dir, folder);
 		if (tu_run(cmd, out, sizeof out))
@@ -160,6 +161,13 @@ static void test_overview(void **state) { (void)state; check_golden("overview", 
 
 int main(void)
 {
+	/* The goldens are lavapipe's images: a GPU rasterizes and filters within the same rules but not bit for bit (H200:
+	 * max 7 code values, one edge pixel 113, mean 0.35-0.41 against the 0.25 allowed). On another test device this
+	 * test says so and is skipped (CI always renders on lavapipe). */
+	if (!TU_ON_LAVAPIPE) {
+		printf("SKIPPED: test_golden: the goldens are lavapipe's; the tests render on %s\n", TASLAB_TEST_DEVICE);
+		return TU_SKIPPED;
+	}
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_orbit_start), cmocka_unit_test(test_orbit_mid), cmocka_unit_test(test_overview),
 		cmocka_unit_test(test_methods),

@@ -98,7 +98,7 @@ static void check_period_tally(const char *res)
 	char p[4200], line[512];
 	const char *heads[6][2] = {
 		{"conditions.csv", "method,T,period,scene,camera,n,Q,Q_lo,Q_hi,p_ref,p_ref_lo,p_ref_hi,jnd"},
-		{"anova.csv", "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg"},
+		{"anova.csv", "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg,note"},
 		{"posthoc.csv", "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni"},
 		{"jod.csv", "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants"},
 		{"fig3.csv", "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent"},

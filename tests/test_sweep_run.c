@@ -18,7 +18,7 @@
 
 static char out[1 << 16];
 
-#define COMMON "--scenes turntable --cameras orbit --size 48x32 --device lavapipe --validation"
+#define COMMON "--scenes turntable --cameras orbit --size 48x32 --device " TASLAB_TEST_DEVICE " --validation"
 
 static int sweep(const char *args)
 {

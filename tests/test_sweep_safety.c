@@ -18,7 +18,7 @@
 
 static char out[1 << 16];
 
-#define COMMON "--scenes turntable --cameras orbit --size 48x32 --device lavapipe --validation"
+#define COMMON "--scenes turntable --cameras orbit --size 48x32 --device " TASLAB_TEST_DEVICE " --validation"
 
 /* `s` as one single-quoted shell word (written here independently of taslab's quoting). */
 static const char *q(const char *s)
@@ -189,7 +189,7 @@ static void test_lock_and_out(void **state)
 	st = sh("%s sweep " COMMON " --variants ref --frames 0:1 --out /dev/null", TASLAB_BINARY);
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "/dev/null"))
 		fail_msg("exit %d:\n%s", st, out);
-	st = sh("%s render --scene turntable --size 8x8 --frames 0 --device lavapipe --out /dev/null", TASLAB_BINARY);
+	st = sh("%s render --scene turntable --size 8x8 --frames 0 --device " TASLAB_TEST_DEVICE " --out /dev/null", TASLAB_BINARY);
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "/dev/null"))
 		fail_msg("exit %d:\n%s", st, out);
 }
@@ -260,7 +260,7 @@ static void test_damaged_runs(void **state)
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "000007.exr: not a frame of this run"))
 		fail_msg("tonemap: exit %d:\n%s", st, out);
 	unlink(q2);
-	st = sh("%s render --scene turntable --size 8x8 --frames 2 --device lavapipe --no-exr --quiet --out %s/small",
+	st = sh("%s render --scene turntable --size 8x8 --frames 2 --device " TASLAB_TEST_DEVICE " --no-exr --quiet --out %s/small",
 		TASLAB_BINARY, q(dir));
 	assert_int_equal(st, 0);
 	snprintf(p, sizeof p, "%s/small/frames/000002.png", dir);
@@ -308,7 +308,7 @@ static void test_changed_inputs(void **state)
 			    TASLAB_SOURCE_DIR, q(ocio)), 0);
 	snprintf(sw, sizeof sw, "%s/sw", dir);
 	snprintf(args, sizeof args,
-		 "--scenes %s --cameras orbit --size 48x32 --device lavapipe --variants ref,tfr@8 --frames 0:2 --no-report "
+		 "--scenes %s --cameras orbit --size 48x32 --device " TASLAB_TEST_DEVICE " --variants ref,tfr@8 --frames 0:2 --no-report "
 		 "--ocio-config %s/config.ocio --display sRGB --view Graded --out %s",
 		 q(scn), q(ocio), q(sw));
 	int st = sh("%s sweep %s --quiet", TASLAB_BINARY, args);
@@ -336,7 +336,7 @@ static void test_changed_inputs(void **state)
 	assert_false(tu_file_exists(man)); /* nothing rendered from the new scene into the old sweep */
 	/* a run made from the edited scene (here: by hand, into the sweep's folder) is damaged, not complete */
 	snprintf(p, sizeof p, "%s/runs/turntable/orbit/tfr-T8", sw);
-	st = sh("%s render --scene %s --camera orbit --method tfr@8 --size 48x32 --frames 0:2 --device lavapipe --quiet "
+	st = sh("%s render --scene %s --camera orbit --method tfr@8 --size 48x32 --frames 0:2 --device " TASLAB_TEST_DEVICE " --quiet "
 		"--ocio-config %s/config.ocio --display sRGB --view Graded --out %s",
 		TASLAB_BINARY, q(scn), q(ocio), q(p));
 	assert_int_equal(st, 0);

@@ -25,7 +25,7 @@ int tu_open_scene_and_device(const char *name, scene **scn, vkdev **dev)
 {
 	char err[1024], path[4096];
 	snprintf(path, sizeof path, "%s/scenes/%s.json", TASLAB_SOURCE_DIR, name);
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	vkdev_desc d = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (scene_load(path, scn, err, sizeof err) || vkdev_create(&d, dev, err, sizeof err)) {
 		fprintf(stderr, "%s\n", err);
 		return -1;
@@ -58,7 +58,7 @@ vkdev *tu_lavapipe(void)
 {
 	char err[1024];
 	vkdev *dev = NULL;
-	vkdev_desc d = {.device = "lavapipe", .validation = true};
+	vkdev_desc d = {.device = TASLAB_TEST_DEVICE, .validation = true};
 	if (vkdev_create(&d, &dev, err, sizeof err))
 		fail_msg("%s", err);
 	return dev;

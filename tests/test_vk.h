@@ -12,7 +12,7 @@
 struct scene;
 struct vkdev;
 struct colour;
-/* Loads scenes/NAME.json and opens lavapipe with the validation layer; 0 or -1 (message printed). */
+/* Loads scenes/NAME.json and opens the test device (lavapipe by default) with the validation layer; 0 or -1 (message printed). */
 int tu_open_scene_and_device(const char *name, struct scene **scn, struct vkdev **dev);
 /* Frees both; returns -1 when the device saw any validation message, so a group teardown fails. */
 int tu_close_scene_and_device(struct scene **scn, struct vkdev **dev);
@@ -28,8 +28,13 @@ typedef struct tu_clip {
 
 /* tests/data/NAME.json, or a path below the source tree when NAME contains '/'; fails the test on error. */
 struct scene *tu_load_scene(const char *name);
-/* lavapipe with the validation layer; fails the test on error. */
+/* The test device (TASLAB_TEST_DEVICE, lavapipe by default) with the validation layer; fails the test on error. */
 struct vkdev *tu_lavapipe(void);
+/* True when the tests render on lavapipe (the default). Exact equalities between *different pipelines* (tfr's
+ * shading vs ref's, OCIO's GLSL vs its rewrite, ...) hold there: llvmpipe compiles the same arithmetic the same way.
+ * A GPU's compiler contracts and reorders differently per pipeline (FMA, shadow-compare flips at a few pixels), so
+ * those tests state a tolerance for other devices (README "Tests": on an NVIDIA GPU). */
+#define TU_ON_LAVAPIPE (!strcmp(TASLAB_TEST_DEVICE, "lavapipe"))
 int tu_camera_index(const struct scene *s, const char *name);
 /* Renders frames [0, n) of a variant token with extra options ("name=value" or a flag name, NULL-terminated),
  * optionally a display transform and decision maps; checks the device saw no validation message. */

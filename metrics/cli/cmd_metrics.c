@@ -128,8 +128,9 @@ static int diff_main(void *opts, cli_ctx *ctx)
 		n += (size_t)snprintf(line + n, sizeof line - n, "; flicker %.3f", p->flicker_mean);
 	if (n < sizeof line && !isnan(p->flip_mean))
 		n += (size_t)snprintf(line + n, sizeof line - n, "; FLIP %.5f", p->flip_mean);
-	fprintf(stderr, "taslab: %zu frame pairs in %.2f s (%.1f pairs/s)%s -> %s/frames.csv, summary.json\n", r.frames,
-		r.seconds, r.frames / r.seconds, line, o->out);
+	fprintf(stderr, "taslab: %zu frame pairs%s in %.2f s (%.1f pairs/s)%s -> %s/frames.csv, summary.json%s\n",
+		r.frames, r.views > 1 ? " per eye" : "", r.seconds, (double)(r.frames * r.views) / r.seconds,
+		line, o->out, r.views > 1 ? " (both eyes pooled; each eye in L/ and R/)" : "");
 	return TL_OK;
 }
 
@@ -142,7 +143,9 @@ static const cli_command metrics_diff = {
 		       "exceed_2..exceed_64,psnr,ssim,flicker_mean,flip_mean), DIR/summary.json (the same, pooled over\n"
 		       "frames, plus FLIP's weighted median and quartiles, min and max over all pixels) and\n"
 		       "DIR/distribution.csv (the pooled distribution of d in 1-code-value bins). --metrics picks the\n"
-		       "metrics (one plug-in each); the column layout never changes.",
+		       "metrics (one plug-in each); the column layout never changes. Two stereo runs: each eye\n"
+		       "against the same eye into DIR/L/ and DIR/R/ (every file above), both eyes pooled into DIR/\n"
+		       "(frames.csv: each frame's eyes pooled); a stereo run against a mono one is refused.",
 	.options = diff_options,
 	.opts_size = sizeof(diff_cli_opts),
 	.defaults = diff_defaults,

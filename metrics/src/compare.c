@@ -250,6 +250,19 @@ void mtr_comparer_pool(mtr_comparer *c, const mtr_frame_stats *f, size_t n, mtr_
 			mtr_metric_registry[i]->pool(c->state[i], f, n, p);
 }
 
+int mtr_comparer_merge(mtr_comparer *into, const mtr_comparer *from, char *err, size_t err_size)
+{
+	if (into->selected != from->selected || (from->width && into->width &&
+						 (into->width != from->width || into->height != from->height)))
+		return tl_error(err, err_size, TL_ERR_ARG, "merging comparers of other metrics or frame sizes");
+	for (int k = 0; k < 256; k++)
+		into->hist[k] += from->hist[k];
+	for (int i = 0; mtr_metric_registry[i]; i++)
+		if ((into->selected & (1u << i)) && mtr_metric_registry[i]->merge)
+			mtr_metric_registry[i]->merge(into->state[i], from->state[i]);
+	return TL_OK;
+}
+
 const uint64_t *mtr_comparer_histogram(const mtr_comparer *c)
 {
 	return (c->pass & MTR_PASS_MAXRGB) ? c->hist : NULL;

@@ -45,7 +45,22 @@ static void sequence_free(sequence *s)
 	s->n = 0;
 }
 
-static int sequence_open(const char *path, const char *ext, sequence *s, char *err, size_t err_size)
+/* The views of PATH: 2 for a stereo run (frames/L, frames/R), 1 for a mono run or a folder of images. A run folder
+ * without a manifest or with a bad one is reported by sequence_open. */
+static uint32_t path_views(const char *path)
+{
+	char frames[4096], err[256];
+	snprintf(frames, sizeof frames, "%s/frames", path);
+	run_manifest m;
+	if (!is_dir(frames) || run_manifest_read(path, &m, err, sizeof err))
+		return 1;
+	return m.views > 1 ? m.views : 1;
+}
+
+/* Opens view `view` of PATH (a run with `views` views, or a folder of images when `views` is 1 and PATH has no
+ * frames/). */
+static int sequence_open(const char *path, const char *ext, uint32_t views, uint32_t view, sequence *s, char *err,
+			 size_t err_size)
 {
 	memset(s, 0, sizeof *s);
 	char frames[4096];
@@ -67,6 +82,7 @@ static int sequence_open(const char *path, const char *ext, sequence *s, char *e
 			return rc;
 		s->w = m.width;
 		s->h = m.height;
+		snprintf(frames, sizeof frames, "%s/%s", path, run_view_dir(views, view));
 	}
 	snprintf(s->dir, sizeof s->dir, "%s", is_dir(frames) ? frames : path);
 	DIR *d = opendir(s->dir);
@@ -285,66 +301,30 @@ static void csv_row(FILE *f, long frame, const mtr_frame_stats *s)
 	fputc('\n', f);
 }
 
-int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)
+/* Compares one view's frame pairs (two opened sequences of the same names) into OUT/frames.csv and, with
+ * --heatmaps, OUT/heatmaps; stats[i] receives pair i, *pixels the frame size, *compute the time in statistics. */
+static int diff_view(const mtr_diff_desc *d, const sequence *ra, const sequence *rb, const char *out, mtr_comparer *cmp,
+		     mtr_frame_stats *stats, uint64_t *pixels, double *compute, char *err, size_t err_size)
 {
-	const char *ext = d->format == MTR_FORMAT_PNG ? ".png" : ".exr";
-	sequence ra, rb;
-	int rc = -1;
-	mtr_frame_stats *stats = NULL;
+	int rc;
 	float *map = NULL, *flip_map = NULL;
 	pair_buf cur = {0}, prev = {0}, next = {0};
 	float *spare[2] = {NULL, NULL}; /* the buffers of the pair before prev, for the next decode */
 	size_t spare_n[2] = {0, 0};
 	FILE *csv = NULL;
 	tl_atomic csv_file = {0};
-	mtr_comparer *cmp = NULL;
 	char path[4096];
-	memset(res, 0, sizeof *res);
-	memset(&rb, 0, sizeof rb);
-	if (d->format == MTR_FORMAT_EXR && !d->colour)
-		return tl_error(err, err_size, TL_ERR_ARG, "EXR comparison needs a display transform");
-	/* An old summary must not look like this comparison's result, also when the runs are refused below (a frame
-	 * missing or of another size than the manifest's, issue 31.8). */
-	snprintf(path, sizeof path, "%s/summary.json", d->out);
-	unlink(path);
-	mtr_compare_desc cd = {.metrics = d->metrics, .options = d->options, .option_count = d->option_count,
-			       .threads = d->threads};
-	if ((rc = mtr_comparer_create(&cd, &cmp, err, err_size)))
-		return rc;
 	const int flip_index = mtr_metric_find("flip");
 	const bool want_flip = flip_index >= 0 && ((mtr_comparer_selected(cmp) >> flip_index) & 1u);
-	if ((rc = sequence_open(d->ref, ext, &ra, err, err_size))) {
-		mtr_comparer_destroy(&cmp);
-		return rc;
-	}
-	if ((rc = sequence_open(d->test, ext, &rb, err, err_size)))
-		goto done;
-	rc = TL_ERR_INPUT;
-	if (ra.n != rb.n) {
-		snprintf(err, err_size, "%s has %zu frames but %s has %zu: compare runs of the same frames", ra.dir, ra.n,
-			 rb.dir, rb.n);
-		goto done;
-	}
-	for (size_t i = 0; i < ra.n; i++)
-		if (strcmp(ra.names[i], rb.names[i])) {
-			snprintf(err, err_size, "frame files differ: %s/%s vs %s/%s", ra.dir, ra.names[i], rb.dir, rb.names[i]);
-			goto done;
-		}
-	snprintf(path, sizeof path, "%s/%s", d->out, d->heatmaps ? (want_flip ? "heatmaps/flip" : "heatmaps") : "");
+	snprintf(path, sizeof path, "%s/%s", out, d->heatmaps ? (want_flip ? "heatmaps/flip" : "heatmaps") : "");
 	if ((rc = tl_mkdirs(path, err, err_size)))
 		goto done;
 	if (d->plots) {
-		snprintf(path, sizeof path, "%s/plots", d->out);
+		snprintf(path, sizeof path, "%s/plots", out);
 		if ((rc = tl_mkdirs(path, err, err_size)))
 			goto done;
 	}
-	rc = TL_ERR_INPUT;
-	stats = calloc(ra.n, sizeof *stats);
-	if (!stats) {
-		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
-		goto done;
-	}
-	snprintf(path, sizeof path, "%s/frames.csv", d->out);
+	snprintf(path, sizeof path, "%s/frames.csv", out);
 	if ((rc = tl_atomic_open(&csv_file, path, err, err_size)))
 		goto done;
 	rc = TL_ERR_INPUT;
@@ -354,10 +334,9 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		if (mtr_column_where(c) & 1u)
 			fprintf(csv, ",%s", mtr_column_name(c));
 	fputc('\n', csv);
-	double t0 = tl_clock_s(), compute = 0;
-	loader l = {d, &ra, &rb, 0, &cur, {NULL, NULL}, {0, 0}};
+	loader l = {d, ra, rb, 0, &cur, {NULL, NULL}, {0, 0}};
 	load_pair(&l);
-	for (size_t i = 0; i < ra.n; i++) {
+	for (size_t i = 0; i < ra->n; i++) {
 		if (cur.rc) {
 			snprintf(err, err_size, "%s", cur.err);
 			rc = cur.rc;
@@ -366,13 +345,13 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		/* Overlap: decode pair i+1 on helper threads while pair i is measured. */
 		pthread_t th;
 		int threaded = 0;
-		loader ln = {d, &ra, &rb, i + 1, &next, {NULL, NULL}, {spare_n[0], spare_n[1]}};
-		if (i + 1 < ra.n) { /* the loader owns them from here */
+		loader ln = {d, ra, rb, i + 1, &next, {NULL, NULL}, {spare_n[0], spare_n[1]}};
+		if (i + 1 < ra->n) { /* the loader owns them from here */
 			ln.reuse[0] = spare[0], ln.reuse[1] = spare[1];
 			spare[0] = spare[1] = NULL;
 		}
 		memset(&next, 0, sizeof next);
-		if (i + 1 < ra.n)
+		if (i + 1 < ra->n)
 			threaded = pthread_create(&th, NULL, load_main, &ln) == 0;
 		size_t npx = (size_t)cur.w * cur.h;
 		if (d->heatmaps && ((!map && !(map = malloc(npx * sizeof *map))) ||
@@ -388,27 +367,27 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		double tc = tl_clock_s();
 		int crc = mtr_comparer_frame(cmp, &a, &b, have_prev ? &ap : NULL, have_prev ? &bp : NULL, map, flip_map,
 					     &stats[i], err, err_size);
-		compute += tl_clock_s() - tc;
+		*compute += tl_clock_s() - tc;
 		if (crc && i > 0 && (cur.w != prev.w || cur.h != prev.h))
-			snprintf(err, err_size, "frame %s has another size than the previous frames", ra.names[i]);
-		const int stem = (int)strlen(ra.names[i]) - 4;
+			snprintf(err, err_size, "frame %s has another size than the previous frames", ra->names[i]);
+		const int stem = (int)strlen(ra->names[i]) - 4;
 		if (!crc && d->heatmaps) {
-			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", d->out, stem, ra.names[i]);
+			snprintf(path, sizeof path, "%s/heatmaps/%.*s.png", out, stem, ra->names[i]);
 			crc = mtr_heatmap_write(path, map, cur.w, cur.h, d->heatmap_max > 0 ? d->heatmap_max : 64, err, err_size);
 		}
 		if (!crc && d->heatmaps && want_flip) {
-			snprintf(path, sizeof path, "%s/heatmaps/flip/%.*s.png", d->out, stem, ra.names[i]);
+			snprintf(path, sizeof path, "%s/heatmaps/flip/%.*s.png", out, stem, ra->names[i]);
 			crc = mtr_heatmap_write(path, flip_map, cur.w, cur.h, 1.0, err, err_size);
 		}
 		if (threaded)
 			pthread_join(th, NULL);
-		else if (i + 1 < ra.n)
+		else if (i + 1 < ra->n)
 			load_pair(&ln);
 		if (crc) {
 			rc = crc;
 			goto done;
 		}
-		csv_row(csv, atol(ra.names[i]), &stats[i]);
+		csv_row(csv, atol(ra->names[i]), &stats[i]);
 		free(spare[0]);
 		free(spare[1]);
 		spare[0] = prev.a;
@@ -419,17 +398,36 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		cur = next;
 		memset(&next, 0, sizeof next);
 	}
+	*pixels = cur_size(&prev);
 	csv = NULL;
-	if ((rc = tl_atomic_commit(&csv_file, err, err_size)))
-		goto done;
-	res->frames = ra.n;
-	mtr_comparer_pool(cmp, stats, ra.n, &res->pooled);
-	res->seconds = tl_clock_s() - t0;
-	res->compute_seconds = compute;
-	const mtr_frame_stats *p = &res->pooled;
+	rc = tl_atomic_commit(&csv_file, err, err_size);
+done:
+	tl_atomic_abort(&csv_file);
+	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b), free(spare[0]), free(spare[1]);
+	free(map);
+	free(flip_map);
+	return rc;
+}
+
+static const char *const eye_names[2] = {"L", "R"}; /* the run folder's frames/L, frames/R (run_view_dir) */
+
+/* OUT/distribution.csv, OUT/summary.json (written last: the folder is complete) and the plots of n pooled pairs of
+ * `pixels` pixels. `eye`: NULL (mono), "L" or "R" (one eye of a stereo diff) or "" (both eyes pooled). */
+static int write_summary(const mtr_diff_desc *d, const char *out, mtr_comparer *cmp, const mtr_frame_stats *stats,
+			 size_t n, size_t frames, uint64_t pixels, const char *eye, mtr_frame_stats *pooled, char *err,
+			 size_t err_size)
+{
+	char path[4096];
+	int rc;
+	mtr_comparer_pool(cmp, stats, n, pooled);
+	const mtr_frame_stats *p = pooled;
 	static const char ref_key[] = "ref"; /* summary.json's key of the reference frames: not a method name */
 	json_t *j = json_pack("{s:s, s:s, s:s, s:I}", ref_key, d->ref, "test", d->test, "format",
-			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)ra.n);
+			      d->format == MTR_FORMAT_PNG ? "png" : "exr", "frames", (json_int_t)frames);
+	if (eye && *eye)
+		json_object_set_new(j, "eye", json_string(eye));
+	else if (eye)
+		json_object_set_new(j, "stereo", json_true());
 	json_t *sel = json_array();
 	for (int m = 0; mtr_metric_name(m); m++)
 		if ((mtr_comparer_selected(cmp) >> m) & 1u)
@@ -438,7 +436,8 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 	for (int c = 0; mtr_column_name(c); c++)
 		if (mtr_column_where(c) & 2u)
 			json_object_set_new(j, mtr_column_name(c), num_or_null(mtr_column_value(c, p)));
-	if (want_flip) {
+	const int flip_index = mtr_metric_find("flip");
+	if (flip_index >= 0 && ((mtr_comparer_selected(cmp) >> flip_index) & 1u)) {
 		double ppd = MTR_FLIP_PPD_DEFAULT;
 		for (size_t k = 0; k < d->option_count; k++)
 			if (!strcmp(d->options[k].name, "ppd"))
@@ -446,18 +445,22 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 		json_object_set_new(j, "flip_ppd", json_real(ppd));
 	}
 	json_object_set_new(j, "pooling",
-			    json_string("mean over frames; maxrgb_max: max; psnr: from the mean MSE; flicker_mean: over "
+			    json_string(eye && !*eye ?
+					"stereo: each eye against the same eye (L/, R/), pooled here over both eyes' frames "
+					"as over 2 x frames pairs (frames.csv: each frame's two eyes pooled): means; maxrgb_max: "
+					"max; psnr: from the mean MSE; flicker_mean: over frames 2..n of each eye; flip_*: over "
+					"all pixels of both eyes; metrics not selected: null" :
+					"mean over frames; maxrgb_max: max; psnr: from the mean MSE; flicker_mean: over "
 					"frames 2..n; flip_*: over all pixels of all frames (weighted quartiles from a "
 					"histogram, within 2.5e-4 x the value); metrics not selected: null"));
-	/* distribution.csv first: summary.json, written last, means the folder is complete. */
 	const uint64_t *hist = mtr_comparer_histogram(cmp);
 	if (hist) {
-		uint64_t hist_total = (uint64_t)ra.n * cur_size(&prev);
+		uint64_t hist_total = (uint64_t)n * pixels;
 		tl_atomic hf;
-		snprintf(path, sizeof path, "%s/distribution.csv", d->out);
+		snprintf(path, sizeof path, "%s/distribution.csv", out);
 		if ((rc = tl_atomic_open(&hf, path, err, err_size))) {
 			json_decref(j);
-			goto done;
+			return rc;
 		}
 		fprintf(hf.f, "d_from,d_to,count,fraction\n");
 		for (int b = 0; b < 256; b++)
@@ -465,25 +468,129 @@ int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t
 				hist_total ? (double)hist[b] / (double)hist_total : 0.0);
 		if ((rc = tl_atomic_commit(&hf, err, err_size))) {
 			json_decref(j);
-			goto done;
+			return rc;
 		}
 	}
-	snprintf(path, sizeof path, "%s/summary.json", d->out);
+	snprintf(path, sizeof path, "%s/summary.json", out);
 	rc = tl_json_write(path, j, err, err_size);
 	json_decref(j);
 	if (rc)
-		goto done;
-	if (d->plots && hist && write_plots(d->out, err, err_size))
+		return rc;
+	if (d->plots && hist && write_plots(out, err, err_size))
 		fprintf(stderr, "taslab metrics: note: %s\n", err);
-	rc = 0;
+	return TL_OK;
+}
+
+/* Both eyes pooled per frame into OUT/frames.csv (frames of the two views in stats[0], stats[1]). */
+static int write_pooled_frames(const char *out, const sequence *ra, const mtr_frame_stats *const stats[2], char *err,
+			       size_t err_size)
+{
+	char path[4096];
+	tl_atomic f;
+	snprintf(path, sizeof path, "%s/frames.csv", out);
+	int rc = tl_atomic_open(&f, path, err, err_size);
+	if (rc)
+		return rc;
+	fputs("frame", f.f);
+	for (int c = 0; mtr_column_name(c); c++)
+		if (mtr_column_where(c) & 1u)
+			fprintf(f.f, ",%s", mtr_column_name(c));
+	fputc('\n', f.f);
+	for (size_t i = 0; i < ra->n; i++) {
+		mtr_frame_stats two[2] = {stats[0][i], stats[1][i]}, p;
+		mtr_pool(two, 2, &p);
+		csv_row(f.f, atol(ra->names[i]), &p);
+	}
+	return tl_atomic_commit(&f, err, err_size);
+}
+
+int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size)
+{
+	const char *ext = d->format == MTR_FORMAT_PNG ? ".png" : ".exr";
+	sequence ra[2], rb[2];
+	mtr_comparer *cmp[2] = {NULL, NULL};
+	mtr_frame_stats *stats[2] = {NULL, NULL}, *both = NULL;
+	char path[4096], out[4096];
+	int rc = TL_OK;
+	memset(res, 0, sizeof *res);
+	memset(ra, 0, sizeof ra);
+	memset(rb, 0, sizeof rb);
+	if (d->format == MTR_FORMAT_EXR && !d->colour)
+		return tl_error(err, err_size, TL_ERR_ARG, "EXR comparison needs a display transform");
+	/* An old summary must not look like this comparison's result, also when the runs are refused below (a frame
+	 * missing or of another size than the manifest's, issue 31.8). */
+	for (int k = 0; k < 3; k++) {
+		snprintf(path, sizeof path, "%s/%s%s", d->out, k ? eye_names[k - 1] : "", k ? "/summary.json" : "summary.json");
+		unlink(path);
+	}
+	/* Stereo (STEREO.md "metrics per eye against ref's same eye, then pooled"): a stereo run against a mono one has
+	 * no pairing that means anything. */
+	const uint32_t views = path_views(d->ref), tviews = path_views(d->test);
+	if (views != tviews || views > 2)
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s is %s but %s is %s: compare stereo runs with stereo runs (each eye "
+				"against the same eye), or give RUN/frames/L or RUN/frames/R to compare one eye as images",
+				d->ref, views > 1 ? "a stereo run" : "mono", d->test, tviews > 1 ? "a stereo run" : "mono");
+	mtr_compare_desc cd = {.metrics = d->metrics, .options = d->options, .option_count = d->option_count,
+			       .threads = d->threads};
+	double t0 = tl_clock_s();
+	uint64_t pixels = 0;
+	for (uint32_t v = 0; v < views; v++) {
+		if ((rc = mtr_comparer_create(&cd, &cmp[v], err, err_size)) ||
+		    (rc = sequence_open(d->ref, ext, views, v, &ra[v], err, err_size)) ||
+		    (rc = sequence_open(d->test, ext, views, v, &rb[v], err, err_size)))
+			goto done;
+		rc = TL_ERR_INPUT;
+		if (ra[v].n != rb[v].n) {
+			snprintf(err, err_size, "%s has %zu frames but %s has %zu: compare runs of the same frames", ra[v].dir,
+				 ra[v].n, rb[v].dir, rb[v].n);
+			goto done;
+		}
+		for (size_t i = 0; i < ra[v].n; i++)
+			if (strcmp(ra[v].names[i], rb[v].names[i]) || (v && strcmp(ra[v].names[i], ra[0].names[i]))) {
+				snprintf(err, err_size, "frame files differ: %s/%s vs %s/%s", ra[v].dir, ra[v].names[i],
+					 v && strcmp(ra[v].names[i], ra[0].names[i]) ? ra[0].dir : rb[v].dir,
+					 v && strcmp(ra[v].names[i], ra[0].names[i]) ? ra[0].names[i] : rb[v].names[i]);
+				goto done;
+			}
+		if (v && ra[v].n != ra[0].n) {
+			snprintf(err, err_size, "%s has %zu frames but %s has %zu", ra[v].dir, ra[v].n, ra[0].dir, ra[0].n);
+			goto done;
+		}
+		if (!(stats[v] = calloc(ra[v].n, sizeof *stats[v]))) {
+			rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+			goto done;
+		}
+		snprintf(out, sizeof out, "%s%s%s", d->out, views > 1 ? "/" : "", views > 1 ? eye_names[v] : "");
+		if ((rc = diff_view(d, &ra[v], &rb[v], out, cmp[v], stats[v], &pixels, &res->compute_seconds, err, err_size)) ||
+		    (rc = write_summary(d, out, cmp[v], stats[v], ra[v].n, ra[v].n, pixels, views > 1 ? eye_names[v] : NULL,
+					views > 1 ? &res->eye[v] : &res->pooled, err, err_size)))
+			goto done;
+	}
+	if (views > 1) { /* both eyes pooled: summary.json last, so the folder is complete only with it */
+		const size_t n = ra[0].n;
+		const mtr_frame_stats *const per_eye[2] = {stats[0], stats[1]};
+		if (!(both = malloc(2 * n * sizeof *both))) {
+			rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+			goto done;
+		}
+		memcpy(both, stats[0], n * sizeof *both);
+		memcpy(both + n, stats[1], n * sizeof *both);
+		if ((rc = mtr_comparer_merge(cmp[0], cmp[1], err, err_size)) ||
+		    (rc = write_pooled_frames(d->out, &ra[0], per_eye, err, err_size)) ||
+		    (rc = write_summary(d, d->out, cmp[0], both, 2 * n, n, pixels, "", &res->pooled, err, err_size)))
+			goto done;
+	}
+	res->frames = ra[0].n;
+	res->views = views;
+	res->seconds = tl_clock_s() - t0;
+	rc = TL_OK;
 done:
-	tl_atomic_abort(&csv_file);
-	free(cur.a), free(cur.b), free(prev.a), free(prev.b), free(next.a), free(next.b), free(spare[0]), free(spare[1]);
-	free(map);
-	free(flip_map);
-	free(stats);
-	mtr_comparer_destroy(&cmp);
-	sequence_free(&ra);
-	sequence_free(&rb);
+	for (uint32_t v = 0; v < 2; v++) {
+		free(stats[v]);
+		mtr_comparer_destroy(&cmp[v]);
+		sequence_free(&ra[v]);
+		sequence_free(&rb[v]);
+	}
+	free(both);
 	return rc;
 }

@@ -119,6 +119,9 @@ typedef struct mtr_metric {
 	int (*compute)(void *state, const mtr_pair *p, mtr_frame_stats *out, char *err, size_t err_size);
 	/* Pools n frames' fields into *pooled. `state` is NULL for the stateless mtr_pool(). */
 	void (*pool)(void *state, const mtr_frame_stats *frames, size_t n, mtr_frame_stats *pooled);
+	/* Optional, for state that pools over pixels: adds what `from` (the same metric with the same options) has
+	 * gathered over its frames to `into`, as if `into` had compared them too (a stereo diff pools both eyes). */
+	void (*merge)(void *into, const void *from);
 	/* Optional: frees what create/compute allocated (not the state itself). */
 	void (*destroy)(void *state);
 } mtr_metric;

@@ -160,6 +160,16 @@ static void flip_pool(void *state, const mtr_frame_stats *f, size_t n, mtr_frame
 		p->flip_q1_weighted = p->flip_weighted_median = p->flip_q3_weighted = NAN;
 }
 
+static void flip_merge(void *into, const void *from)
+{
+	flip_state *a = into;
+	const flip_state *b = from;
+	for (uint32_t k = 0; k < HIST_BINS; k++) {
+		a->clip->bin[k].count += b->clip->bin[k].count;
+		a->clip->bin[k].sum += b->clip->bin[k].sum;
+	}
+}
+
 static void flip_destroy(void *state)
 {
 	flip_state *s = state;
@@ -195,5 +205,6 @@ const mtr_metric mtr_metric_flip = {
 	.create = flip_create,
 	.compute = flip_compute,
 	.pool = flip_pool,
+	.merge = flip_merge,
 	.destroy = flip_destroy,
 };

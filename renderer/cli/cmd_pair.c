@@ -20,18 +20,20 @@
 #include "taslab/tl_fs.h"
 #include "taslab/vkdev.h"
 
-/* reference | variant, side by side with a 2-pixel grey gap. */
-static int inspect_clip(const char *ref_run, const char *var_run, uint32_t first, uint32_t end, float fps,
+/* reference | variant, side by side with a 2-pixel grey gap; stereo runs: their side-by-side frames (sbs/, left |
+ * right) stacked, the reference above the variant with a 2-row grey gap. */
+static int inspect_clip(const char *ref_run, const char *var_run, bool stereo, uint32_t first, uint32_t end, float fps,
 			const char *out, char *err, size_t err_size)
 {
+	const char *dir = stereo ? "sbs" : "frames";
 	clip_writer *w = NULL;
 	uint8_t *a = NULL, *b = NULL, *sbs = NULL;
 	int rc = TL_ERR_INPUT;
 	for (uint32_t f = first; f < end; f++) {
 		char pa[TL_PATH_MAX], pb[TL_PATH_MAX];
 		uint32_t wa, ha, wb, hb;
-		snprintf(pa, sizeof pa, "%s/frames/%06u.png", ref_run, f);
-		snprintf(pb, sizeof pb, "%s/frames/%06u.png", var_run, f);
+		snprintf(pa, sizeof pa, "%s/%s/%06u.png", ref_run, dir, f);
+		snprintf(pb, sizeof pb, "%s/%s/%06u.png", var_run, dir, f);
 		free(a);
 		free(b);
 		a = b = NULL;
@@ -42,16 +44,22 @@ static int inspect_clip(const char *ref_run, const char *var_run, uint32_t first
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s and %s differ in size", pa, pb);
 			goto done;
 		}
-		uint32_t W = 2 * wa + 2;
+		uint32_t W = stereo ? wa : 2 * wa + 2, H = stereo ? 2 * ha + 2 : ha;
 		if (!w) {
-			if (!(sbs = malloc((size_t)W * ha * 3))) {
+			if (!(sbs = malloc((size_t)W * H * 3))) {
 				rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 				goto done;
 			}
-			if ((rc = clip_writer_create(out, W, ha, fps, &w, err, err_size)))
+			if ((rc = clip_writer_create(out, W, H, fps, &w, err, err_size)))
 				goto done;
 		}
-		for (uint32_t y = 0; y < ha; y++) {
+		if (stereo) {
+			size_t plane = (size_t)wa * ha * 3;
+			memcpy(sbs, a, plane);
+			memset(sbs + plane, 128, (size_t)wa * 2 * 3);
+			memcpy(sbs + plane + (size_t)wa * 2 * 3, b, plane);
+		}
+		for (uint32_t y = 0; !stereo && y < ha; y++) {
 			uint8_t *row = sbs + (size_t)y * W * 3;
 			memcpy(row, a + (size_t)y * wa * 3, (size_t)wa * 3);
 			memset(row + (size_t)wa * 3, 128, 6);
@@ -77,6 +85,13 @@ static const cli_opt pair_options[] = {
 	{.name = "out", .arg = "DIR",
 	 .help = "output folder (runs/, clips/, inspect/, pairs.json)",
 	 .type = CLI_STRING, .offset = offsetof(pair_opts, out)},
+	{.name = "stereo", .arg = NULL,
+	 .help = "both eyes (--size per eye): every run stereo, the clips side by side (2W x H, left | right), "
+			     "pairs.json \"display\": \"stereo\" for a study of side-by-side clips",
+	 .type = CLI_FLAG, .offset = offsetof(pair_opts, stereo)},
+	{.name = "ipd", .arg = "M",
+	 .help = "with --stereo: distance between the eyes in metres (default 0.063)",
+	 .type = CLI_DOUBLE, .offset = offsetof(pair_opts, ipd), .lo = 0.0, .hi = RENDER_IPD_MAX},
 	{0},
 };
 
@@ -84,6 +99,7 @@ static void pair_defaults(void *opts, cli_setup_opts *setup)
 {
 	(void)setup;
 	((pair_opts *)opts)->variants = "ref";
+	((pair_opts *)opts)->ipd = -1.0;
 }
 
 static int pair_validate(void *opts, cli_ctx *ctx)
@@ -91,6 +107,10 @@ static int pair_validate(void *opts, cli_ctx *ctx)
 	pair_opts *o = opts;
 	if (!o->out)
 		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--out DIR is required (see 'taslab pair --help')");
+	if (o->ipd >= 0.0 && !o->stereo)
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--ipd needs --stereo");
+	if (o->stereo && o->ipd < 0.0)
+		o->ipd = RENDER_STEREO_IPD_DEFAULT;
 	char buf[2048];
 	const char *items[32];
 	int rc = cli_split_list(o->variants, "--variants", buf, sizeof buf, items, 32, &o->count, ctx->err, sizeof ctx->err);
@@ -130,7 +150,8 @@ static int pair_main(void *opts, cli_ctx *ctx)
 	}
 	pairs_condition conds[32];
 	pairs_set set = {.fps = s->fps, .first_frame = s->first, .last_frame = s->end - 1, .width = s->width,
-			 .height = s->height, .conditions = conds, .count = 0};
+			 .height = s->height, .conditions = conds, .count = 0, .views = o->stereo ? 2 : 1,
+			 .ipd = o->stereo ? o->ipd : 0.0};
 	snprintf(set.scene, sizeof set.scene, "%s", scn->name);
 	snprintf(set.scene_path, sizeof set.scene_path, "%s", s->scene_path);
 	snprintf(set.camera, sizeof set.camera, "%s", scn->cameras[s->camera].name);
@@ -152,19 +173,28 @@ static int pair_main(void *opts, cli_ctx *ctx)
 		if (!same_as_ref) {
 			snprintf(run, sizeof run, "%s/runs/%s", o->out, id);
 			snprintf(clip, sizeof clip, "%s/clips/%s.webm", o->out, id);
-			fprintf(stderr, "taslab: pair %s/%s: rendering %s (frames %u..%u, %ux%u)\n", scn->name,
-				scn->cameras[s->camera].name, id, s->first, s->end - 1, s->width, s->height);
+			fprintf(stderr, "taslab: pair %s/%s: rendering %s (frames %u..%u, %ux%u%s)\n", scn->name,
+				scn->cameras[s->camera].name, id, s->first, s->end - 1, s->width, s->height,
+				o->stereo ? " per eye, stereo" : "");
 			render_run_desc rr = {.dev = s->dev, .scene = scn, .scene_path = s->scene_path, .camera = s->camera,
 					      .colour = s->colour, .method = mc, .first = s->first, .end = s->end,
 					      .width = s->width, .height = s->height, .fps = s->fps, .write_exr = true,
-					      .write_png = true, .out = run, .command_line = ctx->command_line};
+					      .write_png = true, .out = run, .command_line = ctx->command_line,
+					      .views = o->stereo ? 2 : 1, .ipd = o->stereo ? (float)o->ipd : 0.0f};
 			uint32_t n;
 			char why[1024];
 			if ((rc = render_run(&rr, why, sizeof why)) || (rc = clip_encode_run(run, clip, &n, why, sizeof why)))
 				return tl_error(err, err_size, rc, "%s: %s", id, why);
 		}
-		if (k < 0)
+		if (k < 0) { /* the runs' input digests, so `report --study` can check the set against a sweep (issue 27.12) */
+			run_manifest m;
+			char why[1024];
+			if ((rc = run_manifest_read(run, &m, why, sizeof why)))
+				return tl_error(err, err_size, rc, "%s", why);
+			snprintf(set.scene_digest, sizeof set.scene_digest, "%s", m.scene_digest);
+			snprintf(set.colour_digest, sizeof set.colour_digest, "%s", m.colour_digest);
 			continue;
+		}
 		pairs_condition *c = &conds[set.count++];
 		memset(c, 0, sizeof *c);
 		snprintf(c->id, sizeof c->id, "%s", id);
@@ -180,7 +210,7 @@ static int pair_main(void *opts, cli_ctx *ctx)
 		snprintf(ref_run, sizeof ref_run, "%s/runs/ref", o->out);
 		snprintf(var_run, sizeof var_run, "%s/%s", o->out, c->run);
 		snprintf(inspect, sizeof inspect, "%s/%s", o->out, c->inspect);
-		if ((rc = inspect_clip(ref_run, var_run, s->first, s->end, s->fps, inspect, why, sizeof why)))
+		if ((rc = inspect_clip(ref_run, var_run, o->stereo, s->first, s->end, s->fps, inspect, why, sizeof why)))
 			return tl_error(err, err_size, rc, "%s: %s", id, why);
 	}
 	if ((rc = pairs_write(path, &set, err, err_size)))
@@ -198,7 +228,9 @@ const cli_command cli_cmd_pair = {
 		       "  DIR/runs/ID/        run folders (frames, stats.csv, manifest.json)\n"
 		       "  DIR/clips/ID.webm   bit-exact lossless clips for the study\n"
 		       "  DIR/inspect/ID.webm reference | variant side by side, for looking at the differences\n"
-		       "  DIR/pairs.json      the conditions (scene, camera, camera_motion, method, T, period) and clips",
+		       "  DIR/pairs.json      the conditions (scene, camera, camera_motion, method, T, period) and clips\n"
+		       "With --stereo every run renders both eyes and the clips show them side by side (left | right;\n"
+		       "inspect: the reference's above the variant's); pairs.json says \"display\": \"stereo\".",
 	.options = pair_options,
 	.opts_size = sizeof(pair_opts),
 	.defaults = pair_defaults,

@@ -27,7 +27,27 @@
 
 /* ------------------------------------------------------------------ the closing step */
 
-int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric, bool report,
+/* The mono sweep of `taslab report --mono`: its spec and rows (malloc'ed). */
+static int mono_rows(const sweep_spec *s, const char *mono_dir, sweep_spec **ms, mtr_sweep_row **rows, size_t *count,
+		     char *err, size_t err_size)
+{
+	char path[TL_PATH_MAX + 32];
+	if (!s->stereo)
+		return tl_error(err, err_size, TL_ERR_ARG, "--mono: this sweep is not stereo (made without --stereo)");
+	snprintf(path, sizeof path, "%s/sweep.json", mono_dir);
+	if (!(*ms = calloc(1, sizeof **ms)))
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	int rc = tl_is_file(path) ? sweep_spec_read(path, *ms, err, err_size)
+				  : tl_error(err, err_size, TL_ERR_ARG, "--mono %s is not a sweep folder (no sweep.json)", mono_dir);
+	if (!rc && (*ms)->stereo)
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--mono %s is a stereo sweep: give a mono one", mono_dir);
+	if (!rc)
+		rc = mtr_sweep_collect(*ms, mono_dir, rows, count, err, err_size);
+	return rc;
+}
+
+int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric,
+		     const char *mono_dir, bool report,
 		     bool quiet, size_t *incomplete, char *report_path, size_t report_path_size, char *err, size_t err_size)
 {
 	size_t n = sweep_run_count(s);
@@ -52,10 +72,18 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 		if (trc)
 			fprintf(stderr, "taslab: run %zu: %s\n", i, why);
 	}
-	mtr_sweep_row *rows = NULL;
-	size_t count = 0;
-	if ((rc = mtr_sweep_collect(s, dir, &rows, &count, err, err_size)))
+	mtr_sweep_row *rows = NULL, *mrows = NULL;
+	sweep_spec *ms = NULL;
+	size_t count = 0, mcount = 0;
+	if (mono_dir && (rc = mono_rows(s, mono_dir, &ms, &mrows, &mcount, err, err_size))) {
+		free(ms);
 		return rc;
+	}
+	if ((rc = mtr_sweep_collect(s, dir, &rows, &count, err, err_size))) {
+		free(ms);
+		free(mrows);
+		return rc;
+	}
 	*incomplete = 0;
 	for (size_t i = 0; i < count; i++)
 		*incomplete += !(rows[i].status.run && rows[i].status.clip && rows[i].status.metrics);
@@ -63,12 +91,15 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 	if (!rc && report) {
 		double t0 = tl_clock_s();
 		sty_report_desc rd = {.dir = dir, .spec = s, .rows = rows, .count = count, .study = study,
-				      .jnd_metric = jnd_metric};
+				      .jnd_metric = jnd_metric, .mono_dir = mono_dir, .mono_spec = ms, .mono_rows = mrows,
+				      .mono_count = mcount};
 		rc = sty_report_write(&rd, report_path, report_path_size, err, err_size);
 		if (!rc && !quiet)
 			fprintf(stderr, "taslab: report written in %.1f s\n", tl_clock_s() - t0);
 	}
 	free(rows);
+	free(mrows);
+	free(ms);
 	return rc;
 }
 
@@ -298,7 +329,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	if (rc)
 		goto done;
 	char report[TL_PATH_MAX];
-	if ((rc = cli_sweep_finish(spec, dir, NULL, NULL, !o->no_report, o->quiet, &incomplete, report, sizeof report, err,
+	if ((rc = cli_sweep_finish(spec, dir, NULL, NULL, NULL, !o->no_report, o->quiet, &incomplete, report, sizeof report, err,
 				   err_size)))
 		goto done;
 	if (!o->quiet)
@@ -367,6 +398,10 @@ static const cli_opt report_options[] = {
 	{.name = "jnd-against", .arg = "COLUMN",
 	 .help = "summary.csv column to plot the JND against (default flip_mean; e.g. maxrgb_p99, exceed_T, flicker_mean)",
 	 .type = CLI_STRING, .offset = offsetof(report_opts, jnd_metric)},
+	{.name = "mono", .arg = "MONO_SWEEP",
+	 .help = "a stereo sweep's speedups and shaded samples beside this mono sweep's (same scenes, paths, variants, "
+		 "frames, size per eye): SWEEP/stereo_vs_mono.csv and the report's Stereo section",
+	 .type = CLI_STRING, .offset = offsetof(report_opts, mono)},
 	{.name = "quiet", .arg = NULL,
 	 .help = "no progress output",
 	 .type = CLI_FLAG, .offset = offsetof(report_opts, quiet)},
@@ -403,7 +438,7 @@ static int report_main(void *opts, cli_ctx *ctx)
 	int rc = tl_is_file(path) ? sweep_spec_read(path, spec, ctx->err, sizeof ctx->err)
 				  : tl_error(ctx->err, sizeof ctx->err, TL_ERR_INPUT, "%s is not a sweep folder (no sweep.json)", dir);
 	if (!rc)
-		rc = cli_sweep_finish(spec, dir, o->study, o->jnd_metric, true, o->quiet, &incomplete, report, sizeof report,
+		rc = cli_sweep_finish(spec, dir, o->study, o->jnd_metric, o->mono, true, o->quiet, &incomplete, report, sizeof report,
 				      ctx->err, sizeof ctx->err);
 	if (!rc) {
 		printf("%s\n", report);
@@ -419,7 +454,7 @@ static int report_main(void *opts, cli_ctx *ctx)
 const cli_command cli_cmd_report = {
 	.name = "report",
 	.summary = "rebuild a sweep's summary.csv, table1.md and report (optionally with a study's results)",
-	.synopsis = "taslab report SWEEP [--study STUDY.db] [--jnd-against COLUMN]",
+	.synopsis = "taslab report SWEEP [--study STUDY.db] [--jnd-against COLUMN] [--mono MONO_SWEEP]",
 	.description = "Reads SWEEP/sweep.json, computes comparisons still missing for complete runs, and writes\n"
 		       "SWEEP/summary.csv, SWEEP/table1.md and SWEEP/report/index.html. With --study, the study's tally\n"
 		       "(Q, p_ref, JND with 95% intervals) is joined per condition and the JND plotted against a metric.\n"

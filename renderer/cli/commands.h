@@ -32,6 +32,8 @@ typedef struct pair_opts {
 	const char *variants, *out;
 	method_config configs[32]; /* the parsed variants (validate) */
 	size_t count;
+	bool stereo;               /* --stereo: both eyes, side-by-side clips (STEREO.md) */
+	double ipd;                /* --ipd M; negative until given */
 } pair_opts;
 
 typedef struct tonemap_opts {
@@ -99,6 +101,7 @@ typedef struct sweep_opts {
 /* `taslab report` (cmd_report.c). */
 typedef struct report_opts {
 	const char *study, *jnd_metric;
+	const char *mono; /* --mono MONO_SWEEP: a stereo sweep's speedups beside this mono sweep's */
 	bool quiet;
 } report_opts;
 

@@ -105,13 +105,14 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	if (!rc)
 		rc = mkparent(run_dir, err, err_size);
 	if (!rc) {
-		fprintf(stderr, "taslab sweep: rendering %s/%s %s on %s, frames %u..%u at %ux%u\n", sc->name,
+		fprintf(stderr, "taslab sweep: rendering %s/%s %s on %s, frames %u..%u at %ux%u%s\n", sc->name,
 			sc->cameras[r->camera].name, v->variant, dev->props.deviceName, sc->first, sc->end - 1, s->width,
-			s->height);
+			s->height, s->stereo ? " per eye, stereo" : "");
 		render_run_desc rr = {.dev = dev, .scene = scn, .scene_path = sc->path, .camera = cam, .colour = col,
 				      .method = &mc, .first = sc->first, .end = sc->end, .width = s->width, .height = s->height,
 				      .fps = (float)sc->fps, .write_exr = true, .write_png = true, .out = run_dir,
-				      .command_line = command_line, .progress = progress_byte, .user = &progress_fd};
+				      .command_line = command_line, .progress = progress_byte, .user = &progress_fd,
+				      .views = s->stereo ? 2 : 1, .ipd = (float)s->ipd};
 		rc = render_run(&rr, err, err_size);
 	}
 	if (!rc && dev && vkdev_validation_messages(dev))

@@ -12,6 +12,7 @@
 #include "taslab/method.h"
 #include "taslab/metrics.h"
 #include "taslab/metrics_flip.h"
+#include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/sweep_keys.h"
 
@@ -391,6 +392,9 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	if (mtr_metric_parse(s->metrics, &mask, err, err_size))
 		return TL_ERR_ARG;
 	s->ppd = r->ppd > 0 ? r->ppd : MTR_FLIP_PPD_DEFAULT;
+	if (r->ipd > 0 && !r->stereo)
+		return tl_error(err, err_size, TL_ERR_ARG, "ipd needs stereo (--ipd goes with --stereo)");
+	s->ipd = s->stereo ? (r->ipd > 0 ? r->ipd : RENDER_STEREO_IPD_DEFAULT) : 0.0;
 	s->width = r->width ? r->width : 960;
 	s->height = r->height ? r->height : 540;
 	for (size_t i = 0; i < r->camera_count; i++)

@@ -219,6 +219,7 @@ static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visib
 	if (r->ts_pool)
 		vkCmdResetQueryPool(cmd, r->ts_pool, 0, FRAME_MAX_PASSES + 1);
 	r->ts_count = 0;
+	r->stats_recorded = false;
 	if (r->method->record_pre) {
 		r->method->record_pre(r, cmd, frame);
 		if ((res = render_cmd_submit_wait(r)))
@@ -248,7 +249,7 @@ static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visib
 	st->shaded_samples = st->reused_samples = st->visible_units = st->shaded_units = st->new_units = -1;
 	st->allocated_samples = st->late_samples = -1;
 	st->fs_invocations = st->cs_invocations = -1;
-	if (r->stats_pool) {
+	if (r->stats_pool && r->stats_recorded) {
 		uint64_t v[2];
 		if (vkGetQueryPoolResults(r->dev->device, r->stats_pool, 0, 1, sizeof v, v, sizeof v,
 					  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
@@ -261,15 +262,14 @@ static int frame_view(render *r, uint32_t frame, frame_stats *st, int64_t *visib
 	int have_ts = r->ts_pool && r->ts_count == r->method->pass_count + 1 &&
 		      vkGetQueryPoolResults(r->dev->device, r->ts_pool, 0, r->ts_count, sizeof ts, ts, sizeof ts[0],
 					    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS;
-	double period_ms = r->dev->props.limits.timestampPeriod * 1e-6;
 	for (uint32_t p = 0; p < st->pass_count; p++) {
 		st->pass_names[p] = r->method->pass_names[p];
-		st->gpu_ms[p] = have_ts ? (double)(ts[p + 1] - ts[p]) * period_ms : -1.0;
+		st->gpu_ms[p] = have_ts ? vkdev_elapsed_ms(r->dev, ts[p], ts[p + 1]) : -1.0;
 	}
 	/* The frame's time is the method's work: a pass named "truth" (the --truth diagnostic, which shades the reused
 	 * samples to count the late ones; rrc/tarc copy their --decisions maps in the same interval; empty without
 	 * either) is left out, so speedups do not change with these diagnostics. Its own time stays in gpu_ms_truth. */
-	st->gpu_ms_total = have_ts ? (double)(ts[st->pass_count] - ts[0]) * period_ms : -1.0;
+	st->gpu_ms_total = have_ts ? vkdev_elapsed_ms(r->dev, ts[0], ts[st->pass_count]) : -1.0;
 	for (uint32_t p = 0; have_ts && p < st->pass_count; p++)
 		if (!strcmp(st->pass_names[p], "truth"))
 			st->gpu_ms_total -= st->gpu_ms[p];

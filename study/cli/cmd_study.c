@@ -1,4 +1,5 @@
-/* cmd_study.c — `taslab study design|add|links|serve|status|tally|export|import` (study/; `simulate`: cmd_study_simulate.c). */
+/* cmd_study.c — `taslab study design|add|links|serve|status|tally|export|import` (study/; `simulate`:
+ * cmd_study_simulate.c; `pairs`: cmd_study_pairs.c). */
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -342,12 +343,14 @@ static const cli_command study_import = {
 };
 
 extern const cli_command cli_cmd_study_simulate; /* cmd_study_simulate.c (issue 28) */
-static const cli_command *const study_subs[] = {&study_design, &study_add, &study_links, &study_serve, &study_status,
-						&study_tally, &study_export, &study_import, &cli_cmd_study_simulate, NULL};
+extern const cli_command cli_cmd_study_pairs;    /* cmd_study_pairs.c (issue 27.13) */
+static const cli_command *const study_subs[] = {&cli_cmd_study_pairs, &study_design, &study_add, &study_links,
+						&study_serve, &study_status, &study_tally, &study_export,
+						&study_import, &cli_cmd_study_simulate, NULL};
 
 const cli_command cli_cmd_study = {
 	.name = "study",
-	.summary = "pairwise-comparison studies: design, add, serve, status, tally, export/import",
+	.summary = "pairwise-comparison studies: pairs, design, add, serve, status, tally, export/import",
 	.synopsis = "taslab study <subcommand> --db STUDY.db [options]",
 	.subcommands = study_subs,
 };

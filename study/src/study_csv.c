@@ -41,6 +41,17 @@ int sty_csv_formula(const char *s)
 	return s[0] == '=' || s[0] == '+' || s[0] == '-' || s[0] == '@' || s[0] == '\t' || s[0] == '\r';
 }
 
+const char *sty_num_cell(double v, const char *fmt, char *buf, size_t n)
+{
+	if (isnan(v))
+		snprintf(buf, n, "%s", "");
+	else if (isinf(v))
+		snprintf(buf, n, "%s", v > 0 ? "inf" : "-inf");
+	else
+		snprintf(buf, n, fmt, v);
+	return buf;
+}
+
 const char *sty_csv_cell(const char *s, char *buf, size_t n)
 {
 	/* OWASP "CSV injection": a spreadsheet runs a cell starting with = + - @ (and TAB/CR before them) as a

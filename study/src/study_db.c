@@ -175,6 +175,7 @@ static int db_connect(sty *s, const char *file, bool init, char *err, size_t err
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: the study has no admin token (damaged?)", s->path);
 	meta_get(s, "stimuli", s->stimuli, sizeof s->stimuli);
 	meta_get(s, "served_url", s->served_url, sizeof s->served_url);
+	meta_get(s, "display", s->display, sizeof s->display);
 	return TL_OK;
 }
 

@@ -85,12 +85,21 @@ typedef struct cond {
 
 /* Reads one pairs.json (from `taslab pair`, output/pairs.h) into conditions; `rel` is its folder relative to
  * the stimuli. Every clip it names must exist, so a session never fails midway on a missing file. */
-static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs, size_t *n, char *err, size_t err_size)
+static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs, size_t *n, uint32_t *views, char *err,
+		      size_t err_size)
 {
 	pairs_set set;
 	int rc = pairs_read(file, &set, err, err_size);
 	if (rc)
 		return rc;
+	/* One kind of display per study (STEREO.md "studies add display=stereo"): the page shows every clip one way. */
+	if (*views && set.views != *views) {
+		pairs_free(&set);
+		return tl_error(err, err_size, TL_ERR_INPUT, "%s: a %s set in a study of %s sets: make stereo and mono sets two "
+				"studies (a participant's page shows one kind of clip)", file, *views > 1 ? "mono" : "stereo",
+				*views > 1 ? "stereo" : "mono");
+	}
+	*views = set.views;
 	if (strcmp(set.camera_motion, "stationary") && strcmp(set.camera_motion, "moving")) {
 		pairs_free(&set);
 		return tl_error(err, err_size, TL_ERR_INPUT, "%s: camera_motion must be stationary or moving", file);
@@ -157,6 +166,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	int rc = TL_ERR_ARG;
 	char **sets = NULL;
 	size_t nsets = 0;
+	uint32_t views = 0; /* of the sets: 1 mono, 2 stereo (one kind per study) */
 	memset(out, 0, sizeof *out);
 	if (!d->stimuli || d->participants < 1 || d->participants > 100000) {
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
@@ -207,7 +217,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	qsort(sets, nsets, sizeof *sets, cmp_str);
 	for (size_t i = 0; i < nsets; i++) {
 		snprintf(p, sizeof p, "%s%s%s/pairs.json", root, sets[i][0] ? "/" : "", sets[i]);
-		if ((rc = read_pairs(s, p, sets[i], &cs, &nc, err, err_size)))
+		if ((rc = read_pairs(s, p, sets[i], &cs, &nc, &views, err, err_size)))
 			goto done;
 		rc = TL_ERR_ARG;
 	}
@@ -313,13 +323,15 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	char seedbuf[32];
 	snprintf(seedbuf, sizeof seedbuf, "%llu", (unsigned long long)d->seed);
 	ok = ok && !sty_meta_set(s, "stimuli", root) && !sty_meta_set(s, "seed", seedbuf) &&
-	     !sty_meta_set(s, "design", d->adaptive ? "adaptive" : "full");
+	     !sty_meta_set(s, "design", d->adaptive ? "adaptive" : "full") &&
+	     !sty_meta_set(s, "display", views > 1 ? "stereo" : "");
 	if (!ok || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
 		rc = sty_db_fail(s, err, err_size, "writing the design");
 		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
 		goto done;
 	}
 	snprintf(s->stimuli, sizeof s->stimuli, "%s", root);
+	snprintf(s->display, sizeof s->display, "%s", views > 1 ? "stereo" : "");
 	/* Session length: clip durations from the first set's pairs.json frames and fps. */
 	double clip_s = 5.0;
 	snprintf(p, sizeof p, "%s%s%s/pairs.json", root, sets[0][0] ? "/" : "", sets[0]);

@@ -20,6 +20,7 @@ struct sty {
 	char stimuli[TL_PATH_MAX];
 	char token[33];
 	char served_url[256];
+	char display[16];            /* "stereo": the sets' clips are side by side (pairs.json display); "" mono */
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
 	struct sty_batch {    /* group commit of the server's writes (study_commit.c), under lock */
 		bool open, leading;   /* a transaction is open; a request is gathering it before its commit */
@@ -71,6 +72,11 @@ bool sty_random_hex(char out[33]);
 /* A text cell for a CSV file a spreadsheet may open (OWASP CSV injection; RFC 4180): a leading = + - @ TAB or
  * CR gets a ' in front; a cell holding , " CR or LF is quoted with "" for ". Returns buf (truncated to n). */
 const char *sty_csv_cell(const char *s, char *buf, size_t n);
+
+/* A number as every study output writes it (issue 27.10, one NaN convention): `fmt` (one double) when finite,
+ * "inf" / "-inf" when infinite, "" when undefined (NaN) — an empty CSV cell; Markdown writers show "" as "–" and
+ * JSON writers write null (and the strings "inf", "-inf"). Returns buf. */
+const char *sty_num_cell(double v, const char *fmt, char *buf, size_t n);
 
 /* True when a text value would be read as a formula by a spreadsheet (first character = + - @ TAB CR). */
 int sty_csv_formula(const char *s);

@@ -127,7 +127,7 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	sty_rpt_study study = {0};
 	if (d->study) {
 		snprintf(path, sizeof path, "%s/study", rdir);
-		if ((rc = tl_mkdirs(path, err, err_size)) || (rc = sty_rpt_study_load(d->study, path, &study, err, err_size)))
+		if ((rc = tl_mkdirs(path, err, err_size)) || (rc = sty_rpt_study_load(d, path, &study, err, err_size)))
 			return rc;
 	}
 	sty_rpt_group *gi = NULL;
@@ -139,6 +139,15 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	/* the study: joined table and JND against the chosen metric */
 	if (!rc && d->study)
 		rc = sty_rpt_study_files(d, rdir, &study, &jnd_plot, err, err_size);
+	/* What the join could not do is said here (stderr) and on the page (issue 27.12). */
+	if (!rc && study.unchecked[0])
+		fprintf(stderr, "taslab report: note: %s\n", study.unchecked);
+	if (!rc && study.missing_count)
+		fprintf(stderr, "taslab report: note: %zu condition(s) of the study have no run in this sweep and are not "
+				"joined: %s\n",
+			study.missing_count, study.missing);
+	if (!rc)
+		rc = sty_rpt_stereo_csv(d, err, err_size);
 	snprintf(path, sizeof path, "%s/index.html", rdir);
 	if (!rc)
 		rc = sty_rpt_page_write(d, path, gi, ng, &study, gnuplot_note, jnd_plot, err, err_size);

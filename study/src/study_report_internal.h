@@ -12,6 +12,7 @@
 
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
+#include "taslab/study.h"
 #include "taslab/sweep.h"
 
 #define STY_RPT_HEAT_MAX 32.0 /* heatmap colour scale: 0..32 code values (T = 8..16 differences stay visible) */
@@ -51,10 +52,15 @@ typedef struct sty_rpt_cond {
 	double n, Q, Q_lo, Q_hi, p, p_lo, p_hi, jnd, jnd_lo, jnd_hi;
 } sty_rpt_cond;
 
-/* A study's conditions, from its tally. */
+/* A study's conditions, from its tally, and what its join with the sweep says (issue 27.12). */
 typedef struct sty_rpt_study {
 	sty_rpt_cond *c;
 	size_t n;
+	char unchecked[2048];  /* why (part of) the stimuli could not be checked against the runs; "" when all were */
+	char missing[4096];    /* the study's conditions no run of the sweep has ("tfr@32 calm/walk; ..."), joined */
+	size_t missing_count;
+	bool fig3;             /* plots/fig3.svg was drawn */
+	size_t fig3_points;    /* pooled conditions with a T (Fig. 3's points) */
 } sty_rpt_study;
 
 /* ---- study_report.c */
@@ -86,18 +92,33 @@ void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group 
 			 const mtr_match_pair *p, size_t np);
 
 /* ---- study_report_study.c */
-/* Tallies the study `db` into `out` (the tally's files) and keeps its conditions. */
-int sty_rpt_study_load(const char *db, const char *out, sty_rpt_study *t, char *err, size_t err_size);
+/* Checks the study d->study against the sweep (sty_rpt_study_check), tallies it into `out` (the tally's files) and
+ * keeps its conditions; the conditions no run has are listed in t->missing. TL_ERR_INPUT (one line) when its
+ * stimuli are not the sweep's runs. */
+int sty_rpt_study_load(const sty_report_desc *d, const char *out, sty_rpt_study *t, char *err, size_t err_size);
+
+/* ---- study_report_check.c */
+/* The stimuli of the open study `s` (named `db`) against the sweep d: TL_ERR_INPUT with one line when a set differs
+ * (frames, size, fps, display transform, scene or colour digest, a clip that is not the sweep's); what could not be
+ * checked goes to t->unchecked. */
+int sty_rpt_study_check(sty *s, const sty_report_desc *d, const char *db, sty_rpt_study *t, char *err,
+			size_t err_size);
+/* Fills t->missing and t->missing_count: the study's (scene, camera) conditions without a run in d. */
+void sty_rpt_study_missing(const sty_report_desc *d, sty_rpt_study *t);
 void sty_rpt_study_free(sty_rpt_study *t);
 /* The study condition of a run: same method, T, period, scene and camera; NULL when none (or not one). */
 const sty_rpt_cond *sty_rpt_study_find(const sty_rpt_study *t, const sweep_spec *s, const mtr_sweep_row *r);
-/* report/data/study.csv (the study joined with the runs) and the JND plot against d->jnd_metric; *jnd_plot says
+/* report/data/study.csv (the study joined with the runs), Fig. 3 (data/fig3.csv, plots/fig3.svg) and the JND plot against d->jnd_metric; *jnd_plot says
  * whether the plot was drawn. */
-int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, const sty_rpt_study *t, bool *jnd_plot, char *err,
+int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, sty_rpt_study *t, bool *jnd_plot, char *err,
 			size_t err_size);
 
 /* ---- study_report_page.c */
 /* Writes report/index.html (the page) into `path`. */
+/* study_report_stereo.c: SWEEP/stereo_vs_mono.csv (with d->mono_spec; TL_OK without) and the page's "Stereo"
+ * section (a stereo sweep only). */
+int sty_rpt_stereo_csv(const sty_report_desc *d, char *err, size_t err_size);
+void sty_rpt_page_stereo(FILE *f, const sty_report_desc *d);
 int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt_group *gi, size_t ng,
 		       const sty_rpt_study *study, bool gnuplot_note, bool jnd_plot, char *err, size_t err_size);
 

@@ -67,6 +67,7 @@ static const char *CSS =
 	".plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:10px}"
 	".plots figure{margin:0;border:1px solid #eceef1;border-radius:6px;padding:4px;background:#fff}"
 	".plots img{width:100%;height:auto;display:block}figcaption{font-size:12px;color:#555;text-align:center}"
+	"figure.wide{margin:0;max-width:960px}figure.wide img{width:100%;height:auto;display:block}"
 	"table{border-collapse:collapse;font-size:13px;margin:6px 0}th,td{border-bottom:1px solid #e3e6ea;padding:3px 8px;"
 	"text-align:right;vertical-align:middle}th{background:#f0f2f5;position:sticky;top:0}td.l,th.l{text-align:left}"
 	"td{white-space:nowrap}td img{max-width:104px;height:auto;display:block;image-rendering:pixelated}"
@@ -199,18 +200,45 @@ static void page_head(FILE *f, const sty_report_desc *d, const sty_rpt_group *gi
 		fprintf(f, "<p class=\"missing\">gnuplot is not installed: no plots (the numbers are in summary.csv).</p>\n");
 }
 
-/* The study section: where the tally is, what Q, p_ref and JND are, and the JND plot. */
-static void page_study(FILE *f, const sty_report_desc *d, bool jnd_plot)
+/* The study section: where the tally is, what Q, p_ref and JND are, what the join could not do, Fig. 3 and the JND
+ * plot. */
+static void page_study(FILE *f, const sty_report_desc *d, const sty_rpt_study *t, bool jnd_plot)
 {
 	const char *jnd_metric = d->jnd_metric ? d->jnd_metric : "flip_mean";
 	fprintf(f, "<section id=\"study\"><h2>Study</h2><p class=\"note\">From ");
 	esc(f, d->study);
-	fprintf(f, " (tally in <a href=\"study/conditions.csv\">study/conditions.csv</a>): Q = mean reference-relative "
+	fprintf(f, " (tally in <a href=\"study/conditions.csv\">study/conditions.csv</a>, all tables in "
+		   "<a href=\"study/tables.md\">study/tables.md</a>): Q = mean reference-relative "
 		   "rating (+2: reference much better), p_ref = share preferring the reference (ties halved), JND = "
 		   "Φ⁻¹(p_ref)/Φ⁻¹(0.75), 95%% intervals (DESIGN section 7). Joined per condition (method, T, period, "
 		   "scene, camera) in <a href=\"data/study.csv\">data/study.csv</a>.</p>\n");
+	if (t->unchecked[0]) {
+		fprintf(f, "<p class=\"missing\">Not checked: ");
+		esc(f, t->unchecked);
+		fprintf(f, ".</p>\n");
+	} else
+		fprintf(f, "<p class=\"note\">The study's stimuli were checked against this sweep's runs (frames, size, "
+			   "fps, display transform, scene and colour digests; clips taken from a sweep byte for byte).</p>\n");
+	if (t->missing_count) {
+		fprintf(f, "<p class=\"missing\">%zu condition(s) of the study have no run in this sweep and are not joined: ",
+			t->missing_count);
+		esc(f, t->missing);
+		fprintf(f, ".</p>\n");
+	}
+	fprintf(f, "<h3>Fig. 3: quality against T</h3>\n");
+	if (t->fig3)
+		fprintf(f, "<figure class=\"wide\"><img src=\"plots/fig3.svg\" alt=\"Fig. 3: Q and p_ref against T\">"
+			   "<figcaption>As the paper's Fig. 3 (sec. 3): Q with its 95%% t interval (cut to −2..2) and p_ref "
+			   "with its 95%% Wilson interval, per method, pooled over scenes and camera paths; dashed: 1 JND "
+			   "(p_ref = 75%%). Data: <a href=\"data/fig3.csv\">data/fig3.csv</a>.</figcaption></figure>\n");
+	else
+		fprintf(f, "<p class=\"note\">%s</p>\n", t->fig3_points ? "Fig. 3 was not drawn (gnuplot failed or is missing); "
+									  "its data are in data/fig3.csv."
+									: "No rated condition has a threshold T: no Fig. 3.");
 	if (jnd_plot)
-		fprintf(f, "<figure class=\"plots\"><img src=\"plots/jnd.svg\" alt=\"JND against %s\"></figure>\n", jnd_metric);
+		fprintf(f, "<h3>JND against %s</h3><figure class=\"wide\" style=\"max-width:720px\"><img src=\"plots/jnd.svg\" "
+			   "alt=\"JND against %s\"></figure>\n",
+			jnd_metric, jnd_metric);
 	else
 		fprintf(f, "<p class=\"note\">No condition of the study matches a run with %s: no JND plot.</p>\n", jnd_metric);
 	fprintf(f, "</section>\n");
@@ -368,8 +396,9 @@ int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt
 	FILE *f = page.f;
 	page_head(f, d, gi, ng, gnuplot_note);
 	page_table1(f, d->spec, gi, ng);
+	sty_rpt_page_stereo(f, d);
 	if (d->study)
-		page_study(f, d, jnd_plot);
+		page_study(f, d, study, jnd_plot);
 	for (size_t g = 0; g < ng; g++)
 		page_group(f, d, &gi[g], study, pairs, np);
 	free(pairs);

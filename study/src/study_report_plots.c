@@ -10,6 +10,7 @@
 #include "study_report_internal.h"
 #include "taslab/imageio.h"
 #include "taslab/metrics.h"
+#include "taslab/run.h"
 #include "taslab/tl_fs.h"
 
 /* ------------------------------------------------------------------ plots */
@@ -207,7 +208,8 @@ static int write_thumb(const char *path, const uint8_t *rgb, uint32_t w, uint32_
 	return rc;
 }
 
-/* Thumbnails of the ref and the run at frame f and the max-RGB difference heatmap (DESIGN section 3). */
+/* Thumbnails of the ref and the run at frame f and the max-RGB difference heatmap (DESIGN section 3); stereo runs:
+ * of their side-by-side frames (sbs/, left | right). */
 int sty_rpt_run_images(const char *run_dir, const char *ref_dir, uint32_t f, const char *ref_png, const char *run_png,
 		       const char *heat_png, char *err, size_t err_size)
 {
@@ -215,8 +217,10 @@ int sty_rpt_run_images(const char *run_dir, const char *ref_dir, uint32_t f, con
 	uint8_t *a = NULL, *b = NULL;
 	uint32_t wa, ha, wb, hb;
 	float *map = NULL;
-	snprintf(pa, sizeof pa, "%s/frames/%06u.png", ref_dir, f);
-	snprintf(pb, sizeof pb, "%s/frames/%06u.png", run_dir, f);
+	run_manifest m;
+	const bool stereo = !run_manifest_read(run_dir, &m, pa, sizeof pa) && m.views > 1;
+	snprintf(pa, sizeof pa, "%s/%s/%06u.png", ref_dir, stereo ? "sbs" : "frames", f);
+	snprintf(pb, sizeof pb, "%s/%s/%06u.png", run_dir, stereo ? "sbs" : "frames", f);
 	int rc = imageio_read_rgb8(pa, &wa, &ha, &a, err, err_size);
 	if (!rc)
 		rc = imageio_read_rgb8(pb, &wb, &hb, &b, err, err_size);

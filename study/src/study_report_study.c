@@ -31,16 +31,17 @@ static double as_written(double v)
 	return strtod(buf, NULL);
 }
 
-int sty_rpt_study_load(const char *db, const char *out, sty_rpt_study *t, char *err, size_t err_size)
+int sty_rpt_study_load(const sty_report_desc *d, const char *out, sty_rpt_study *t, char *err, size_t err_size)
 {
 	sty *s = NULL;
 	sty_result *r = NULL;
 	memset(t, 0, sizeof *t);
-	int rc = sty_open(db, &s, err, err_size);
+	int rc = sty_open(d->study, &s, err, err_size);
 	if (rc)
 		return rc;
 	sty_tally_desc td = {.out = out, .bootstrap = 200, .seed = 1, .no_plot = true};
-	if (!(rc = sty_tally_compute(s, &td, &r, err, err_size)))
+	/* The join's premise first (issue 27.12): nothing of the study is written for a sweep of other clips. */
+	if (!(rc = sty_rpt_study_check(s, d, d->study, t, err, err_size)) && !(rc = sty_tally_compute(s, &td, &r, err, err_size)))
 		rc = sty_tally_write(s, r, &td, err, err_size);
 	sty_close(&s);
 	if (!rc && !(t->c = calloc(r->row_count + 1, sizeof *t->c)))
@@ -64,6 +65,8 @@ int sty_rpt_study_load(const char *db, const char *out, sty_rpt_study *t, char *
 		c->jnd_lo = jnd_of(c->p_lo, c->n), c->jnd_hi = jnd_of(c->p_hi, c->n);
 	}
 	sty_result_free(&r);
+	if (!rc)
+		sty_rpt_study_missing(d, t);
 	return rc;
 }
 
@@ -116,9 +119,83 @@ static int jnd_plot_draw(const char *rdir, const char *jnd_metric, bool *drawn, 
 	return TL_OK;
 }
 
-int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, const sty_rpt_study *t, bool *jnd_plot, char *err,
+/* The paper's Fig. 3 (sec. 3): per method (and period), the pooled Q with its 95% interval and p_ref with its 95%
+ * Wilson interval against T, the JND line at p_ref = 75% and chance at 50% — report/data/fig3.csv and
+ * plots/fig3.svg. t->fig3 says whether it was drawn. */
+static int fig3_files(const char *rdir, sty_rpt_study *t, char *err, size_t err_size)
+{
+	char path[TL_PATH_MAX + 64], series[2048] = "";
+	tl_atomic a;
+	snprintf(path, sizeof path, "%s/data/fig3.csv", rdir);
+	int rc = tl_atomic_open(&a, path, err, err_size);
+	if (rc)
+		return rc;
+	fprintf(a.f, "series,method,T,period,n,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent\n");
+	t->fig3_points = 0;
+	for (size_t i = 0; i < t->n; i++) {
+		const sty_rpt_cond *c = &t->c[i];
+		if (strcmp(c->scene, "all") || !isfinite(c->T))
+			continue;
+		char name[64];
+		if (c->period)
+			snprintf(name, sizeof name, "%s/%u", c->method, c->period);
+		else
+			snprintf(name, sizeof name, "%s", c->method);
+		char key[80];
+		snprintf(key, sizeof key, " %s ", name);
+		if (!strstr(series, key) && strlen(series) + strlen(key) + 1 < sizeof series)
+			strcat(series, key);
+		fprintf(a.f, "%s,%s,%g,", name, c->method, c->T);
+		if (c->period)
+			fprintf(a.f, "%u", c->period);
+		double vals[] = {c->n, c->Q, c->Q_lo, c->Q_hi, 100 * c->p, 100 * c->p_lo, 100 * c->p_hi};
+		for (size_t q = 0; q < sizeof vals / sizeof vals[0]; q++) {
+			fputc(',', a.f);
+			if (isfinite(vals[q]))
+				fprintf(a.f, "%.9g", vals[q]);
+		}
+		fputc('\n', a.f);
+		t->fig3_points++;
+	}
+	if ((rc = tl_atomic_commit(&a, err, err_size)) || !t->fig3_points)
+		return rc;
+	mtr_plot plot;
+	char gp[TL_PATH_MAX + 64], note[1024];
+	snprintf(gp, sizeof gp, "%s/data/fig3.gp", rdir);
+	FILE *f = mtr_plot_begin(&plot, gp, err, err_size);
+	if (!f)
+		return TL_ERR_OUTPUT;
+	/* Undefined intervals (one participant) are empty cells: gnuplot draws the point without a bar. */
+	fprintf(f, "set terminal svg size 960,400 dynamic font 'sans,11' background rgb 'white'\n"
+		   "set datafile separator ','\nset datafile missing ''\nset termoption noenhanced\n"
+		   "set output '%s/plots/fig3.svg'\nseries = '%s'\n"
+		   "set multiplot layout 1,2 title 'Fig. 3: rated quality against the threshold T (pooled over scenes and "
+		   "camera paths, 95%% intervals)'\n"
+		   "set grid\nset logscale x 2\nset offsets graph 0.08, graph 0.08, 0, 0\nset key top left\n"
+		   "set xlabel 'T (largest reused colour difference, 8-bit code values)'\n"
+		   "set ylabel 'Q (0 = no difference, +2 = reference much better)'\nset yrange [-2<*<-0.5:0.5<*<2]\n"
+		   "set arrow 1 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#888888'\n"
+		   "plot for [m in series] '%s/data/fig3.csv' using (strcol(1) eq m ? $3 : 1/0):"
+		   "(strcol(1) eq m ? $6 : 1/0):7:8 every ::1 with yerrorlines pt 7 title m\n"
+		   "unset arrow 1\nset ylabel 'p_ref (%% choosing the reference)'\nset yrange [0:100]\n"
+		   "set arrow 2 from graph 0, first 75 to graph 1, first 75 nohead dt 2 lc rgb '#c03030'\n"
+		   "set label 2 '1 JND (75%%)' at graph 0.02, first 78 tc rgb '#c03030'\n"
+		   "set arrow 3 from graph 0, first 50 to graph 1, first 50 nohead dt 3 lc rgb '#888888'\n"
+		   "set label 3 'chance (50%%)' at graph 0.02, first 53 tc rgb '#666666'\n"
+		   "plot for [m in series] '%s/data/fig3.csv' using (strcol(1) eq m ? $3 : 1/0):"
+		   "(strcol(1) eq m ? $9 : 1/0):10:11 every ::1 with yerrorlines pt 7 title m\n"
+		   "unset multiplot\n",
+		rdir, series, rdir, rdir);
+	t->fig3 = mtr_plot_end(&plot, note, sizeof note) == TL_OK;
+	return TL_OK;
+}
+
+int sty_rpt_study_files(const sty_report_desc *d, const char *rdir, sty_rpt_study *t, bool *jnd_plot, char *err,
 			size_t err_size)
 {
+	int frc = fig3_files(rdir, t, err, err_size);
+	if (frc)
+		return frc;
 	const sweep_spec *s = d->spec;
 	const char *jnd_metric = d->jnd_metric ? d->jnd_metric : "flip_mean";
 	char path[TL_PATH_MAX + 64];

@@ -175,6 +175,7 @@ static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *pa
 int sty_next_trial(sty *s, const char *code, sty_trial *t, char *err, size_t err_size)
 {
 	memset(t, 0, sizeof *t);
+	t->stereo = !strcmp(s->display, "stereo");
 	sty_batch_lock(s);
 	int64_t pid = sty_select_participant(s, code);
 	int rc = pid < 0 ? tl_error(err, err_size, TL_ERR_NOTFOUND, "unknown participant") : TL_OK;

@@ -595,9 +595,10 @@ static void serve_trial(struct sty_server *sv, const sty_request *rq, const char
 	snprintf(a, sizeof a, "/clips/%s", t.clip_a);
 	snprintf(b, sizeof b, "/clips/%s", t.clip_b);
 	/* No trial kind but training (issue 27.6): a catch trial looks like any other trial to the browser. */
-	set_json(r, json_pack("{s:b, s:I, s:I, s:I, s:s, s:s, s:b, s:b}", "done", 0, "index", (json_int_t)t.index, "total",
-			      (json_int_t)t.total, "answered", (json_int_t)t.answered, "clip_a", a, "clip_b", b, "training",
-			      !strcmp(t.kind, "training"), "break_before", t.break_before));
+	set_json(r, json_pack("{s:b, s:I, s:I, s:I, s:s, s:s, s:b, s:b, s:s}", "done", 0, "index", (json_int_t)t.index,
+			      "total", (json_int_t)t.total, "answered", (json_int_t)t.answered, "clip_a", a, "clip_b", b,
+			      "training", !strcmp(t.kind, "training"), "break_before", t.break_before, "display",
+			      t.stereo ? "stereo" : "mono"));
 }
 
 /* GET /admin/status: the study's status as JSON (study_status.h), for the live status page. */

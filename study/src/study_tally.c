@@ -41,6 +41,8 @@ static void helmert(size_t k, double *c)
 	}
 }
 
+#define STY_SS_ZERO 1e-18 /* a sum of squares of ratings (-2..2) this small is rounding error (see below) */
+
 /* One effect from the n x m matrix of contrast scores z (m = effect df). */
 static void effect_from_scores(const double *z, size_t n, size_t m, sty_anova_effect *e)
 {
@@ -65,17 +67,30 @@ static void effect_from_scores(const double *z, size_t n, size_t m, sty_anova_ef
 			for (size_t k = 0; k < m; k++)
 				S[j * m + k] += dj * (z[i * m + k] - mean[k]) / (double)(n - 1);
 		}
-	e->F = (ss_eff / e->df1) / (ss_err / e->df2);
-	e->p = gsl_cdf_fdist_Q(e->F, e->df1, e->df2);
-	/* Greenhouse-Geisser: epsilon = tr(S)^2 / (m tr(S S)), S the covariance of orthonormal contrast scores. */
+	/* No error variance: F is undefined (NaN) when the effect has none either (every participant's contrast scores
+	 * are 0: identical cells), infinite with p = 0 when it has (issue 27.10: one NaN convention, no 0/0 printed).
+	 * Ratings lie in -2..2, so sums of squares below STY_SS_ZERO are the contrasts' rounding, not variance. */
+	if (ss_err < STY_SS_ZERO)
+		ss_err = 0;
+	if (ss_eff < STY_SS_ZERO)
+		ss_eff = 0;
+	if (ss_err > 0)
+		e->F = (ss_eff / e->df1) / (ss_err / e->df2);
+	else
+		e->F = ss_eff > 0 ? INFINITY : NAN;
+	e->p = isnan(e->F) ? NAN : isinf(e->F) ? 0.0 : gsl_cdf_fdist_Q(e->F, e->df1, e->df2);
+	/* Greenhouse-Geisser: epsilon = tr(S)^2 / (m tr(S S)), S the covariance of orthonormal contrast scores; 1 by
+	 * definition for one contrast, undefined when S is 0. */
 	double tr = 0, tr2 = 0;
 	for (size_t j = 0; j < m; j++) {
 		tr += S[j * m + j];
 		for (size_t k = 0; k < m; k++)
 			tr2 += S[j * m + k] * S[k * m + j];
 	}
-	e->epsilon_gg = tr2 > 0 ? fmin(1.0, tr * tr / ((double)m * tr2)) : 1.0;
-	e->p_gg = gsl_cdf_fdist_Q(e->F, e->epsilon_gg * e->df1, e->epsilon_gg * e->df2);
+	e->epsilon_gg = m == 1 ? 1.0 : ss_err > 0 && tr2 > 0 ? fmin(1.0, tr * tr / ((double)m * tr2)) : NAN;
+	e->p_gg = isnan(e->F) || isnan(e->epsilon_gg) ? NAN
+		  : isinf(e->F)                         ? 0.0
+							: gsl_cdf_fdist_Q(e->F, e->epsilon_gg * e->df1, e->epsilon_gg * e->df2);
 	free(mean);
 	free(S);
 }
@@ -340,10 +355,12 @@ static int row_compute(const data *d, const sel *s, const int *use, row_stats *r
 	r->participants = k;
 	r->Q = mean;
 	if (k > 1) {
+		/* The t interval intersected with the rating scale -2..2 (issue 27.11): Q lies on the scale, so cutting
+		 * off the part outside it keeps the interval's coverage and stops it running past +-2 with few observers. */
 		double se = sqrt(var / (double)(k - 1) / (double)k);
 		double t = gsl_cdf_tdist_Pinv(0.975, (double)(k - 1));
-		r->Q_lo = mean - t * se;
-		r->Q_hi = mean + t * se;
+		r->Q_lo = fmax(-2.0, mean - t * se);
+		r->Q_hi = fmin(2.0, mean + t * se);
 	} else {
 		r->Q_lo = r->Q_hi = NAN;
 	}
@@ -398,9 +415,13 @@ static void paired_t(const double *x, const double *y, size_t n, double *t, doub
 		m2 += dlt * ((x[i] - y[i]) - mean);
 	}
 	*df = (double)n - 1;
-	double sd = n > 1 ? sqrt(m2 / (double)(n - 1)) : NAN;
-	*t = sd > 0 ? mean / (sd / sqrt((double)n)) : (mean == 0 ? 0 : INFINITY * mean);
-	*p = isfinite(*t) ? 2 * gsl_cdf_tdist_Q(fabs(*t), *df) : 0;
+	double sd = n > 1 ? (m2 < STY_SS_ZERO ? 0.0 : sqrt(m2 / (double)(n - 1))) : NAN;
+	/* Identical differences: t is undefined (NaN) when they are all 0, infinite (p = 0) otherwise — never 0 and 1. */
+	if (sd > 0)
+		*t = mean / (sd / sqrt((double)n));
+	else
+		*t = n < 2 || fabs(mean) < 1e-9 ? NAN : mean > 0 ? INFINITY : -INFINITY;
+	*p = isnan(*t) ? NAN : isinf(*t) ? 0.0 : 2 * gsl_cdf_tdist_Q(fabs(*t), *df);
 }
 
 /* ------------------------------------------------------------------ the tally as a value */
@@ -478,7 +499,7 @@ static int row_of(const data *d, const sel *sl, size_t m, boot_state *bs, sty_ro
 	for (uint32_t b = 0; b < bs->B; b++)
 		if (isfinite(bs->boot[b]))
 			bf[nb++] = (float)bs->boot[b];
-	row->jod = -r.j.jnd;
+	row->jod = -r.j.jnd + 0.0; /* + 0.0: no "-0" where p_ref is one half */
 	row->jod_lo = nb ? mtr_percentile(bf, nb, 2.5) : NAN;
 	row->jod_hi = nb ? mtr_percentile(bf, nb, 97.5) : NAN;
 	row->participants = np;
@@ -522,18 +543,38 @@ static int anova_of(const data *d, const condk *mt, size_t m, sty_result *res)
 		}
 	sty_anova_effect eff[3];
 	static const char *const enames[3] = {"camera", "scene", "camera:scene"};
-	if (n < 2 || sty_rm_anova2(y, n, nmo, nsc, eff))
+	/* Why a variant has no ANOVA, said instead of an empty table (issue 27.10). */
+	char *note = res->variants[m].anova_note;
+	size_t note_size = sizeof res->variants[m].anova_note;
+	if (nsc < 2 && nmo < 2) {
+		snprintf(note, note_size, "one scene (%s) and one camera motion (%s): no factor with two levels to compare",
+			 nsc ? sc_lv[0] : "none", nmo ? mo_lv[0] : "none");
+		goto done;
+	}
+	if (n < 2) {
+		snprintf(note, note_size, "%zu participant(s) rated all %zu cells (%zu scene(s) x %zu camera motion(s)); "
+					  "a repeated-measures ANOVA needs two",
+			 n, cells, nsc, nmo);
+		goto done;
+	}
+	if (sty_rm_anova2(y, n, nmo, nsc, eff))
 		goto done;
 	for (int e = 0; e < 3; e++) {
 		if (!(eff[e].df1 > 0))
 			continue; /* a factor with one level has no effect to test */
+		if (isnan(eff[e].F) && !note[0])
+			snprintf(note, note_size, "identical cells: every participant's %s contrasts are 0 (no variance), so F "
+						  "and p are undefined",
+				 enames[e]);
 		sty_anova_row *na = realloc(res->anova, (res->anova_count + 1) * sizeof *na);
 		if (!na) {
 			rc = TL_ERR_NOMEM;
 			goto done;
 		}
 		res->anova = na;
-		na[res->anova_count++] = (sty_anova_row){.variant = m, .effect = enames[e], .e = eff[e], .participants = n};
+		na[res->anova_count++] = (sty_anova_row){.variant = m, .effect = enames[e], .e = eff[e], .participants = n,
+							 .note = isnan(eff[e].F) ? "identical cells: no variance (F undefined)"
+										 : NULL};
 	}
 	for (int f = 0; f < 2 && !rc; f++) {
 		size_t nl = f == 0 ? nmo : nsc;
@@ -562,7 +603,7 @@ static int anova_of(const data *d, const condk *mt, size_t m, sty_result *res)
 				snprintf(ph->level_1, sizeof ph->level_1, "%s", f == 0 ? mo_lv[l1] : sc_lv[l1]);
 				snprintf(ph->level_2, sizeof ph->level_2, "%s", f == 0 ? mo_lv[l2] : sc_lv[l2]);
 				paired_t(u, v, n, &ph->t, &ph->df, &ph->p);
-				ph->p_bonferroni = fmin(1.0, ph->p * ncmp);
+				ph->p_bonferroni = isnan(ph->p) ? NAN : fmin(1.0, ph->p * ncmp);
 			}
 		free(u);
 		free(v);

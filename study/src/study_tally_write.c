@@ -26,10 +26,25 @@ static const char *const TALLY_FILES[] = {"observers.csv", "conditions.csv", "an
 enum { F_OBSERVERS, F_CONDITIONS, F_ANOVA, F_POSTHOC, F_JOD, F_TABLES, F_FIG3, F_CONDITIONS_JSON, F_ANOVA_JSON,
        F_THRESHOLDS };
 
+/* Numbers follow the study's one convention (study_internal.h sty_num_cell, issue 27.10): undefined is an empty
+ * cell (CSV), null (JSON) or "–" (Markdown); infinite is inf / -inf (JSON: the strings). */
 static void csv_num(FILE *f, double v, const char *fmt)
 {
-	if (isfinite(v))
-		fprintf(f, fmt, v);
+	char b[64];
+	fputs(sty_num_cell(v, fmt, b, sizeof b), f);
+}
+
+static const char *md_num(double v, const char *fmt, char *b, size_t n)
+{
+	sty_num_cell(v, fmt, b, n);
+	if (!b[0])
+		snprintf(b, n, "–");
+	return b;
+}
+
+static json_t *num_json(double v)
+{
+	return isnan(v) ? json_null() : isinf(v) ? json_string(v > 0 ? "inf" : "-inf") : json_real(v);
 }
 
 /* A variant's cells: cm, the method as a CSV cell; Ts and Ps, T and period ("" for none); TP, "T,period". */
@@ -82,7 +97,10 @@ static void write_conditions(FILE *f, const sty_result *r)
 		csv_num(f, w->Q, "%.6f"), fputc(',', f);
 		csv_num(f, w->Q_lo, "%.6f"), fputc(',', f);
 		csv_num(f, w->Q_hi, "%.6f"), fputc(',', f);
-		fprintf(f, "%.6f,%.6f,%.6f,%.6f\n", w->j.p, w->j.p_lo, w->j.p_hi, w->j.jnd);
+		csv_num(f, w->j.p, "%.6f"), fputc(',', f);
+		csv_num(f, w->j.p_lo, "%.6f"), fputc(',', f);
+		csv_num(f, w->j.p_hi, "%.6f"), fputc(',', f);
+		csv_num(f, w->j.jnd, "%.6f"), fputc('\n', f);
 	}
 }
 
@@ -94,8 +112,9 @@ static void write_jod(FILE *f, const sty_result *r)
 		variant_cells vc;
 		char csc[160], cca[160];
 		cells_of(&r->variants[w->variant], &vc);
-		fprintf(f, "%s,%s,%s,%s,%.6f,", vc.cm, vc.TP, sty_csv_cell(w->scene, csc, sizeof csc),
-			sty_csv_cell(w->camera, cca, sizeof cca), w->jod);
+		fprintf(f, "%s,%s,%s,%s,", vc.cm, vc.TP, sty_csv_cell(w->scene, csc, sizeof csc),
+			sty_csv_cell(w->camera, cca, sizeof cca));
+		csv_num(f, w->jod, "%.6f"), fputc(',', f);
 		csv_num(f, w->jod_lo, "%.6f"), fputc(',', f);
 		csv_num(f, w->jod_hi, "%.6f");
 		fprintf(f, ",%zu\n", w->participants);
@@ -112,15 +131,44 @@ static void write_fig3(FILE *f, const sty_result *r)
 			continue;
 		variant_cells vc;
 		cells_of(&r->variants[w->variant], &vc);
-		fprintf(f, "%s,%s,%.6f,", vc.cm, vc.TP, w->Q);
+		fprintf(f, "%s,%s,", vc.cm, vc.TP);
+		csv_num(f, w->Q, "%.6f"), fputc(',', f);
 		csv_num(f, w->Q_lo, "%.6f"), fputc(',', f);
-		csv_num(f, w->Q_hi, "%.6f");
-		fprintf(f, ",%.4f,%.4f,%.4f\n", 100 * w->j.p, 100 * w->j.p_lo, 100 * w->j.p_hi);
+		csv_num(f, w->Q_hi, "%.6f"), fputc(',', f);
+		csv_num(f, 100 * w->j.p, "%.4f"), fputc(',', f);
+		csv_num(f, 100 * w->j.p_lo, "%.4f"), fputc(',', f);
+		csv_num(f, 100 * w->j.p_hi, "%.4f"), fputc('\n', f);
 	}
 }
 
+/* A text cell of tables.md: '|' escaped, line breaks as spaces. */
+static const char *md_text(const char *t, char *b, size_t n)
+{
+	size_t k = 0;
+	for (; *t && k + 3 < n; t++) {
+		if (*t == '|')
+			b[k++] = '\\';
+		b[k++] = *t == '\n' || *t == '\r' ? ' ' : *t;
+	}
+	b[k] = 0;
+	return b;
+}
+
+/* A variant in a sentence: its method, then " T=8" and " period 4" where it has them. */
+static void variant_name(const sty_variant *v, char *b, size_t n)
+{
+	int k = snprintf(b, n, "%s", v->method);
+	if (!isnan(v->T) && k > 0 && (size_t)k < n)
+		k += snprintf(b + k, n - (size_t)k, " T=%g", v->T);
+	if (v->period && k > 0 && (size_t)k < n)
+		snprintf(b + k, n - (size_t)k, " period %u", v->period);
+}
+
+/* tables.md (issue 27.11): every table of the tally — conditions, ANOVA with the reason where there is none, post
+ * hoc tests, observer screening and JOD — in the same units and conventions as the CSV files. */
 static void write_tables(FILE *f, const sty_result *r)
 {
+	char a[64], b[64], c[64], d[64], e[64], g[64], h[64], sc[160], ca[160];
 	fprintf(f, "# Study results\n\n## Conditions\n\n| method | T | period | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
 		   "|---|---|---|---|---|---|---|---|---|\n");
 	for (size_t i = 0; i < r->row_count; i++) {
@@ -128,23 +176,114 @@ static void write_tables(FILE *f, const sty_result *r)
 		const sty_variant *v = &r->variants[w->variant];
 		variant_cells vc;
 		cells_of(v, &vc);
-		fprintf(f, "| %s | %s | %s | %s | %s | %zu | %.2f [%.2f, %.2f] | %.1f%% [%.1f, %.1f] | %.2f |\n", v->method, vc.Ts,
-			vc.Ps, w->scene, w->camera, w->n, w->Q, w->Q_lo, w->Q_hi, 100 * w->j.p, 100 * w->j.p_lo, 100 * w->j.p_hi,
-			w->j.jnd);
+		fprintf(f, "| %s | %s | %s | %s | %s | %zu | %s [%s, %s] | %s%% [%s, %s] | %s |\n", v->method, vc.Ts, vc.Ps,
+			md_text(w->scene, sc, sizeof sc), md_text(w->camera, ca, sizeof ca), w->n, md_num(w->Q, "%.2f", a, sizeof a),
+			md_num(w->Q_lo, "%.2f", b, sizeof b), md_num(w->Q_hi, "%.2f", c, sizeof c),
+			md_num(100 * w->j.p, "%.1f", d, sizeof d), md_num(100 * w->j.p_lo, "%.1f", e, sizeof e),
+			md_num(100 * w->j.p_hi, "%.1f", g, sizeof g), md_num(w->j.jnd, "%.2f", h, sizeof h));
 	}
-	fprintf(f, "\nQ: mean reference-relative rating (+2 = reference much better); p_ref: share of answers preferring "
-		   "the reference (ties count half); JND = Phi^-1(p_ref)/Phi^-1(0.75).\n");
+	fprintf(f, "\nQ: mean reference-relative rating (+2 = reference much better) with a 95%% t interval over "
+		   "participants, cut to the scale -2..2; p_ref: share of answers preferring the reference (ties count half), "
+		   "Wilson interval; JND = Phi^-1(p_ref)/Phi^-1(0.75). \"–\": undefined (fewer than two participants).\n");
+
+	fprintf(f, "\n## Repeated-measures ANOVA (camera motion x scene, per variant)\n\n");
+	if (r->anova_count)
+		fprintf(f, "| method | T | period | effect | df1 | df2 | F | p | epsilon (GG) | p (GG) | participants |\n"
+			   "|---|---|---|---|---|---|---|---|---|---|---|\n");
+	else
+		fprintf(f, "None: no variant could be analysed (why, per variant, below).\n");
+	for (size_t i = 0; i < r->anova_count; i++) {
+		const sty_anova_row *x = &r->anova[i];
+		variant_cells vc;
+		cells_of(&r->variants[x->variant], &vc);
+		fprintf(f, "| %s | %s | %s | %s | %g | %g | %s | %s | %s | %s | %zu |\n", r->variants[x->variant].method, vc.Ts,
+			vc.Ps, x->effect, x->e.df1, x->e.df2, md_num(x->e.F, "%.3f", a, sizeof a), md_num(x->e.p, "%.4g", b, sizeof b),
+			md_num(x->e.epsilon_gg, "%.4f", c, sizeof c), md_num(x->e.p_gg, "%.4g", d, sizeof d), x->participants);
+	}
+	int notes = 0;
+	for (size_t v = 0; v < r->variant_count; v++)
+		if (r->variants[v].anova_note[0]) {
+			char name[96];
+			int rows = 0;
+			for (size_t i = 0; i < r->anova_count; i++)
+				rows += r->anova[i].variant == v;
+			variant_name(&r->variants[v], name, sizeof name);
+			fprintf(f, "%s- %s: %s%s.\n", notes++ ? "" : "\n", name, rows ? "" : "no ANOVA: ",
+				r->variants[v].anova_note);
+		}
+	fprintf(f, "\nDependent variable: each participant's mean rating per cell; participants with every cell only. "
+		   "GG: Greenhouse-Geisser.\n");
+
+	fprintf(f, "\n## Post hoc paired t tests (Bonferroni)\n\n");
+	if (!r->posthoc_count)
+		fprintf(f, "None: no variant has an ANOVA with a factor of two or more levels.\n");
+	else {
+		fprintf(f, "| method | T | period | factor | level 1 | level 2 | t | df | p | p (Bonferroni) |\n"
+			   "|---|---|---|---|---|---|---|---|---|---|\n");
+		for (size_t i = 0; i < r->posthoc_count; i++) {
+			const sty_posthoc_row *h = &r->posthoc[i];
+			variant_cells vc;
+			cells_of(&r->variants[h->variant], &vc);
+			fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %g | %s | %s |\n", r->variants[h->variant].method,
+				vc.Ts, vc.Ps, h->factor, md_text(h->level_1, sc, sizeof sc), md_text(h->level_2, ca, sizeof ca),
+				md_num(h->t, "%.3f", a, sizeof a), h->df, md_num(h->p, "%.4g", b, sizeof b),
+				md_num(h->p_bonferroni, "%.4g", c, sizeof c));
+		}
+	}
+
+	fprintf(f, "\n## Observers (catch-trial screening)\n\n| participant | catch trials | mean abs answer | much better | "
+		   "flagged |\n|---|---|---|---|---|\n");
+	size_t flagged = 0;
+	for (size_t i = 0; i < r->observer_count; i++) {
+		const sty_observer *o = &r->observers[i];
+		flagged += o->flagged;
+		fprintf(f, "| %s | %d | %s | %d | %s |\n", md_text(o->label, sc, sizeof sc), o->catch_n,
+			md_num(o->catch_mean_abs, "%.2f", a, sizeof a), o->catch_much_better, o->flagged ? "yes" : "no");
+	}
+	fprintf(f, "\nFlagged: more than half of the catch answers (reference against itself) \"much better\". %zu of %zu "
+		   "flagged; %zu left out of the statistics%s.\n",
+		flagged, r->observer_count, r->left_out, flagged && !r->left_out ? " (--keep-flagged)" : "");
+
+	fprintf(f, "\n## JOD (Thurstone Case V, reference at 0)\n\n| method | T | period | scene | camera | JOD [95%% CI] | "
+		   "participants |\n|---|---|---|---|---|---|---|\n");
+	for (size_t i = 0; i < r->row_count; i++) {
+		const sty_row *w = &r->rows[i];
+		const sty_variant *v = &r->variants[w->variant];
+		variant_cells vc;
+		cells_of(v, &vc);
+		fprintf(f, "| %s | %s | %s | %s | %s | %s [%s, %s] | %zu |\n", v->method, vc.Ts, vc.Ps,
+			md_text(w->scene, sc, sizeof sc), md_text(w->camera, ca, sizeof ca), md_num(w->jod, "%.2f", a, sizeof a),
+			md_num(w->jod_lo, "%.2f", b, sizeof b), md_num(w->jod_hi, "%.2f", c, sizeof c), w->participants);
+	}
+	fprintf(f, "\nJOD = -Phi^-1(p_ref)/Phi^-1(0.75) (1 JOD: 75%% prefer the reference); 95%% percentile bootstrap over "
+		   "participants.\n");
 }
 
+/* anova.csv: per variant its effects, or one row without an effect whose note says why there is none (issue 27.10);
+ * a row whose F is undefined says why in its note. */
 static void write_anova(FILE *f, const sty_result *r)
 {
-	fprintf(f, "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg\n");
-	for (size_t i = 0; i < r->anova_count; i++) {
-		const sty_anova_row *a = &r->anova[i];
+	fprintf(f, "method,T,period,effect,df1,df2,F,p,p_gg,epsilon_gg,note\n");
+	for (size_t v = 0; v < r->variant_count; v++) {
 		variant_cells vc;
-		cells_of(&r->variants[a->variant], &vc);
-		fprintf(f, "%s,%s,%s,%g,%g,%.6f,%.6g,%.6g,%.6f\n", vc.cm, vc.TP, a->effect, a->e.df1, a->e.df2, a->e.F, a->e.p,
-			a->e.p_gg, a->e.epsilon_gg);
+		char note[400];
+		cells_of(&r->variants[v], &vc);
+		int rows = 0;
+		for (size_t i = 0; i < r->anova_count; i++) {
+			const sty_anova_row *a = &r->anova[i];
+			if (a->variant != v)
+				continue;
+			rows++;
+			fprintf(f, "%s,%s,%s,%g,%g,", vc.cm, vc.TP, a->effect, a->e.df1, a->e.df2);
+			csv_num(f, a->e.F, "%.6f"), fputc(',', f);
+			csv_num(f, a->e.p, "%.6g"), fputc(',', f);
+			csv_num(f, a->e.p_gg, "%.6g"), fputc(',', f);
+			csv_num(f, a->e.epsilon_gg, "%.6f");
+			fprintf(f, ",%s\n", a->note ? sty_csv_cell(a->note, note, sizeof note) : "");
+		}
+		if (!rows && r->variants[v].anova_note[0])
+			fprintf(f, "%s,%s,,,,,,,,%s\n", vc.cm, vc.TP,
+				sty_csv_cell(r->variants[v].anova_note, note, sizeof note));
 	}
 }
 
@@ -156,9 +295,12 @@ static void write_posthoc(FILE *f, const sty_result *r)
 		variant_cells vc;
 		char l1c[160], l2c[160];
 		cells_of(&r->variants[h->variant], &vc);
-		fprintf(f, "%s,%s,%s,%s,%s,%.6f,%g,%.6g,%.6g\n", vc.cm, vc.TP, h->factor,
-			sty_csv_cell(h->level_1, l1c, sizeof l1c), sty_csv_cell(h->level_2, l2c, sizeof l2c), h->t, h->df, h->p,
-			h->p_bonferroni);
+		fprintf(f, "%s,%s,%s,%s,%s,", vc.cm, vc.TP, h->factor, sty_csv_cell(h->level_1, l1c, sizeof l1c),
+			sty_csv_cell(h->level_2, l2c, sizeof l2c));
+		csv_num(f, h->t, "%.6f"), fputc(',', f);
+		csv_num(f, h->df, "%g"), fputc(',', f);
+		csv_num(f, h->p, "%.6g"), fputc(',', f);
+		csv_num(f, h->p_bonferroni, "%.6g"), fputc('\n', f);
 	}
 }
 
@@ -171,23 +313,35 @@ static json_t *conditions_json(const sty_result *r)
 		json_array_append_new(jc, json_pack("{s:s, s:o, s:o, s:s, s:s, s:I, s:f, s:o, s:o, s:f, s:f, s:f, s:f}",
 						    "method", v->method, "T", T_json(v), "period", period_json(v), "scene",
 						    w->scene, "camera", w->camera, "n", (json_int_t)w->n, "Q", w->Q, "Q_lo",
-						    isfinite(w->Q_lo) ? json_real(w->Q_lo) : json_null(), "Q_hi",
-						    isfinite(w->Q_hi) ? json_real(w->Q_hi) : json_null(), "p_ref", w->j.p,
-						    "p_ref_lo", w->j.p_lo, "p_ref_hi", w->j.p_hi, "jnd", w->j.jnd));
+						    num_json(w->Q_lo), "Q_hi", num_json(w->Q_hi), "p_ref", w->j.p, "p_ref_lo",
+						    w->j.p_lo, "p_ref_hi", w->j.p_hi, "jnd", w->j.jnd));
 	}
 	return jc;
 }
 
+/* anova.json: the rows of anova.csv (undefined numbers null, never a row left out), each with its note (null). */
 static json_t *anova_json(const sty_result *r)
 {
 	json_t *ja = json_array();
-	for (size_t i = 0; ja && i < r->anova_count; i++) {
-		const sty_anova_row *a = &r->anova[i];
-		const sty_variant *v = &r->variants[a->variant];
-		json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:s, s:f, s:f, s:f, s:f, s:f, s:f, s:I}", "method",
-						    v->method, "T", T_json(v), "period", period_json(v), "effect", a->effect,
-						    "df1", a->e.df1, "df2", a->e.df2, "F", a->e.F, "p", a->e.p, "p_gg", a->e.p_gg,
-						    "epsilon_gg", a->e.epsilon_gg, "participants", (json_int_t)a->participants));
+	for (size_t v = 0; ja && v < r->variant_count; v++) {
+		const sty_variant *vv = &r->variants[v];
+		int rows = 0;
+		for (size_t i = 0; i < r->anova_count; i++) {
+			const sty_anova_row *a = &r->anova[i];
+			if (a->variant != v)
+				continue;
+			rows++;
+			json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:s, s:f, s:f, s:o, s:o, s:o, s:o, s:I, s:o}",
+							    "method", vv->method, "T", T_json(vv), "period", period_json(vv),
+							    "effect", a->effect, "df1", a->e.df1, "df2", a->e.df2, "F",
+							    num_json(a->e.F), "p", num_json(a->e.p), "p_gg", num_json(a->e.p_gg),
+							    "epsilon_gg", num_json(a->e.epsilon_gg), "participants",
+							    (json_int_t)a->participants, "note",
+							    a->note ? json_string(a->note) : json_null()));
+		}
+		if (!rows && vv->anova_note[0])
+			json_array_append_new(ja, json_pack("{s:s, s:o, s:o, s:n, s:s}", "method", vv->method, "T", T_json(vv),
+							    "period", period_json(vv), "effect", "note", vv->anova_note));
 	}
 	return ja;
 }
@@ -313,6 +467,34 @@ int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size)
 		return rc;
 	}
 	rc = write_files(r, d, made_dir, err, err_size);
+	if (!rc)
+		sty_tally_notes(r, stderr);
 	sty_result_free(&r);
 	return rc;
+}
+
+void sty_tally_notes(const sty_result *r, FILE *f)
+{
+	size_t noted = 0, same = 0;
+	for (size_t v = 0; v < r->variant_count; v++) {
+		noted += r->variants[v].anova_note[0] != 0;
+		same += !strcmp(r->variants[v].anova_note, r->variants[0].anova_note);
+	}
+	if (!noted)
+		return;
+	if (noted == r->variant_count && same == noted && !r->anova_count) { /* the usual case: one scene and path */
+		fprintf(f, "taslab study: no ANOVA for any variant: %s\n", r->variants[0].anova_note);
+		return;
+	}
+	for (size_t v = 0; v < r->variant_count; v++) {
+		const sty_variant *x = &r->variants[v];
+		char name[96];
+		int rows = 0;
+		if (!x->anova_note[0])
+			continue;
+		for (size_t i = 0; i < r->anova_count; i++)
+			rows += r->anova[i].variant == v;
+		variant_name(x, name, sizeof name);
+		fprintf(f, "taslab study: %s: %s%s\n", name, rows ? "ANOVA incomplete: " : "no ANOVA: ", x->anova_note);
+	}
 }

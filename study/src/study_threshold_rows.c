@@ -82,7 +82,12 @@ int sty_thresholds_compute(sty_trating *t, size_t n, sty_result *r, char *err, s
 	return rc;
 }
 
-static void num(FILE *f, double v) { fprintf(f, ",%.6f", v); } /* inf as "inf", as conditions.csv's jnd */
+/* The study's one convention (sty_num_cell, issue 27.10): inf as "inf", undefined as an empty cell. */
+static void num(FILE *f, double v)
+{
+	char b[64];
+	fprintf(f, ",%s", sty_num_cell(v, "%.6f", b, sizeof b));
+}
 
 void sty_write_thresholds(FILE *f, const sty_result *r)
 {

@@ -8,6 +8,9 @@
  * sa_e16, sa_e32, sa_e64: the fraction of pixels whose max-RGB difference to sa's frame exceeds T (TAS-METHODS A5:
  * at matched budgets tasa should exceed less often than sau against sa).
  *
+ * OPTION "stereo" renders that variant's both eyes (WxH per eye; the counts and times are totals over both eyes,
+ * the quality columns the left eye's), "ipd=M" its eye distance (default 0.063).
+ *
  *   bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
  * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
  *        force=tarc@8,force-reshade */
@@ -25,6 +28,8 @@ typedef struct bench_variant {
 	char label[64];
 	method_config mc;
 	render *r;
+	uint32_t views; /* 2: ",stereo" (both eyes, the size per eye; STEREO.md) */
+	float ipd;      /* ",ipd=M" with stereo (default RENDER_STEREO_IPD_DEFAULT) */
 } bench_variant;
 
 static int parse_variant(const char *arg, bench_variant *v)
@@ -43,10 +48,19 @@ static int parse_variant(const char *arg, bench_variant *v)
 		fprintf(stderr, "bench_methods: %s: %s\n", arg, tok ? err : "no variant");
 		return 1;
 	}
+	v->views = 1;
+	v->ipd = RENDER_STEREO_IPD_DEFAULT;
 	while ((tok = strtok_r(NULL, ",", &save))) {
 		char *ov = strchr(tok, '=');
 		if (ov)
 			*ov++ = 0;
+		if (!strcmp(tok, "stereo") || !strcmp(tok, "ipd")) { /* render options, not the method's */
+			if (!strcmp(tok, "stereo"))
+				v->views = 2;
+			else
+				v->ipd = ov ? strtof(ov, NULL) : -1.0f;
+			continue;
+		}
 		if (method_config_set(&v->mc, tok, ov ? ov : "true", err, sizeof err)) {
 			fprintf(stderr, "bench_methods: %s: %s\n", arg, err);
 			return 1;
@@ -101,7 +115,8 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	for (int i = 0; i < nv; i++) {
-		render_desc rd = {.scene = s, .camera = cam, .width = w, .height = h, .method = &v[i].mc};
+		render_desc rd = {.scene = s, .camera = cam, .width = w, .height = h, .method = &v[i].mc, .views = v[i].views,
+				  .ipd = v[i].views > 1 ? v[i].ipd : 0.0f};
 		if (render_create(dev, &rd, &v[i].r, err, sizeof err)) {
 			fprintf(stderr, "bench_methods: %s: %s\n", v[i].label, err);
 			return 1;

@@ -106,6 +106,11 @@ int mtr_comparer_frame(mtr_comparer *c, const mtr_image *a, const mtr_image *b, 
 /* Pools the n frames given (mtr_pool) plus what needs the comparer's per-pixel state (FLIP weighted percentiles
  * over all frames compared so far). */
 void mtr_comparer_pool(mtr_comparer *c, const mtr_frame_stats *frames, size_t n, mtr_frame_stats *pooled);
+/* Adds what `from` gathered over its frames (max-RGB histogram, FLIP's pixel histogram) to `into`, so that
+ * mtr_comparer_pool(into, ...) over both comparers' frames pools all their pixels (a stereo diff: one comparer per
+ * eye, then both eyes pooled). Both must select the same metrics with the same options and compare frames of one
+ * size; TL_ERR_ARG otherwise. */
+int mtr_comparer_merge(mtr_comparer *into, const mtr_comparer *from, char *err, size_t err_size);
 /* The selected metrics: bit i for registry metric i. */
 uint32_t mtr_comparer_selected(const mtr_comparer *c);
 /* Counts of floor(d) (max-RGB difference, bin 255 includes larger) over all frames compared; NULL when maxrgb is

@@ -32,14 +32,18 @@ typedef struct mtr_diff_desc {
 } mtr_diff_desc;
 
 typedef struct mtr_diff_result {
-	size_t frames;
-	mtr_frame_stats pooled;
+	size_t frames;          /* frame pairs (per eye) */
+	uint32_t views;         /* 2: two stereo runs, each eye against the same eye into OUT/L/ and OUT/R/ (every file
+	                           of a mono diff), both eyes pooled into OUT/frames.csv and OUT/summary.json; else 1 */
+	mtr_frame_stats pooled; /* stereo: over both eyes */
+	mtr_frame_stats eye[2]; /* stereo: each eye's pooled values (L, R) */
 	double seconds;         /* wall time */
 	double compute_seconds; /* time in statistics (excluding decoding) */
 } mtr_diff_result;
 
 /* Returns TL_OK or a tl_err code, among them TL_ERR_ARG (EXR without `colour`, a bad metric or option),
- * TL_ERR_INPUT (a run or folder that is missing, incomplete or unlike the other; for a frame, the image reader's
+ * TL_ERR_INPUT (a run or folder that is missing, incomplete or unlike the other — a stereo run against a mono
+ * run or a folder of images among them; for a frame, the image reader's
  * code), TL_ERR_OUTPUT (OUT cannot be written) and TL_ERR_NOMEM. */
 int mtr_diff_run(const mtr_diff_desc *d, mtr_diff_result *res, char *err, size_t err_size);
 

@@ -42,6 +42,8 @@ typedef struct vkdev {
 	char driver_info[256];
 	bool has_pipeline_stats;
 	bool has_timestamps;
+	uint32_t timestamp_valid_bits; /* of the queue family: 36 on some GPUs, 64 on lavapipe (vkdev_elapsed_ms) */
+	uint32_t subgroup_size;        /* 8 on lavapipe, 32 on NVIDIA, 32 or 64 on AMD: shaders must not assume one */
 	bool has_buffer_device_address; /* bufferDeviceAddress enabled (LUTs of a view transform) */
 	bool validation;
 	bool has_debug_utils;
@@ -69,7 +71,13 @@ void vkdev_destroy(vkdev **dev);
 uint32_t vkdev_validation_messages(const vkdev *dev);
 /* True when the selected device is Mesa's lavapipe (llvmpipe) CPU driver. */
 bool vkdev_is_lavapipe(const vkdev *dev);
-/* Lists the physical devices, one line each ("index: name (type)"), into `out`. */
+/* Milliseconds between two timestamps of the device's queue: the difference is taken modulo 2^timestamp_valid_bits
+ * (a counter narrower than 64 bits wraps) and scaled by limits.timestampPeriod (ns per tick; 1 on lavapipe). */
+double vkdev_elapsed_ms(const vkdev *dev, uint64_t begin, uint64_t end);
+/* The same with the two properties given (unit-tested against values lavapipe does not have). */
+double vkdev_ticks_ms(uint64_t begin, uint64_t end, uint32_t valid_bits, float period_ns);
+/* Lists the physical devices, one line each ("index: name (type) ..." with the properties taslab depends on: Vulkan
+ * version, subgroup size, timestamp period and bits, largest device-local heap), into `out`. */
 VkResult vkdev_list(char *out, size_t out_size);
 
 /* Attaches a debug name to an object (no-op without VK_EXT_debug_utils). */

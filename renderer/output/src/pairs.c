@@ -22,16 +22,35 @@ int pairs_write(const char *path, const pairs_set *s, char *err, size_t err_size
 						       isfinite(c->T) ? json_real(c->T) : json_null(), "period",
 						       c->period ? json_integer(c->period) : json_null(), "run", c->run, "clip",
 						       c->clip, "inspect", c->inspect));
+		json_t *jc = json_array_get(conds, i);
 		if (c->facts.known)
-			json_object_set_new(json_array_get(conds, i), "method_facts", method_facts_json(&c->facts));
+			json_object_set_new(jc, "method_facts", method_facts_json(&c->facts));
+		if (!c->run[0]) /* a set from a sweep has no run or inspect folder of its own */
+			json_object_del(jc, "run");
+		if (!c->inspect[0])
+			json_object_del(jc, "inspect");
+		if (c->sweep_run[0])
+			json_object_set_new(jc, "sweep_run", json_string(c->sweep_run));
 	}
 	json_t *m = json_pack("{s:i, s:s, s:s, s:s, s:s, s:f, s:[I,I], s:[i,i], s:s, s:{s:s, s:s}, s:o}", "taslab_pairs", 1,
 			      "scene", s->scene, "scene_path", s->scene_path, "camera", s->camera, "camera_motion",
 			      s->camera_motion, "fps", s->fps, "frames", (json_int_t)s->first_frame, (json_int_t)s->last_frame, "size",
 			      (int)s->width, (int)s->height, "display_transform", s->display_transform, "reference", "run",
 			      s->ref_run, "clip", s->ref_clip, "conditions", conds);
+	if (m && s->views > 1) { /* STEREO.md: studies add display=stereo; mono sets are written as before */
+		json_object_set_new(m, "display", json_string("stereo"));
+		json_object_set_new(m, "ipd", json_real(s->ipd));
+	}
 	if (m && s->ref_method[0])
 		json_object_set_new(json_object_get(m, "reference"), "method", json_string(s->ref_method));
+	if (m && !s->ref_run[0])
+		json_object_del(json_object_get(m, "reference"), "run");
+	if (m && s->scene_digest[0])
+		json_object_set_new(m, "scene_digest", json_string(s->scene_digest));
+	if (m && s->colour_digest[0])
+		json_object_set_new(m, "colour_digest", json_string(s->colour_digest));
+	if (m && s->sweep[0])
+		json_object_set_new(m, "source", json_pack("{s:s, s:s}", "sweep", s->sweep, "ref_run", s->sweep_ref_run));
 	int rc = tl_json_write(path, m, err, err_size);
 	json_decref(m);
 	return rc;
@@ -88,12 +107,29 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 	if (!bad) {
 		get_str(j, "scene_path", s->scene_path, sizeof s->scene_path, 0);
 		get_str(j, "display_transform", s->display_transform, sizeof s->display_transform, 0);
+		get_str(j, "scene_digest", s->scene_digest, sizeof s->scene_digest, 0);
+		get_str(j, "colour_digest", s->colour_digest, sizeof s->colour_digest, 0);
+		json_t *src = json_object_get(j, "source");
+		if (src && (get_str(src, "sweep", s->sweep, sizeof s->sweep, 0) ||
+			    get_str(src, "ref_run", s->sweep_ref_run, sizeof s->sweep_ref_run, 1)))
+			bad = "source must hold the sweep folder and the reference's run folder in it";
 		s->fps = json_number_value(json_object_get(j, "fps"));
 		json_int_t a = json_integer_value(json_array_get(fr, 0)), b = json_integer_value(json_array_get(fr, 1));
 		json_int_t w = json_integer_value(json_array_get(sz, 0)), h = json_integer_value(json_array_get(sz, 1));
 		if (a < 0 || b < a || b > 0xffffffffLL || (sz && (w < 1 || h < 1 || w > 16384 || h > 16384)))
 			bad = "frames or size out of range";
 		s->first_frame = (uint32_t)a, s->last_frame = (uint32_t)b, s->width = (uint32_t)w, s->height = (uint32_t)h;
+		json_t *disp = json_object_get(j, "display"), *ipd = json_object_get(j, "ipd");
+		s->views = 1;
+		if (disp && !(json_is_string(disp) && (!strcmp(json_string_value(disp), "stereo") ||
+						       !strcmp(json_string_value(disp), "mono"))))
+			bad = "display must be \"stereo\" or \"mono\"";
+		else if (disp && !strcmp(json_string_value(disp), "stereo")) {
+			s->views = 2;
+			s->ipd = json_number_value(ipd);
+			if (!json_is_number(ipd) || !(s->ipd >= 0.0 && s->ipd <= 1.0))
+				bad = "a stereo set needs ipd in metres (0..1)";
+		}
 	}
 	size_t n = bad ? 0 : json_array_size(conds);
 	if (n && !(s->conditions = calloc(n, sizeof *s->conditions)))
@@ -116,6 +152,7 @@ int pairs_read(const char *path, pairs_set *s, char *err, size_t err_size)
 			snprintf(x->variant, sizeof x->variant, "%s", x->method);
 		get_str(c, "run", x->run, sizeof x->run, 1);
 		get_str(c, "inspect", x->inspect, sizeof x->inspect, 1);
+		get_str(c, "sweep_run", x->sweep_run, sizeof x->sweep_run, 1);
 		x->T = json_is_number(T) ? json_number_value(T) : NAN;
 		json_int_t nv = json_is_integer(N) ? json_integer_value(N) : 0;
 		x->period = nv > 0 && nv <= 8 ? (uint32_t)nv : 0;

@@ -70,6 +70,13 @@ static const sweep_key table[] = {
 	{.name = "truth", .type = SWEEP_KEY_BOOL, REQ(truth), .flags = SWEEP_KEY_SPEC | SWEEP_KEY_OPTIONAL, SPEC(truth),
 	 .help = "render every variant whose method has --truth with it: late_samples and late_percent in summary.csv "
 		 "(reused samples more than T from their true shading; costs shading them too)"},
+	/* stereo (issue 25) came after the first sweeps: a sweep.json without it is mono */
+	{.name = "stereo", .type = SWEEP_KEY_BOOL, REQ(stereo), .flags = SWEEP_KEY_SPEC | SWEEP_KEY_OPTIONAL, SPEC(stereo),
+	 .help = "every run renders both eyes (--size per eye; STEREO.md): frames/L, frames/R, side-by-side clips, metrics "
+		 "per eye then pooled; part of the sweep's identity"},
+	{.name = "ipd", .arg = "M", .type = SWEEP_KEY_NUMBER, REQ(ipd), .lo = 1e-4, .hi = 1.0,
+	 .flags = SWEEP_KEY_SPEC | SWEEP_KEY_OPTIONAL, SPEC(ipd),
+	 .help = "with --stereo: distance between the eyes in metres (default 0.063)"},
 	{.name = "jobs", .arg = "N", .type = SWEEP_KEY_WHOLE, REQ(jobs), .lo = 1, .hi = 256, .flags = SWEEP_KEY_RESUME_OK,
 	 .help = "runs at a time on this machine, each in its own process (default 1)"},
 };

@@ -101,6 +101,36 @@ static VkResult make_instance(bool validation, bool *has_debug_utils, VkInstance
 	return vkCreateInstance(&ci, NULL, out);
 }
 
+/* The first graphics+compute queue family (the one taslab uses) and its timestamp bits; UINT32_MAX (bits 0) without
+ * one. */
+static uint32_t queue_family(VkPhysicalDevice pd, uint32_t *timestamp_bits)
+{
+	uint32_t qn = 0;
+	vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, NULL);
+	VkQueueFamilyProperties qp[16];
+	if (qn > 16)
+		qn = 16;
+	vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, qp);
+	*timestamp_bits = 0;
+	for (uint32_t i = 0; i < qn; i++)
+		if ((qp[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qp[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) {
+			*timestamp_bits = qp[i].timestampValidBits;
+			return i;
+		}
+	return UINT32_MAX;
+}
+
+double vkdev_ticks_ms(uint64_t begin, uint64_t end, uint32_t valid_bits, float period_ns)
+{
+	uint64_t mask = valid_bits >= 64 ? UINT64_MAX : (UINT64_C(1) << valid_bits) - 1;
+	return (double)((end - begin) & mask) * (double)period_ns * 1e-6;
+}
+
+double vkdev_elapsed_ms(const vkdev *dev, uint64_t begin, uint64_t end)
+{
+	return vkdev_ticks_ms(begin, end, dev->timestamp_valid_bits, dev->props.limits.timestampPeriod);
+}
+
 VkResult vkdev_list(char *out, size_t out_size)
 {
 	VkInstance inst;
@@ -118,8 +148,23 @@ VkResult vkdev_list(char *out, size_t out_size)
 	for (uint32_t i = 0; i < n; i++) {
 		VkPhysicalDeviceProperties p;
 		vkGetPhysicalDeviceProperties(pd[i], &p);
+		VkPhysicalDeviceSubgroupProperties sg = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+		VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sg};
+		vkGetPhysicalDeviceProperties2(pd[i], &p2);
+		VkPhysicalDeviceMemoryProperties mp;
+		vkGetPhysicalDeviceMemoryProperties(pd[i], &mp);
+		VkDeviceSize local = 0;
+		for (uint32_t h = 0; h < mp.memoryHeapCount; h++)
+			if ((mp.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) && mp.memoryHeaps[h].size > local)
+				local = mp.memoryHeaps[h].size;
+		uint32_t ts_bits;
+		queue_family(pd[i], &ts_bits);
 		size_t len = strlen(out);
-		snprintf(out + len, out_size - len, "%u: %s (%s)\n", i, p.deviceName, device_type_name(p.deviceType));
+		snprintf(out + len, out_size - len,
+			 "%u: %s (%s) Vulkan %u.%u, subgroup %u, timestamps %.3g ns x %u bits, %.0f MiB device-local\n", i,
+			 p.deviceName, device_type_name(p.deviceType), VK_API_VERSION_MAJOR(p.apiVersion),
+			 VK_API_VERSION_MINOR(p.apiVersion), sg.subgroupSize, (double)p.limits.timestampPeriod,
+			 ts_bits, (double)local / (1024.0 * 1024.0));
 	}
 	vkDestroyInstance(inst, NULL);
 	return VK_SUCCESS;
@@ -222,6 +267,21 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &drv};
 	vkGetPhysicalDeviceProperties2(d->physical, &p2);
 	d->driver_id = drv.driverID;
+	VkPhysicalDeviceSubgroupProperties sg = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+	VkPhysicalDeviceProperties2 sp2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sg};
+	vkGetPhysicalDeviceProperties2(d->physical, &sp2);
+	d->subgroup_size = sg.subgroupSize;
+	/* The compute shaders' workgroups: 16x16 (vbuf rate pass) and 64x1 are the largest; Vulkan guarantees only 128
+	 * invocations and 128x128x64 sizes (every desktop driver and lavapipe give 1024). */
+	const VkPhysicalDeviceLimits *lim = &d->props.limits;
+	if (lim->maxComputeWorkGroupInvocations < 256 || lim->maxComputeWorkGroupSize[0] < 64 ||
+	    lim->maxComputeWorkGroupSize[1] < 16) {
+		snprintf(err, err_size, "device '%s' allows %u compute invocations per workgroup (%ux%u); taslab needs 256 (64x16): "
+			 "choose another --device", d->props.deviceName, lim->maxComputeWorkGroupInvocations,
+			 lim->maxComputeWorkGroupSize[0], lim->maxComputeWorkGroupSize[1]);
+		r = VK_ERROR_FEATURE_NOT_PRESENT;
+		goto fail;
+	}
 	snprintf(d->driver_info, sizeof d->driver_info, "%s %s", drv.driverName, drv.driverInfo);
 	if (VK_API_VERSION_MINOR(d->props.apiVersion) < 3 && VK_API_VERSION_MAJOR(d->props.apiVersion) == 1) {
 		snprintf(err, err_size, "device '%s' supports Vulkan %u.%u; taslab needs 1.3", d->props.deviceName,
@@ -230,19 +290,8 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 		goto fail;
 	}
 
-	uint32_t qn = 0;
-	vkGetPhysicalDeviceQueueFamilyProperties(d->physical, &qn, NULL);
-	VkQueueFamilyProperties qp[16];
-	if (qn > 16)
-		qn = 16;
-	vkGetPhysicalDeviceQueueFamilyProperties(d->physical, &qn, qp);
-	d->queue_family = UINT32_MAX;
-	for (uint32_t i = 0; i < qn; i++)
-		if ((qp[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qp[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) {
-			d->queue_family = i;
-			d->has_timestamps = qp[i].timestampValidBits > 0 && d->props.limits.timestampComputeAndGraphics;
-			break;
-		}
+	d->queue_family = queue_family(d->physical, &d->timestamp_valid_bits);
+	d->has_timestamps = d->timestamp_valid_bits > 0 && d->props.limits.timestampComputeAndGraphics;
 	if (d->queue_family == UINT32_MAX) {
 		snprintf(err, err_size, "device '%s' has no graphics+compute queue", d->props.deviceName);
 		r = VK_ERROR_INITIALIZATION_FAILED;

@@ -85,6 +85,22 @@ VkResult render_cmd_submit_wait(render *r)
 	return res ? res : vkWaitForFences(r->dev->device, 1, &r->fence, VK_TRUE, UINT64_MAX);
 }
 
+void render_stats_begin(render *r, VkCommandBuffer cmd)
+{
+	if (!r->stats_pool)
+		return;
+	/* reset here so any number of shading passes may run per command buffer (the last one counts) */
+	vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
+	vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
+	r->stats_recorded = true;
+}
+
+void render_stats_end(render *r, VkCommandBuffer cmd)
+{
+	if (r->stats_pool)
+		vkCmdEndQuery(cmd, r->stats_pool, 0);
+}
+
 void render_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
 		    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access)
 {

@@ -154,6 +154,10 @@ struct render {
 
 	/* queries and submission */
 	VkQueryPool ts_pool, stats_pool;
+	/* the pipeline-statistics query was begun in this frame's command buffer (render_stats_begin): only then are its
+	 * results waited for. A query never written since its reset never becomes available, and waiting on it hangs on
+	 * NVIDIA's driver (the vbuf methods have no shading pass that records it); lavapipe returned at once. */
+	bool stats_recorded;
 	uint32_t ts_count;
 	VkCommandBuffer cmd;
 	VkFence fence;
@@ -289,6 +293,9 @@ void render_ts(render *r, VkCommandBuffer cmd);
 VkResult render_cmd_begin(render *r);
 VkResult render_cmd_submit_wait(render *r);
 /* A global memory barrier between two stage/access sets. */
+/* Resets and begins / ends the pipeline-statistics query around a shading pass (no-ops without the pool). */
+void render_stats_begin(render *r, VkCommandBuffer cmd);
+void render_stats_end(render *r, VkCommandBuffer cmd);
 void render_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
 		    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
 

@@ -624,14 +624,10 @@ void atlas_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	memcpy(&tbits, &s->v.threshold, sizeof tbits);
 	barrier_compute(cmd); /* host writes (blocks, work, counters) before the shaders */
 	render_ts(r, cmd);
-	if (r->stats_pool) {
-		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
-		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
-	}
+	render_stats_begin(r, cmd);
 	bind_compute(r, s, cmd, s->shade_pipe, 0, s->shade_chunks, frame, tbits);
 	dispatch_chunks(cmd, s->shade_chunks);
-	if (r->stats_pool)
-		vkCmdEndQuery(cmd, r->stats_pool, 0);
+	render_stats_end(r, cmd);
 	barrier_compute(cmd);
 	if (s->v.oracle) {
 		bind_compute(r, s, cmd, s->commit_pipe, 0, s->shade_chunks, frame, tbits);

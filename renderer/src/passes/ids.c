@@ -35,21 +35,30 @@ static int make_set(render *r, ids_pass *p, char *err, size_t err_size)
 
 static int make_pipeline(render *r, ids_pass *p, char *err, size_t err_size)
 {
-	uint32_t *vs = NULL, *fs = NULL;
-	size_t vn = 0, fn = 0;
+	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
+	size_t vn = 0, fn = 0, mn = 0;
 	int rc = render_compile_defs(r, "common/ids.vert.in", "", SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
 		rc = render_compile_defs(r, "common/ids.frag.in", "", SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
+	if (!rc)
+		rc = render_compile_defs(r, "common/ids.frag.in", "#define IDS_ALPHA_MASK 1\n", SHC_STAGE_FRAGMENT, &fm, &mn,
+					 err, err_size);
 	if (!rc) {
 		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
 				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 				       .method_set = p->set_layout};
 		VkResult res = render_make_graphics(r, &pd, &p->pipe);
+		if (!res) {
+			pd.fs = fm;
+			pd.fs_size = mn;
+			res = render_make_graphics(r, &pd, &p->pipe_mask);
+		}
 		if (res)
 			rc = render_vk_error(err, err_size, "ids: visibility pipeline", res);
 	}
 	free(vs);
 	free(fs);
+	free(fm);
 	return rc;
 }
 
@@ -68,6 +77,7 @@ int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size)
 void ids_pass_finish(render *r, ids_pass *p)
 {
 	render_pipeline_destroy(r, &p->pipe);
+	render_pipeline_destroy(r, &p->pipe_mask);
 	if (p->set_layout)
 		vkDestroyDescriptorSetLayout(r->dev->device, p->set_layout, NULL);
 	vkdev_image_destroy(r->dev, &p->image);
@@ -94,18 +104,24 @@ void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t
 			      .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da};
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, w, h);
-	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipe.pipeline);
 	VkDescriptorSet sets[2] = {r->scene_set, p->set};
-	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipe.layout, 0, 2, sets, 0, NULL);
 	const scene *sc = r->scene;
+	const render_pipeline *bound = NULL;
 	for (size_t i = 0; i < sc->object_count; i++) {
 		const scene_object *o = &sc->objects[i];
 		if (o->mesh < 0 || sc->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND)
 			continue;
+		/* scene order is kept (the last drawn wins among coplanar surfaces); the pipeline follows the material */
+		const render_pipeline *want = sc->materials[o->material].alpha_mode == SCENE_ALPHA_MASK ? &p->pipe_mask : &p->pipe;
+		if (want != bound) {
+			vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->pipeline);
+			vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->layout, 0, 2, sets, 0, NULL);
+			bound = want;
+		}
 		/* aux: where the object's mesh starts in the scene's index and vertex buffers (common/ids.vert.in) */
 		gpu_push pc = {slot, (uint32_t)i, (uint32_t)sc->object_count, 0,
 			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], 0, 0}};
-		vkCmdPushConstants(cmd, p->pipe.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+		vkCmdPushConstants(cmd, bound->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
 				   sizeof pc, &pc);
 		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
 		vkCmdDraw(cmd, sc->meshes[o->mesh].index_count, 1, 0, 0);

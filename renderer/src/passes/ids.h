@@ -19,7 +19,9 @@ typedef struct ids_pass {
 	vkdev_image image;                /* the ids, GENERAL layout between frames */
 	VkDescriptorSetLayout set_layout; /* set 1 of the pass: the scene's vertices and indices (common/ids.vert.in) */
 	VkDescriptorSet set;
-	render_pipeline pipe;
+	render_pipeline pipe;             /* opaque objects: no discard, so the depth test runs before the fragment
+					   * shader (llvmpipe tests depth after any shader that can discard) */
+	render_pipeline pipe_mask;        /* glTF MASK objects: alpha-tested */
 } ids_pass;
 
 int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size);

@@ -89,10 +89,8 @@ void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const rend
 		.pDepthAttachment = &da,
 		.pStencilAttachment = p->stencil ? &sa : NULL,
 	};
-	if (p->query && r->stats_pool) { /* reset here so any number of shading passes may run per command buffer */
-		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
-		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
-	}
+	if (p->query)
+		render_stats_begin(r, cmd);
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, w, h);
 	if (p->fullscreen) {
@@ -113,8 +111,8 @@ void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const rend
 	if (p->blend && r->blend_count)
 		draw_blend(r, cmd, slot);
 	vkCmdEndRendering(cmd);
-	if (p->query && r->stats_pool)
-		vkCmdEndQuery(cmd, r->stats_pool, 0);
+	if (p->query)
+		render_stats_end(r, cmd);
 }
 
 /* The reference shading pipelines (opaque/masked and BLEND). */

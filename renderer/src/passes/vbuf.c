@@ -57,17 +57,18 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 		vkdev_buffer *b;
 		VkDeviceSize size;
 		VkBufferUsageFlags extra;
+		bool host; /* written or read by the CPU; the sample list is the GPU's alone (device-local on a GPU) */
 		const char *name;
 	} spec[4] = {
-		{&v->objinfo, objects * 16, 0, "vbuf object info"},
-		{&v->list, (VkDeviceSize)w * h * 8, 0, "vbuf sample list"},
-		{&v->counters, 16 * 4, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "vbuf counters"},
-		{&v->rates, (VkDeviceSize)v->tiles_x * v->tiles_y * 4, 0, "vbuf tile rates"},
+		{&v->objinfo, objects * 16, 0, true, "vbuf object info"},
+		{&v->list, (VkDeviceSize)w * h * 8, 0, false, "vbuf sample list"},
+		{&v->counters, 16 * 4, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, true, "vbuf counters"},
+		{&v->rates, (VkDeviceSize)v->tiles_x * v->tiles_y * 4, 0, true, "vbuf tile rates"},
 	};
 	for (int i = 0; i < 4; i++) {
 		VkResult res = vkdev_buffer_create(r->dev, spec[i].size,
 						   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | spec[i].extra,
-						   true, spec[i].name, spec[i].b);
+						   spec[i].host, spec[i].name, spec[i].b);
 		if (res)
 			return render_vk_error(err, err_size, spec[i].name, res);
 	}

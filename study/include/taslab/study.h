@@ -117,6 +117,7 @@ typedef struct sty_trial {
 	char clip_a[48], clip_b[48];   /* opaque clip names ("<32 hex digits>.webm"), served as /clips/<name> */
 	char kind[16];                 /* test, catch, training */
 	bool break_before;
+	bool stereo;                   /* the study's clips show both eyes side by side (pairs.json "display": "stereo") */
 	bool done;                     /* all trials answered (the other fields are unset) */
 } sty_trial;
 
@@ -181,6 +182,22 @@ typedef struct sty_tally_desc {
 } sty_tally_desc;
 
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size);
+
+/* Study stimuli from a sweep's runs (issue 27.13): `taslab study pairs --sweep SWEEP --out DIR`. One pairs.json set
+ * per scene x camera path of the sweep in DIR/<scene>--<camera>/, whose clips are the sweep's clips (hard links;
+ * copies across file systems) of the listed variants (tokens such as "tfr@8" or ids such as "tfr-T8"; none: every
+ * variant but ref), with the sweep's folder, each clip's run and the runs' input digests recorded (pairs.h), so
+ * `study design --stimuli DIR` rates exactly the clips the sweep measured and `taslab report SWEEP --study` can
+ * check it. Every run must be complete with its clip; `out` must be new or empty. *sets: the sets written.
+ * Errors: TL_ERR_INPUT (not a sweep, an incomplete run, a folder in the way), TL_ERR_ARG (a variant the sweep lacks),
+ * TL_ERR_OUTPUT, TL_ERR_NOMEM; one line in `err`. */
+typedef struct sty_pairs_desc {
+	const char *sweep;
+	const char *out;
+	const char *const *variants;
+	size_t variant_count;
+} sty_pairs_desc;
+int sty_pairs_from_sweep(const sty_pairs_desc *d, size_t *sets, char *err, size_t err_size);
 
 /* Repeated-measures ANOVA on a complete n x (a x b) table of cell means (subject-major, factor A major):
  * effects A, B and A:B with F, dfs, p, and Greenhouse-Geisser epsilon and corrected p. Exposed for tests. Returns

@@ -34,6 +34,12 @@ typedef struct sty_report_desc {
 	size_t count;
 	const char *study;           /* a study database (study.h) or NULL */
 	const char *jnd_metric;      /* summary.csv column the JND is plotted against (NULL: flip_mean) */
+	/* A stereo sweep's report beside a mono sweep (issue 25): its folder, spec and rows (mtr_sweep_collect), or NULL:
+	 * SWEEP/stereo_vs_mono.csv and a "Stereo" section with each run's speedup and shaded samples in both. */
+	const char *mono_dir;
+	const sweep_spec *mono_spec;
+	const mtr_sweep_row *mono_rows;
+	size_t mono_count;
 } sty_report_desc;
 
 /* Writes the report; `index` (may be NULL) receives the path of index.html. Plots need gnuplot: without it the page

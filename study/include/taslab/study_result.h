@@ -9,6 +9,10 @@
  * repeated-measures ANOVA (camera motion x scene) and Bonferroni-adjusted post hoc paired t tests; per participant
  * the catch-trial screening.
  *
+ * Undefined values (issue 27.10) are NAN in the result and written one way by every output: an empty CSV cell, JSON
+ * null, "–" in Markdown and on the report's page; infinite ones (F or t with no error variance) as inf / -inf (JSON:
+ * the strings "inf", "-inf"). Why a value is undefined is said beside it (sty_variant.anova_note, row notes).
+ *
  * Ownership: sty_tally_compute allocates the result; sty_result_free releases it.
  * Errors: a tl_err code, one line in `err`. */
 #ifndef TASLAB_STUDY_RESULT_H
@@ -17,6 +21,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "taslab/metrics.h"
 #include "taslab/study.h"
@@ -31,6 +36,8 @@ typedef struct sty_variant {
 	char method[32];
 	double T;        /* NAN: the method has no threshold */
 	uint32_t period; /* 0: the method has no period */
+	char anova_note[192]; /* why its ANOVA is missing or has undefined F (one scene and camera motion, fewer than
+			       * two complete participants, identical cells); "" when it has a complete one */
 } sty_variant;
 
 /* The statistics of one variant in one scene and camera path, or pooled over all of them. */
@@ -40,7 +47,7 @@ typedef struct sty_row {
 	bool pooled;
 	size_t n;                    /* ratings */
 	size_t participants;         /* participants with a rating here (the JOD bootstrap resamples them) */
-	double Q, Q_lo, Q_hi;        /* mean reference-relative rating, 95% t interval (NAN below two participants) */
+	double Q, Q_lo, Q_hi;        /* mean reference-relative rating, 95% t interval cut to -2..2 (NAN below two participants) */
 	mtr_jnd j;                   /* p_ref with its 95% Wilson interval, JND (metrics.h) */
 	double jod, jod_lo, jod_hi;  /* JOD = -JND and its 95% bootstrap interval (NAN when no resample has one) */
 } sty_row;
@@ -51,6 +58,7 @@ typedef struct sty_anova_row {
 	const char *effect;          /* "camera", "scene" or "camera:scene" (static strings) */
 	sty_anova_effect e;
 	size_t participants;         /* participants with every cell (the ones analysed) */
+	const char *note;            /* NULL, or why F is undefined (a static string) */
 } sty_anova_row;
 
 /* One post hoc paired t test between two levels of a factor (means over the other factor). */
@@ -107,6 +115,11 @@ int sty_tally_compute(sty *s, const sty_tally_desc *d, sty_result **out, char *e
  * is checked against the study's own files first (sty_check_output), and the files appear together or not at all.
  * sty_tally is sty_tally_compute followed by this. */
 int sty_tally_write(sty *s, const sty_result *r, const sty_tally_desc *d, char *err, size_t err_size);
+
+/* Writes to `f` why variants have no ANOVA (or one with undefined F): one line when every variant has none for the
+ * same reason (one scene and camera path), else one line per such variant; nothing when all have one. sty_tally
+ * writes them to stderr. */
+void sty_tally_notes(const sty_result *r, FILE *f);
 
 /* Accepts NULL, nulls the pointer. */
 void sty_result_free(sty_result **r);

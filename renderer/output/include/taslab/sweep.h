@@ -75,6 +75,8 @@ typedef struct sweep_request {
 	char device[256], ocio_config[SWEEP_PATH_MAX], display[128], view[128];
 	bool validation, truth;
 	uint32_t jobs;
+	bool stereo; /* --stereo: every run renders both eyes (STEREO.md) */
+	double ipd;  /* --ipd M with --stereo (0: not given) */
 } sweep_request;
 
 /* Reads a sweep file (request form). Unknown keys, wrong types, empty lists, lists longer than the limits
@@ -122,6 +124,8 @@ typedef struct sweep_spec {
 	char ocio_config[SWEEP_PATH_MAX], display[128], view[128]; /* as given ("" = default) */
 	char display_transform[256];    /* the resolved transform's name (colour_name) */
 	char colour_digest[24];         /* colour_digest: the config and its LUTs, when resolved (issue 31.4) */
+	bool stereo;                    /* every run stereo (--size per eye): part of the sweep's identity */
+	double ipd;                     /* stereo: metres (default 0.063); 0 for mono */
 } sweep_spec;
 
 int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t err_size);
