@@ -334,9 +334,10 @@ static const cli_command study_import = {
 
 extern const cli_command cli_cmd_study_simulate; /* cmd_study_simulate.c (issue 28) */
 extern const cli_command cli_cmd_study_pairs;    /* cmd_study_pairs.c (issue 27.13) */
+extern const cli_command cli_cmd_study_model;    /* cmd_study_model.c (issue 28) */
 static const cli_command *const study_subs[] = {&cli_cmd_study_pairs, &study_design, &study_add, &study_links,
 						&study_serve, &study_status, &study_tally, &study_export,
-						&study_import, &cli_cmd_study_simulate, NULL};
+						&study_import, &cli_cmd_study_simulate, &cli_cmd_study_model, NULL};
 
 const cli_command cli_cmd_study = {
 	.name = "study",
