@@ -129,6 +129,18 @@ static void test_model_simulated(void **state)
 		fail_msg("%s", err);
 	sty_close(&s);
 
+	/* tables.md lists the measured thresholds as thresholds.csv states them */
+	char tpath[4200], want[256];
+	snprintf(tpath, sizeof tpath, "%s/thresholds.csv", tally);
+	const char *key[4] = {"tfr", "", "s0", "c0"};
+	snprintf(want, sizeof want, "| tfr |  | s0 | c0 | %d | %.2f [", 24 * NLEV, tu_csv_lookup(tpath, key, 4, 5));
+	snprintf(tpath, sizeof tpath, "%s/tables.md", tally);
+	char *md = tu_read_file(tpath, NULL);
+	assert_non_null(md);
+	assert_non_null(strstr(md, "## Thresholds (T at 1 JND)"));
+	assert_non_null(strstr(md, want));
+	free(md);
+
 	char model[4096], pred[4096];
 	snprintf(model, sizeof model, "%s/model.json", dir);
 	snprintf(pred, sizeof pred, "%s/pred.csv", dir);
