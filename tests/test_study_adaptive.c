@@ -4,7 +4,9 @@
  *    the same seed and the same answers replay the same trials (conditions and presentation orders);
  *  - test_sigkill: a process that chose a trial is killed with SIGKILL; after reopening, the next trial is the same
  *    trial with the same condition and the same clip names;
- *  - test_adaptive_args: --adaptive without --trials (and --trials without --adaptive) is refused. */
+ *  - test_adaptive_args: --adaptive without --trials (and --trials without --adaptive) is refused;
+ *  - test_adaptive_prior: --prior MODEL.json stores each group's prior with the design and moves QUEST+'s first
+ *    choice to the predicted level (8 or 16); a model without predictions, or --prior without --adaptive, is refused. */
 #define _DEFAULT_SOURCE /* popen (test_study_util.h) */
 #include <signal.h>
 #include <sqlite3.h>
@@ -216,12 +218,99 @@ static void test_adaptive_args(void **state)
 	sty_close(&s);
 }
 
+/* A MODEL.json as 'study model --predict' writes it (the members sty_model_prior reads): every group of make_stimuli
+ * predicted at t_jnd = T with an interval of +-0.2 octave (prior SD 0.1 octave). */
+static void write_model(const char *path, double T)
+{
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	fprintf(f, "{\"metric\": \"flip_mean\", \"interval_half_width_log2\": 0.2, \"predictions\": [");
+	const char *g[4][2] = {{"calm", "still"}, {"calm", "walk"}, {"dynamic", "still"}, {"dynamic", "walk"}};
+	for (int i = 0; i < 4; i++)
+		fprintf(f, "%s{\"method\": \"tfr\", \"period\": null, \"scene\": \"%s\", \"camera\": \"%s\", \"t_jnd\": %g, "
+			   "\"t_jnd_lo\": 1, \"t_jnd_hi\": 100}", i ? ", " : "", g[i][0], g[i][1], T);
+	fprintf(f, "]}\n");
+	fclose(f);
+}
+
+/* Participant 1's first adaptive trial: its T once chosen (earlier trials answered "same"). */
+static double first_adaptive_T(sty *s, const char *db)
+{
+	char **codes, err[256];
+	size_t n;
+	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), TL_OK);
+	double T = 0;
+	for (int k = 0; k < 20 && T == 0; k++) {
+		sty_trial t;
+		assert_int_equal(sty_next_trial(s, codes[0], &t, err, sizeof err), TL_OK);
+		if (db_count(db, "SELECT count(*) FROM adaptive_trials WHERE resolved = 1") > 0)
+			T = (double)db_count(db, "SELECT c.T FROM adaptive_trials a JOIN trials t USING(participant, idx) JOIN"
+						 " conditions c ON c.id = t.condition WHERE a.resolved = 1");
+		else
+			assert_int_equal(sty_answer(s, codes[0], t.index, 0, 900, err, sizeof err), TL_OK);
+	}
+	free_codes(codes, n);
+	return T;
+}
+
+/* design --adaptive --prior MODEL.json (issue 28): each group's prior is stored with the design and moves QUEST+'s
+ * first choice to the level the model predicts; without --adaptive, or with a file that holds no predictions, the
+ * design is refused with one line. */
+static void test_adaptive_prior(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_adaptive_prior");
+	char stim[4096], err[1024], m8[4096], m16[4096], db[3][4096];
+	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	make_stimuli(stim);
+	snprintf(m8, sizeof m8, "%s/m8.json", dir);
+	snprintf(m16, sizeof m16, "%s/m16.json", dir);
+	write_model(m8, 8);
+	write_model(m16, 16);
+	const char *models[3] = {m8, m16, NULL};
+	double first[3];
+	for (int i = 0; i < 3; i++) {
+		snprintf(db[i], sizeof db[i], "%s/p%d.db", dir, i);
+		sty *s = created(db[i]);
+		sty_design_summary sm;
+		sty_design_desc d = {.stimuli = stim, .participants = 2, .seed = 3, .adaptive = true, .trials = 4,
+				     .prior = models[i]};
+		if (sty_design(s, &d, &sm, err, sizeof err))
+			fail_msg("%s", err);
+		commit(s);
+		assert_int_equal(sm.groups, 4);
+		assert_int_equal(sm.priors, models[i] ? 4 : 0);
+		assert_int_equal(db_count(db[i], "SELECT count(*) FROM adaptive_prior"), models[i] ? 4 : 0);
+		first[i] = first_adaptive_T(s, db[i]);
+		sty_close(&s);
+	}
+	printf("# first adaptive T: prior at 8 -> %g, prior at 16 -> %g, no prior -> %g\n", first[0], first[1], first[2]);
+	assert_true(first[0] == 8 && first[1] == 16);
+
+	char db4[4096], bad[4096];
+	snprintf(db4, sizeof db4, "%s/x.db", dir);
+	snprintf(bad, sizeof bad, "%s/bad.json", dir);
+	FILE *f = fopen(bad, "w");
+	fprintf(f, "{\"metric\": \"flip_mean\"}\n");
+	fclose(f);
+	sty *s = created(db4);
+	sty_design_summary sm;
+	sty_design_desc d = {.stimuli = stim, .participants = 2, .seed = 1, .adaptive = true, .trials = 4, .prior = bad};
+	assert_int_equal(sty_design(s, &d, &sm, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "--predict"));
+	d.adaptive = false, d.trials = 0, d.prior = m8;
+	assert_int_equal(sty_design(s, &d, &sm, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "--prior goes with --adaptive"));
+	sty_close(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_adaptive_plan),
 		cmocka_unit_test(test_sigkill),
 		cmocka_unit_test(test_adaptive_args),
+		cmocka_unit_test(test_adaptive_prior),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -181,6 +181,16 @@ static void test_study_on_sweep(void **state)
 	snprintf(p, sizeof p, "%s/report/index.html", sw);
 	char *html = tu_read_file(p, NULL);
 	assert_non_null(strstr(html, "Fig. 3: quality against T"));
+	/* the thresholds beside it (issue 28): the pooled row as the tally's thresholds.csv states it */
+	snprintf(q, sizeof q, "%s/report/study/thresholds.csv", sw);
+	const char *tk[4] = {"tfr", "", "all", "all"};
+	double tj = tu_csv_lookup(q, tk, 4, 5);
+	char trow[128];
+	snprintf(trow, sizeof trow, isinf(tj) ? "<td>all</td><td>all</td><td>%d</td><td>inf [" :
+		 "<td>all</td><td>all</td><td>%d</td><td>%.2f [", (int)tu_csv_lookup(q, tk, 4, 4), tj);
+	assert_non_null(strstr(html, "Thresholds (T at 1 JND)"));
+	if (!strstr(html, trow))
+		fail_msg("the report's thresholds lack '%s'", trow);
 	assert_non_null(strstr(html, "no run in this sweep and are not joined: tfr@32 turntable/orbit"));
 	assert_non_null(strstr(html, "were checked against this sweep"));
 	int plotted = strstr(html, "plots/fig3.svg") != NULL;

@@ -45,6 +45,9 @@ static const cli_opt design_options[] = {
 	{.name = "trials", .arg = "N",
 	 .help = "with --adaptive: test trials per participant (1..10000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, trials), .lo = 1, .hi = 10000},
+	{.name = "prior", .arg = "MODEL.json",
+	 .help = "with --adaptive: each group's prior on t_jnd from 'study model --predict' of the stimuli's sweep",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, prior)},
 	{0},
 };
 
@@ -208,13 +211,16 @@ static int study_main(void *opts, cli_ctx *ctx)
 	if (!strcmp(sub, "design")) {
 		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
 				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every,
-				     .adaptive = ov.adaptive, .trials = ov.trials};
+				     .adaptive = ov.adaptive, .trials = ov.trials, .prior = ov.prior};
 		sty_design_summary sm;
 		if (!(rc = sty_design(s, &d, &sm, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {
 			printf("study %s: %u conditions from %u set(s), %u participants, %u trials each, %u break(s); "
 			       "estimated session %.1f min\nlinks: taslab study links --db %s; run: taslab study serve --db %s\n",
 			       ov.db, sm.conditions, sm.sets, sm.participants, sm.trials_per_participant, sm.breaks, sm.session_minutes,
 			       ov.db, ov.db);
+			if (ov.prior)
+				printf("prior: %s predicts t_jnd for %u of %u adaptive group(s) (the others start uniform)\n",
+				       ov.prior, sm.priors, sm.groups);
 		}
 	} else if (!strcmp(sub, "add")) {
 		uint32_t first;
@@ -283,7 +289,7 @@ static const cli_command study_design = {
 	.name = "study design",
 	.summary = "randomised within-subject plan from the pairs.json sets of a stimulus folder",
 	.synopsis = "taslab study design --db STUDY.db --stimuli DIR --participants N [--seed S] [--training K] [--catch K] "
-		    "[--break-every N] [--adaptive --trials N]",
+		    "[--break-every N] [--adaptive --trials N [--prior MODEL.json]]",
 	.options = design_options,
 	STUDY_SUB,
 };
@@ -344,9 +350,10 @@ static const cli_command study_import = {
 
 extern const cli_command cli_cmd_study_simulate; /* cmd_study_simulate.c (issue 28) */
 extern const cli_command cli_cmd_study_pairs;    /* cmd_study_pairs.c (issue 27.13) */
+extern const cli_command cli_cmd_study_model;    /* cmd_study_model.c (issue 28) */
 static const cli_command *const study_subs[] = {&cli_cmd_study_pairs, &study_design, &study_add, &study_links,
 						&study_serve, &study_status, &study_tally, &study_export,
-						&study_import, &cli_cmd_study_simulate, NULL};
+						&study_import, &cli_cmd_study_simulate, &cli_cmd_study_model, NULL};
 
 const cli_command cli_cmd_study = {
 	.name = "study",

@@ -25,7 +25,47 @@ int sty_adaptive_schema(sty *s, char *err, size_t err_size)
 				" PRIMARY KEY(participant, idx), FOREIGN KEY(participant, idx) REFERENCES trials(participant, idx))",
 			 NULL, NULL, NULL) != SQLITE_OK)
 		return sty_db_fail(s, err, err_size, "adaptive design");
+	if (sqlite3_exec(s->db, "CREATE TABLE IF NOT EXISTS adaptive_prior(grp INTEGER PRIMARY KEY REFERENCES conditions(id),"
+				" theta REAL NOT NULL, sd REAL NOT NULL)", NULL, NULL, NULL) != SQLITE_OK)
+		return sty_db_fail(s, err, err_size, "adaptive design");
 	return TL_OK;
+}
+
+int sty_adaptive_set_prior(sty *s, int64_t grp, double theta, double sd)
+{
+	sqlite3_stmt *st;
+	if (sqlite3_prepare_v2(s->db, "INSERT INTO adaptive_prior(grp, theta, sd) VALUES(?, ?, ?)", -1, &st, NULL))
+		return TL_ERR_DB;
+	sqlite3_bind_int64(st, 1, grp);
+	sqlite3_bind_double(st, 2, theta);
+	sqlite3_bind_double(st, 3, sd);
+	int r = sqlite3_step(st);
+	sqlite3_finalize(st);
+	return r == SQLITE_DONE ? TL_OK : TL_ERR_DB;
+}
+
+/* The group's prior into `a` when the design stored one (studies designed before issue 28's --prior have no table). */
+static int apply_prior(sty *s, int64_t grp, sty_adapt *a, char *err, size_t err_size)
+{
+	sqlite3_stmt *st;
+	if (sqlite3_prepare_v2(s->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_prior'", -1,
+			       &st, NULL))
+		return sty_db_fail(s, err, err_size, "adaptive design");
+	int has = sqlite3_step(st) == SQLITE_ROW;
+	sqlite3_finalize(st);
+	if (!has)
+		return TL_OK;
+	if (sqlite3_prepare_v2(s->db,
+			       "SELECT p.theta, p.sd FROM adaptive_prior p JOIN conditions c ON c.id = p.grp JOIN conditions g ON"
+			       " g.id = ?1 WHERE c.method = g.method AND c.period IS g.period AND c.scene = g.scene AND"
+			       " c.camera = g.camera", -1, &st, NULL))
+		return sty_db_fail(s, err, err_size, "adaptive design");
+	sqlite3_bind_int64(st, 1, grp);
+	int r = sqlite3_step(st);
+	if (r == SQLITE_ROW) /* an SD below 0.1 octave would pin theta to one grid step: 0.1 at least */
+		sty_adapt_prior(a, sqlite3_column_double(st, 0), fmax(sqlite3_column_double(st, 1), 0.1));
+	sqlite3_finalize(st);
+	return r == SQLITE_ROW || r == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "adaptive design");
 }
 
 int sty_adaptive_plan(sty *s, int64_t pid, int64_t idx, int64_t grp)
@@ -78,6 +118,10 @@ int sty_adaptive_choice(sty *s, int64_t grp, int64_t *condition, char *err, size
 	sty_adapt *a = sty_adapt_new(T, n);
 	if (!a)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	if ((rc = apply_prior(s, grp, a, err, err_size))) {
+		sty_adapt_free(&a);
+		return rc;
+	}
 	sqlite3_stmt *st;
 	if (sqlite3_prepare_v2(s->db,
 			       "SELECT t.condition, t.ref_first, a.answer FROM answers a JOIN trials t ON t.participant ="

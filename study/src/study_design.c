@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include "study_adaptive_db.h"
+#include "taslab/study_model.h"
 #include "study_internal.h"
 #include "study_plan.h"
 #include "taslab/pairs.h"
@@ -175,6 +176,14 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	if (d->adaptive != (d->trials > 0))
 		return tl_error(err, err_size, TL_ERR_ARG, d->adaptive ? "--adaptive needs --trials N (test trials per participant)"
 									: "--trials N goes with --adaptive (a full design rates every condition)");
+	if (d->prior) { /* the model is read before anything is written: one line for a file that cannot be a prior */
+		double th, sd;
+		if (!d->adaptive)
+			return tl_error(err, err_size, TL_ERR_ARG, "--prior goes with --adaptive (a full design has no prior)");
+		int r = sty_model_prior(d->prior, "", 0, "", "", &th, &sd, err, err_size);
+		if (r < 0)
+			return r;
+	}
 	sqlite3_stmt *cnt;
 	sqlite3_prepare_v2(s->db, "SELECT (SELECT count(*) FROM conditions) + (SELECT count(*) FROM participants)", -1, &cnt, NULL);
 	int used = sqlite3_step(cnt) == SQLITE_ROW && sqlite3_column_int(cnt, 0) > 0;
@@ -311,6 +320,16 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		}
 		if (!seen)
 			groups[ngroups++] = k;
+	}
+	/* A model's predictions as the groups' priors (issue 28 "--prior"), stored with the design. */
+	out->groups = d->adaptive ? (uint32_t)ngroups : 0;
+	for (size_t g = 0; ok && d->prior && g < ngroups; g++) {
+		const cond *c = &cs[groups[g]];
+		double th, sd;
+		if (sty_model_prior(d->prior, c->method, c->period, c->scene, c->camera, &th, &sd, err, err_size) == 1) {
+			ok = !sty_adaptive_set_prior(s, (int64_t)groups[g] + 1, th, sd); /* condition ids are 1 + index */
+			out->priors++;
+		}
 	}
 	sty_plan_params pp = {.seed = d->seed, .training = d->training, .catch_trials = d->catch_trials,
 			      .break_every = d->break_every, .adaptive = d->adaptive, .trials = d->trials,

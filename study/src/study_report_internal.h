@@ -13,6 +13,7 @@
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
 #include "taslab/study.h"
+#include "taslab/study_result.h"
 #include "taslab/sweep.h"
 
 #define STY_RPT_HEAT_MAX 32.0 /* heatmap colour scale: 0..32 code values (T = 8..16 differences stay visible) */
@@ -61,6 +62,8 @@ typedef struct sty_rpt_study {
 	size_t missing_count;
 	bool fig3;             /* plots/fig3.svg was drawn */
 	size_t fig3_points;    /* pooled conditions with a T (Fig. 3's points) */
+	sty_threshold_row *thr; /* the tally's thresholds (issue 28), shown beside Fig. 3 */
+	size_t nthr;
 } sty_rpt_study;
 
 /* ---- study_report.c */

@@ -235,6 +235,30 @@ static void page_study(FILE *f, const sty_report_desc *d, const sty_rpt_study *t
 		fprintf(f, "<p class=\"note\">%s</p>\n", t->fig3_points ? "Fig. 3 was not drawn (gnuplot failed or is missing); "
 									  "its data are in data/fig3.csv."
 									: "No rated condition has a threshold T: no Fig. 3.");
+	/* issue 28: the measured thresholds (the tally's thresholds.csv) beside Fig. 3 */
+	if (t->nthr) {
+		fprintf(f, "<h3>Thresholds (T at 1 JND)</h3>\n<table><tr><th>method</th><th>period</th><th>scene</th>"
+			   "<th>camera</th><th>trials</th><th>t_jnd [95%% CI]</th></tr>\n");
+		for (size_t i = 0; i < t->nthr; i++) {
+			const sty_threshold_row *h = &t->thr[i];
+			char v[3][32], per[16] = "";
+			if (h->period)
+				snprintf(per, sizeof per, "%u", h->period);
+			double x[3] = {h->f.t_jnd, h->f.t_jnd_lo, h->f.t_jnd_hi};
+			for (int k = 0; k < 3; k++)
+				snprintf(v[k], sizeof v[k], isinf(x[k]) ? "inf" : "%.2f", x[k]);
+			fprintf(f, "<tr><td>");
+			esc(f, h->method);
+			fprintf(f, "</td><td>%s</td><td>", per);
+			esc(f, h->scene);
+			fprintf(f, "</td><td>");
+			esc(f, h->camera);
+			fprintf(f, "</td><td>%zu</td><td>%s [%s, %s]</td></tr>\n", h->f.n, v[0], v[1], v[2]);
+		}
+		fprintf(f, "</table>\n<p class=\"note\">t_jnd: the T at which the fitted p_ref of the median observer reaches "
+			   "75%% (README \"Thresholds\"); inf: not reached up to the largest rated T. Data: "
+			   "<a href=\"study/thresholds.csv\">study/thresholds.csv</a>.</p>\n");
+	}
 	if (jnd_plot)
 		fprintf(f, "<h3>JND against %s</h3><figure class=\"wide\" style=\"max-width:720px\"><img src=\"plots/jnd.svg\" "
 			   "alt=\"JND against %s\"></figure>\n",

@@ -64,6 +64,12 @@ int sty_rpt_study_load(const sty_report_desc *d, const char *out, sty_rpt_study 
 		c->jnd = as_written(w->j.jnd);
 		c->jnd_lo = jnd_of(c->p_lo, c->n), c->jnd_hi = jnd_of(c->p_hi, c->n);
 	}
+	if (!rc && r->threshold_count) { /* the thresholds beside Fig. 3 (issue 28) */
+		if (!(t->thr = malloc(r->threshold_count * sizeof *t->thr)))
+			rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		else
+			memcpy(t->thr, r->thresholds, r->threshold_count * sizeof *t->thr), t->nthr = r->threshold_count;
+	}
 	sty_result_free(&r);
 	if (!rc)
 		sty_rpt_study_missing(d, t);
@@ -73,8 +79,10 @@ int sty_rpt_study_load(const sty_report_desc *d, const char *out, sty_rpt_study 
 void sty_rpt_study_free(sty_rpt_study *t)
 {
 	free(t->c);
+	free(t->thr);
 	t->c = NULL;
-	t->n = 0;
+	t->thr = NULL;
+	t->n = t->nthr = 0;
 }
 
 const sty_rpt_cond *sty_rpt_study_find(const sty_rpt_study *t, const sweep_spec *s, const mtr_sweep_row *r)

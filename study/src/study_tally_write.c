@@ -257,6 +257,26 @@ static void write_tables(FILE *f, const sty_result *r)
 	}
 	fprintf(f, "\nJOD = -Phi^-1(p_ref)/Phi^-1(0.75) (1 JOD: 75%% prefer the reference); 95%% percentile bootstrap over "
 		   "participants.\n");
+
+	/* issue 28: the measured thresholds (thresholds.csv) beside the JOD */
+	fprintf(f, "\n## Thresholds (T at 1 JND)\n\n| method | period | scene | camera | trials | t_jnd [95%% CI] | levels | "
+		   "participants |\n|---|---|---|---|---|---|---|---|\n");
+	for (size_t i = 0; i < r->threshold_count; i++) {
+		const sty_threshold_row *t = &r->thresholds[i];
+		char P[16] = "";
+		if (t->period)
+			snprintf(P, sizeof P, "%u", t->period);
+		fprintf(f, "| %s | %s | %s | %s | %zu | %s [%s, %s] | %zu | %zu |\n", t->method, P,
+			md_text(t->scene, sc, sizeof sc), md_text(t->camera, ca, sizeof ca), t->f.n,
+			md_num(t->f.t_jnd, "%.2f", a, sizeof a), md_num(t->f.t_jnd_lo, "%.2f", b, sizeof b),
+			md_num(t->f.t_jnd_hi, "%.2f", c, sizeof c), t->f.levels, t->f.participants);
+	}
+	if (!r->threshold_count)
+		fprintf(f, "\nNo method was rated at two or more levels of T: no threshold.\n");
+	else
+		fprintf(f, "\nt_jnd: the T at which the fitted p_ref of the median observer reaches 0.75 (psychometric function in "
+			   "log2 T with lapse and observer variability, README \"Thresholds\"); inf: not reached up to the largest "
+			   "rated T; 95%% profile-likelihood interval.\n");
 }
 
 /* anova.csv: per variant its effects, or one row without an effect whose note says why there is none (issue 27.10);

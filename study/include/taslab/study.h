@@ -93,10 +93,12 @@ typedef struct sty_design_desc {
 	double gap_s;             /* grey gap between the clips (default 0.5) */
 	bool adaptive;            /* issue 28: `trials` test trials per participant, each T chosen when shown (QUEST+) */
 	uint32_t trials;          /* with adaptive only */
+	const char *prior;        /* with adaptive: a MODEL.json with predictions (study_model.h) as each group's prior */
 } sty_design_desc;
 
 typedef struct sty_design_summary {
 	uint32_t conditions, sets, participants, trials_per_participant, breaks;
+	uint32_t groups, priors;  /* adaptive: groups (method x period x scene x camera) and those with a model prior */
 	double session_minutes;   /* estimate: trials x (2 clips + gap + answer) + 30 s per break */
 } sty_design_summary;
 

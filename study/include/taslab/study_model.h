@@ -1,0 +1,66 @@
+/* study_model.h — a metric-to-JND model (issue 28 "Metric -> JND model"; README "Thresholds"): the reference-relative
+ * JOD of each rated condition of a study (`study tally`'s jod.csv) against a metric of the same clips in a sweep
+ * (SWEEP/summary.csv: flip_mean, exceed_T, maxrgb_p99, flicker_mean, any numeric column), fitted monotone, checked by
+ * leaving one scene out, and used to predict the JND threshold t_jnd of every scene x camera path x method of a sweep
+ * nobody rated.
+ *
+ * The model: d = -JOD (the quality drop in JND units; 1 JND = p_ref 0.75, DESIGN section 7) is a non-decreasing
+ * function of x = log2 metric, fitted by weighted isotonic regression (pool adjacent violators; weights = the
+ * condition's participants) and read between the pooled blocks' centres by linear interpolation (flat beyond them).
+ * m_jnd is the metric at which the fit first reaches d = 1. A clip series (the levels of T of one scene x camera x
+ * method x period) has t_jnd where its metric first reaches m_jnd, interpolated linearly in log2 T and log2 metric
+ * between the rendered levels; inf when it stays below m_jnd up to the largest T, 0 when it is above at the smallest.
+ * Leave-one-scene-out: for each rated scene the model is fitted without that scene's conditions and predicts the
+ * measured thresholds (thresholds.csv, finite ones) of its series; the error is RMSE of log2 t_jnd. The 95% interval of
+ * a prediction is t_jnd * 2^(+-1.96 * that RMSE) (open — 0, inf — without a leave-one-scene-out error).
+ *
+ * Errors: a tl_err code, one line in `err`. */
+#ifndef TASLAB_STUDY_MODEL_H
+#define TASLAB_STUDY_MODEL_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct sty_model_desc {
+	const char *sweep;       /* folder holding summary.csv of the rated clips */
+	const char *tally;       /* folder holding jod.csv and thresholds.csv (`study tally --out`) */
+	const char *metric;      /* a numeric summary.csv column or exceed_T (NULL: flip_mean) */
+	const char *out;         /* MODEL.json (NULL: none) */
+	const char *predict;     /* a sweep folder to predict (NULL: none) */
+	const char *predict_out; /* its predictions.csv (NULL: MODEL.json's name with -predictions.csv) */
+} sty_model_desc;
+
+typedef struct sty_model_summary {
+	size_t conditions;       /* rated conditions joined with a metric value */
+	size_t scenes;           /* distinct scenes among them */
+	double m_jnd;            /* the metric at 1 JND (inf: the fit never reaches 1 JND) */
+	size_t loso_n;           /* measured thresholds predicted with one scene left out (finite predictions) */
+	size_t loso_open;        /* of those series, predictions that were 0 or inf (left out of the RMSE) */
+	double loso_rmse_log2;   /* NAN when loso_n is 0 */
+	size_t predictions;      /* rows of the predictions file */
+} sty_model_summary;
+
+/* Fits, checks and (with d->predict) predicts; writes d->out and the predictions file atomically. TL_ERR_ARG or
+ * TL_ERR_INPUT for a missing or unreadable file, an unknown metric column, or fewer than two joined conditions. */
+int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size_t err_size);
+
+/* Weighted isotonic (non-decreasing) regression of y[0..n) in the given order (pool adjacent violators): fit[i] is
+ * the weighted mean of i's pooled block. Weights > 0. */
+void sty_isotonic(const double *y, const double *w, size_t n, double *fit);
+
+/* The t_jnd at which a series' metric m[0..n) at levels T[0..n) (ascending) first reaches m_jnd, as above. */
+double sty_model_t_at(const double *T, const double *m, size_t n, double m_jnd);
+
+/* The prior of an adaptive design (issue 28 "--prior"): the prediction for (method, period, scene, camera) in a
+ * MODEL.json written with --predict, as log2 t_jnd and its SD (the leave-one-scene-out RMSE). 1 when found,
+ * 0 when the model holds no finite prediction for it, < 0 (a tl_err code, `err` set) when the file is unreadable. */
+int sty_model_prior(const char *model_json, const char *method, long period, const char *scene, const char *camera,
+		    double *theta, double *sd, char *err, size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
