@@ -198,16 +198,21 @@ static void test_simulate(void **state)
 	assert_true(full.rmse_log2 < 0.6 && adaptive.rmse_log2 < 0.6);
 	assert_int_equal(full.trials_total, 144);
 	assert_int_equal(adaptive.trials_total, 72);
-	d.out = out2; /* the same seed: the same studies, byte for byte */
+	/* the same seed: the same studies, byte for byte. Study k is seeded with seed + k whatever the count, so a replay
+	 * of the first 8 studies must equal the first 8 rows (a quarter of the time of a full replay) */
+	d.out = out2;
+	d.studies = 8;
 	if (sty_simulate(&d, &again, err, sizeof err))
 		fail_msg("%s", err);
+	d.studies = 40;
 	snprintf(p, sizeof p, "%s/simulation.csv", out1);
 	char *a = tu_read_file(p, NULL);
 	snprintf(p, sizeof p, "%s/simulation.csv", out2);
 	char *b = tu_read_file(p, NULL);
 	assert_non_null(a);
 	assert_non_null(b);
-	assert_string_equal(a, b);
+	assert_int_equal(tu_count_lines(b), 9);
+	assert_int_equal(strncmp(a, b, strlen(b)), 0);
 	assert_int_equal(tu_count_lines(a), 41);
 	assert_true(!strncmp(a, "study,design,trials,t_jnd_true,t_jnd,t_jnd_lo,t_jnd_hi", 53));
 	free(a);
