@@ -85,14 +85,7 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	vbuf_record_resolve(r, p, cmd);
 	render_ts(r, cmd);
-	if (r->blend_count)
-		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
-	render_ts(r, cmd);
-	render_pass_display(r, cmd);
-	render_ts(r, cmd);
-	render_pass_readback(r, cmd);
-	vbuf_barrier(cmd);
-	render_ts(r, cmd);
+	vbuf_record_finish(r, cmd);
 }
 
 static void put_extra(frame_stats *st, const char *name, double v)

@@ -291,9 +291,8 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
 				    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
 				    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-	} else if (r->stats_pool) { /* the frame's pipeline statistics: no shading pass, its compute passes */
-		vkCmdResetQueryPool(cmd, r->stats_pool, 0, 1);
-		vkCmdBeginQuery(cmd, r->stats_pool, 0, 0);
+	} else { /* the frame's pipeline statistics: no shading pass, its compute passes */
+		render_stats_begin(r, cmd);
 	}
 	render_ts(r, cmd);
 	ids_pass_record(r, &p->ids, cmd, 0);
@@ -309,8 +308,7 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	render_ts(r, cmd);
 	if (!s->key) {
 		record_fill(r, s, cmd);
-		if (r->stats_pool)
-			vkCmdEndQuery(cmd, r->stats_pool, 0);
+		render_stats_end(r, cmd);
 	}
 	hdr_to_attachment(r, cmd);
 }
@@ -385,14 +383,7 @@ void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	else
 		record_rrc(r, s, cmd, frame);
 	render_ts(r, cmd);
-	if (r->blend_count)
-		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
-	render_ts(r, cmd);
-	render_pass_display(r, cmd);
-	render_ts(r, cmd);
-	render_pass_readback(r, cmd);
-	vbuf_barrier(cmd);
-	render_ts(r, cmd);
+	vbuf_record_finish(r, cmd);
 }
 
 static void put_extra(frame_stats *st, const char *name, double v)

@@ -226,3 +226,15 @@ void vbuf_record_resolve(render *r, vbuf_pass *v, VkCommandBuffer cmd)
 			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 	vbuf_barrier(cmd);
 }
+
+void vbuf_record_finish(render *r, VkCommandBuffer cmd)
+{
+	if (r->blend_count)
+		render_pass_scene(r, cmd, 0, &(render_scene_pass){.hdr = RENDER_HDR_LOAD, .blend = 1});
+	render_ts(r, cmd);
+	render_pass_display(r, cmd);
+	render_ts(r, cmd);
+	render_pass_readback(r, cmd);
+	vbuf_barrier(cmd);
+	render_ts(r, cmd);
+}

@@ -61,5 +61,8 @@ void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t
 void vbuf_record_shade(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t slot);
 /* The HDR target cleared to the sky, the resolve, and the target made a colour attachment again (for BLEND). */
 void vbuf_record_resolve(render *r, vbuf_pass *v, VkCommandBuffer cmd);
+/* The end of a frame on the path, after the method's last pass and its timestamp: BLEND objects composited over the
+ * HDR target (in COLOR_ATTACHMENT_OPTIMAL), display, readback, each closed by a timestamp. */
+void vbuf_record_finish(render *r, VkCommandBuffer cmd);
 
 #endif
