@@ -244,3 +244,16 @@ int render_make_template_pipeline(render *r, const char *template_path, const ch
 	free(spv);
 	return res ? render_vk_error(err, err_size, template_path, res) : TL_OK;
 }
+
+int render_compute_defs(render *r, const char *template_path, const char *defines, VkPipelineLayout layout,
+			VkPipeline *out, char *err, size_t err_size)
+{
+	uint32_t *spv = NULL;
+	size_t n = 0;
+	int rc = render_compile_defs(r, template_path, defines, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
+	if (rc)
+		return rc;
+	VkResult res = render_make_compute(r, spv, n, layout, out);
+	free(spv);
+	return res ? render_vk_error(err, err_size, template_path, res) : TL_OK;
+}

@@ -271,6 +271,9 @@ int render_compile(const render *r, const char *template_path, shc_stage stage, 
 /* The same with `defines` inserted after #version (template variants without run-time branches). */
 int render_compile_defs(const render *r, const char *template_path, const char *defines, shc_stage stage,
 			uint32_t **spv, size_t *spv_size, char *err, size_t err_size);
+/* A compute pipeline from a template with `defines` and `layout` (render_compile_defs + render_make_compute). */
+int render_compute_defs(render *r, const char *template_path, const char *defines, VkPipelineLayout layout,
+			VkPipeline *out, char *err, size_t err_size);
 
 /* ---- frame/draw.c: drawing the scene, timestamps, the command buffer ---- */
 #define RENDER_ALPHA_BIT(m) (1u << (m))

@@ -218,14 +218,7 @@ static int make_set(render *r, atlas_state *s, uint32_t v, char *err, size_t err
 static int make_compute(render *r, atlas_state *s, const char *path, const char *defs, VkPipeline *out, char *err,
 			size_t err_size)
 {
-	uint32_t *spv = NULL;
-	size_t n = 0;
-	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
-	if (rc)
-		return rc;
-	VkResult res = render_make_compute(r, spv, n, s->comp_layout, out);
-	free(spv);
-	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+	return render_compute_defs(r, path, defs, s->comp_layout, out, err, err_size);
 }
 
 static int make_pipelines(render *r, atlas_state *s, char *err, size_t err_size)

@@ -51,14 +51,7 @@ static int make_compute_x(render *r, vreuse_state *s, const char *path, const ch
 	static const char *const mode_define[] = {"", "RRC_RANDOM", "RRC_INTERLEAVED", "WARP", "AMSS", "STU"};
 	char defs[96];
 	snprintf(defs, sizeof defs, "#define %s 1\n%s", mode_define[s->v.mode], extra);
-	uint32_t *spv = NULL;
-	size_t n = 0;
-	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
-	if (rc)
-		return rc;
-	VkResult res = render_make_compute(r, spv, n, s->layout, out);
-	free(spv);
-	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+	return render_compute_defs(r, path, defs, s->layout, out, err, err_size);
 }
 
 static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)

@@ -78,14 +78,7 @@ static int make_compute(render *r, vrs_state *s, const char *path, VkPipeline *o
 {
 	char defs[64];
 	snprintf(defs, sizeof defs, "#define %s 1\n", kind_define[s->kind]);
-	uint32_t *spv = NULL;
-	size_t n = 0;
-	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
-	if (rc)
-		return rc;
-	VkResult res = render_make_compute(r, spv, n, s->layout, out);
-	free(spv);
-	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+	return render_compute_defs(r, path, defs, s->layout, out, err, err_size);
 }
 
 static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t err_size)

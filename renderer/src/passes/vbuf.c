@@ -35,14 +35,7 @@ static int make_set(render *r, vbuf_pass *v, char *err, size_t err_size)
 int vbuf_make_compute(render *r, vbuf_pass *v, const char *path, const char *defs, VkPipeline *out, char *err,
 		      size_t err_size)
 {
-	uint32_t *spv = NULL;
-	size_t n = 0;
-	int rc = render_compile_defs(r, path, defs, SHC_STAGE_COMPUTE, &spv, &n, err, err_size);
-	if (rc)
-		return rc;
-	VkResult res = render_make_compute(r, spv, n, v->layout, out);
-	free(spv);
-	return res ? render_vk_error(err, err_size, path, res) : TL_OK;
+	return render_compute_defs(r, path, defs, v->layout, out, err, err_size);
 }
 
 int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
