@@ -205,7 +205,7 @@ static int load_sweep(const char *dir, const char *metric, clip_pt **out, size_t
 	if ((rc = need_cols(&t, path, names, c, err, err_size)))
 		goto done;
 	if (strcmp(metric, "exceed_T") && mc < 0) {
-		rc = tl_error(err, err_size, TL_ERR_ARG, "--metric %s: %s has no such column (flip_mean, exceed_T, "
+		rc = tl_error(err, err_size, TL_ERR_ARG, "metric %s: %s has no such column (flip_mean, exceed_T, "
 			      "maxrgb_p99, flicker_mean or another numeric column)", metric, path);
 		goto done;
 	}
@@ -646,6 +646,15 @@ static int model_load(const char *path, saved *m, char *err, size_t err_size)
 	return TL_OK;
 }
 
+/* A sweep the saved model cannot predict (its metric not a column there, no summary.csv): the one line names the
+ * model too, since the metric is the model's, not a --metric the user gave. */
+static void saved_error(const char *model_json, const char *metric, char *err, size_t err_size)
+{
+	char why[1024];
+	snprintf(why, sizeof why, "%s", err);
+	tl_error(err, err_size, TL_ERR_ARG, "--model %s (metric %s): %s", model_json, metric, why);
+}
+
 int sty_model_predict(const char *model_json, const char *sweep, char *metric, size_t metric_size, sty_model_pred **out,
 		      size_t *n, char *err, size_t err_size)
 {
@@ -656,7 +665,8 @@ int sty_model_predict(const char *model_json, const char *sweep, char *metric, s
 		return rc;
 	if (metric)
 		snprintf(metric, metric_size, "%s", m.metric);
-	rc = predict_rows(sweep, m.metric, m.m_jnd, m.half, out, n, err, err_size);
+	if ((rc = predict_rows(sweep, m.metric, m.m_jnd, m.half, out, n, err, err_size)))
+		saved_error(model_json, m.metric, err, err_size);
 	json_decref(m.root);
 	return rc;
 }
@@ -686,8 +696,8 @@ static int run_saved(const sty_model_desc *d, sty_model_summary *s, char *err, s
 	json_t *preds = json_array();
 	char csv[4200];
 	predictions_path(d, csv, sizeof csv);
-	if (!rc)
-		rc = predict_rows(d->predict, m.metric, m.m_jnd, m.half, &q, &n, err, err_size);
+	if (!rc && (rc = predict_rows(d->predict, m.metric, m.m_jnd, m.half, &q, &n, err, err_size)))
+		saved_error(d->model, m.metric, err, err_size);
 	if (!rc)
 		rc = write_predictions(csv, q, n, preds, err, err_size);
 	s->predictions = n;

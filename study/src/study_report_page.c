@@ -254,7 +254,7 @@ static void page_thresholds(FILE *f, const sty_report_desc *d, const sty_rpt_stu
 			continue;
 		thr_row_start(f, p->method, p->period, p->scene, p->camera);
 		thr_text(cell, sizeof cell, p->t_jnd, p->t_jnd_lo, p->t_jnd_hi);
-		fprintf(f, "<td>0</td><td class=\"missing\">not rated</td><td>%s</td></tr>\n", cell);
+		fprintf(f, "<td>0</td><td>not rated</td><td>%s</td></tr>\n", cell);
 	}
 	fprintf(f, "</table>\n<p class=\"note\">t_jnd: the T at which the fitted p_ref of the median observer reaches "
 		   "75%% (README \"Thresholds\"); inf: not reached up to the largest rated T.");
