@@ -462,6 +462,8 @@ const cli_command cli_cmd_report = {
 	.description = "Reads SWEEP/sweep.json, computes comparisons still missing for complete runs, and writes\n"
 		       "SWEEP/summary.csv, SWEEP/table1.md and SWEEP/report/index.html. With --study, the study's tally\n"
 		       "(Q, p_ref, JND with 95% intervals) is joined per condition and the JND plotted against a metric.\n"
+		       "With --model (a saved 'taslab study model'), the predicted t_jnd is shown beside each measured\n"
+		       "threshold, and alone for the series of T nobody rated.\n"
 		       "Exit status 1 when runs of the sweep are incomplete (the report is written all the same).",
 	.options = report_options,
 	.opts_size = sizeof(report_opts),
