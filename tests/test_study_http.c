@@ -4,7 +4,8 @@
  *    one header byte a second and reconnecting when closed, while a participant's requests must each be answered
  *    within a second; a trickled head or body is closed at its deadline (test_slow_clients);
  *  - one address (32.3): a lab of 120 participants behind one address is served; one client holding 300 unfinished
- *    requests from that address does not stop another request (test_one_address);
+ *    requests from that address, or 300 idle connections (nothing sent), does not stop another request
+ *    (test_one_address);
  *  - framing (31.9): request bodies with a Transfer-Encoding (another coding, chunked not last, chunked with a chunk
  *    size of 2^64-1) are refused at their head with one status line, at once (test_hostile_framing).
  * Every client here binds an address of 127.0.0.0/8; counts and times are bounded, and the test stops by itself. */
@@ -350,6 +351,17 @@ static void test_one_address(void **state)
 	}
 	sty_server_stats st = sty_server_get_stats(sv);
 	assert_true(st.evicted > 0); /* the reading cap made the room */
+	for (int i = 0; i < HOG; i++)
+		close(fds[i]);
+	/* idle connections (issue 32.3's wording): the hog connects HOG times and sends nothing at all */
+	for (int i = 0; i < HOG; i++)
+		assert_true((fds[i] = connect_from(port, NULL)) >= 0);
+	for (int k = 0; k < 5; k++) {
+		int code_k = request_within(port, req, (size_t)len, 1.0, resp, sizeof resp);
+		if (code_k != 200)
+			fail_msg("request %d beside %d idle connections from its address: %d within 1 s, expected 200", k, HOG,
+				 code_k);
+	}
 	for (int i = 0; i < HOG; i++)
 		close(fds[i]);
 	sty_server_stop(&sv);

@@ -9,7 +9,11 @@
  *    `study import` / `study tally` do. Targets: the leave-one-scene-out RMSE of log2 t_jnd against the tally's
  *    measured thresholds <= 0.5 (issue 28), the metric at 1 JND within 2^(0.5 * 0.8) of M_STAR, and for four scenes
  *    nobody rated (a second sweep) the predicted t_jnd within 0.5 octave of the true one, its 95% interval holding it;
- *  - test_model_bad_input: a missing jod.csv and an unknown metric column are one line each (exit-2 codes). */
+ *  - test_model_simulated also predicts again from the saved model.json (`study model --model --predict`, no refit):
+ *    the predictions file is byte-identical to the fit's, and --out's copy holds the same predictions;
+ *  - test_model_bad_input: a missing jod.csv and an unknown metric column are one line each (exit-2 codes); a model
+ *    file that is not JSON, an old one (no "format"), a malformed member, --model with --sweep or without --predict:
+ *    one line, exit 2. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -110,6 +114,7 @@ static void test_model_simulated(void **state)
 	(void)state;
 	const char *dir = tu_tmpdir("study_model");
 	char path[4096], db[4096], tally[4096], sweep[4096], sweep2[4096], err[1024];
+	double theta_chk, sd_chk;
 	snprintf(path, sizeof path, "%s/ratings.csv", dir);
 	snprintf(db, sizeof db, "%s/study.db", dir);
 	snprintf(tally, sizeof tally, "%s/tally", dir);
@@ -177,6 +182,36 @@ static void test_model_simulated(void **state)
 	}
 	fclose(f);
 
+	/* a saved model predicts what the fit that wrote it did, byte for byte (issue 28: --model, no refit) */
+	char pred2[4200], model2[4200], args[16384], out[4096];
+	snprintf(pred2, sizeof pred2, "%s/pred-saved.csv", dir);
+	snprintf(model2, sizeof model2, "%s/model2.json", dir);
+	snprintf(args, sizeof args, "%s study model --model %s --predict %s --predict-out %s --out %s", TASLAB_BINARY, model,
+		 sweep2, pred2, model2);
+	if (tu_run(args, out, sizeof out))
+		fail_msg("%s", out);
+	assert_non_null(strstr(out, "4 prediction(s)"));
+	size_t na, nb;
+	char *pa = tu_read_file(pred, &na), *pb = tu_read_file(pred2, &nb);
+	assert_non_null(pa);
+	assert_non_null(pb);
+	if (na != nb || memcmp(pa, pb, na))
+		fail_msg("predictions from the saved model differ from the fit's:\n%s---\n%s", pa, pb);
+	free(pa), free(pb);
+	double th2, sd2;
+	assert_int_equal(sty_model_prior(model2, "tfr", 0, "s101", "c0", &th2, &sd2, err, sizeof err), 1);
+	assert_int_equal(sty_model_prior(model, "tfr", 0, "s101", "c0", &theta_chk, &sd_chk, err, sizeof err), 1);
+	assert_true(th2 == theta_chk && sd2 == sd_chk);
+	sty_model_pred *q = NULL;
+	size_t nq = 0;
+	char metric[64];
+	if (sty_model_predict(model, sweep2, metric, sizeof metric, &q, &nq, err, sizeof err))
+		fail_msg("%s", err);
+	assert_int_equal(nq, 4);
+	assert_string_equal(metric, "flip_mean");
+	assert_true(!strcmp(q[1].scene, "s101") && fabs(log2(q[1].t_jnd) - theta_chk) < 1e-6);
+	free(q);
+
 	/* the model as an adaptive design's prior: the prediction and the leave-one-scene-out SD */
 	double theta, sd;
 	assert_int_equal(sty_model_prior(model, "tfr", 0, "s101", "c0", &theta, &sd, err, sizeof err), 1);
@@ -212,6 +247,46 @@ static void test_model_bad_input(void **state)
 	tu_expect_cli_error(args, "jod.csv");
 	snprintf(args, sizeof args, "study model --sweep %s --tally %s", sweep, dir);
 	tu_expect_cli_error(args, "--out");
+
+	/* saved models (--model): bad or old files, bad combinations: one line naming the problem, exit 2 */
+	static const struct {
+		const char *text, *needle;
+	} bad[] = {
+		{"{\"format\": \"taslab study model 1\", \"metric\": ", "not a model"},
+		{"[1, 2]", "not a JSON object"},
+		{"{\"metric\": \"flip_mean\", \"metric_at_1jnd\": 0.05, \"interval_half_width_log2\": 0.5, "
+		 "\"leave_one_scene_out\": {\"rmse_log2_t_jnd\": 0.25}}", "written before --model"},
+		{"{\"format\": \"taslab study model 9\"}", "another \"format\""},
+		{"{\"format\": \"taslab study model 1\", \"metric\": \"flip_mean\", \"metric_at_1jnd\": \"0.05\", "
+		 "\"interval_half_width_log2\": 0.5, \"leave_one_scene_out\": {\"rmse_log2_t_jnd\": 0.25}}",
+		 "\"metric_at_1jnd\""},
+		{"{\"format\": \"taslab study model 1\", \"metric\": \"flip_mean\", \"metric_at_1jnd\": 0.05, "
+		 "\"interval_half_width_log2\": -1, \"leave_one_scene_out\": {\"rmse_log2_t_jnd\": 0.25}}",
+		 "\"interval_half_width_log2\""},
+		{"{\"format\": \"taslab study model 1\", \"metric\": \"flip_mean\", \"metric\": \"flicker_mean\"}",
+		 "not a model"},
+	};
+	char mpath[4200], out[4096];
+	snprintf(mpath, sizeof mpath, "%s/bad-model.json", dir);
+	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+		FILE *f = fopen(mpath, "w");
+		assert_non_null(f);
+		fputs(bad[i].text, f);
+		fclose(f);
+		snprintf(args, sizeof args, "%s study model --model %s --predict %s --predict-out %s/p.csv", TASLAB_BINARY,
+			 mpath, sweep, dir);
+		int st = tu_run(args, out, sizeof out);
+		if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, bad[i].needle) || !strstr(out, mpath))
+			fail_msg("model %zu: exit %d, want 2 and one line naming the file with '%s':\n%s", i, st, bad[i].needle,
+				 out);
+	}
+	char p2[4200];
+	snprintf(p2, sizeof p2, "%s/p.csv", dir);
+	assert_false(tu_file_exists(p2));
+	snprintf(args, sizeof args, "study model --model %s --sweep %s --predict %s --predict-out %s", mpath, sweep, sweep, p2);
+	tu_expect_cli_error(args, "no --sweep or --tally");
+	snprintf(args, sizeof args, "study model --model %s --out %s/m2.json", mpath, dir);
+	tu_expect_cli_error(args, "needs --predict SWEEP2");
 }
 
 int main(void)

@@ -6,6 +6,10 @@
  *    stderr and on the page which of the study's conditions no run has;
  *  - it refuses (one line, exit 2, nothing of the study written) a study whose stimuli are not the sweep's runs:
  *    another size, other frames, another display transform, a clip that is not the sweep's.
+ *  - with --model (issue 28) it shows the model's predicted t_jnd with its interval beside the measured one (the model's
+ *    own predictions file, cell for cell, in data/thresholds.csv, and 2^3.5 [8, 16] for a model whose metric at 1 JND
+ *    lies halfway in log2 between tfr@8's and tfr@16's flip_mean, half width 0.5 octave), and without a study the
+ *    prediction alone ("not rated"); a file that is not a model is one line, exit 2.
  * The sweep is tiny (48x32, two frames, ref, tfr@8, tfr@16 on the tests' device, lavapipe, with validation) so the test stays short. */
 #define _DEFAULT_SOURCE
 #include <math.h>
@@ -95,6 +99,71 @@ static void answer_all(void)
 	sty_close(&s);
 }
 
+/* A numeric cell of SWEEP/summary.csv: the column named `col` in the row of `variant`. */
+static double summary_value(const char *variant, const char *col)
+{
+	char path[4300], *fld[256];
+	snprintf(path, sizeof path, "%s/summary.csv", sw);
+	char *t = tu_read_file(path, NULL), *save = NULL;
+	assert_non_null(t);
+	int vc = -1, cc = -1, row = 0;
+	double v = NAN;
+	for (char *line = strtok_r(t, "\n", &save); line; line = strtok_r(NULL, "\n", &save), row++) {
+		int n = 0;
+		for (char *c = line; n < 256;) {
+			fld[n++] = c;
+			if (!(c = strchr(c, ',')))
+				break;
+			*c++ = 0;
+		}
+		for (int k = 0; !row && k < n; k++) {
+			vc = strcmp(fld[k], "variant") ? vc : k;
+			cc = strcmp(fld[k], col) ? cc : k;
+		}
+		if (row && vc >= 0 && cc >= 0 && cc < n && !strcmp(fld[vc], variant))
+			v = strtod(fld[cc], NULL);
+	}
+	free(t);
+	return v;
+}
+
+/* The predicted thresholds (issue 28): a model whose metric at 1 JND is halfway in log2 between tfr@8's and
+ * tfr@16's flip_mean, predicted for this sweep by `study model --model --predict` (model.json, pred.csv). */
+static void write_model(char *model, size_t n, char *pred, size_t pn)
+{
+	char hand[4300], args[16384];
+	double m8 = summary_value("tfr@8", "flip_mean"), m16 = summary_value("tfr@16", "flip_mean");
+	if (!(m8 > 0 && m16 > m8))
+		fail_msg("flip_mean of tfr@8 %g and tfr@16 %g: want 0 < tfr@8 < tfr@16", m8, m16);
+	snprintf(hand, sizeof hand, "%s/hand.json", dir);
+	snprintf(model, n, "%s/model.json", dir);
+	snprintf(pred, pn, "%s/pred.csv", dir);
+	FILE *f = fopen(hand, "w");
+	assert_non_null(f);
+	fprintf(f, "{\"format\": \"taslab study model 1\", \"metric\": \"flip_mean\", \"metric_at_1jnd\": %.8g, "
+		   "\"interval_half_width_log2\": 0.5, \"leave_one_scene_out\": {\"rmse_log2_t_jnd\": 0.2551, \"n\": 1, "
+		   "\"open\": 0}, \"conditions\": 2, \"scenes\": 1}\n", sqrt(m8 * m16));
+	fclose(f);
+	snprintf(args, sizeof args, "study model --model %s --predict %s --out %s --predict-out %s", hand, sw, model, pred);
+	if (run_cli(args))
+		fail_msg("%s", out);
+}
+
+/* data/thresholds.csv's predicted cells of tfr turntable/orbit are pred.csv's, and 2^3.5 [8, 16]. */
+static void check_predicted(const char *pred, double n_want)
+{
+	char p[4300];
+	snprintf(p, sizeof p, "%s/report/data/thresholds.csv", sw);
+	const char *k[4] = {"tfr", "", "turntable", "orbit"};
+	for (int c = 0; c < 3; c++) {
+		double got = tu_csv_lookup(p, k, 4, 8 + c), want = tu_csv_lookup(pred, k, 4, 4 + c);
+		double truth = exp2(3.5 + 0.5 * (c == 0 ? 0 : c == 1 ? -1 : 1));
+		if (!(got == want) || !(fabs(got - truth) < 2e-4))
+			fail_msg("data/thresholds.csv predicted cell %d: %g, the model's %g, expected %g", c, got, want, truth);
+	}
+	assert_true(tu_csv_lookup(p, k, 4, 4) == n_want);
+}
+
 static void test_study_on_sweep(void **state)
 {
 	(void)state;
@@ -157,8 +226,10 @@ static void test_study_on_sweep(void **state)
 	sty_close(&s);
 	answer_all();
 
-	/* the join: two rated runs, the tfr@32 condition said to have none, Fig. 3 */
-	snprintf(args, sizeof args, "report %s --study %s", sw, db);
+	/* the join: two rated runs, the tfr@32 condition said to have none, Fig. 3; with a model's predictions */
+	char model[4300], pred[4300];
+	write_model(model, sizeof model, pred, sizeof pred);
+	snprintf(args, sizeof args, "report %s --study %s --model %s", sw, db, model);
 	if (run_cli(args))
 		fail_msg("%s", out);
 	if (!strstr(out, "1 condition(s) of the study have no run in this sweep and are not joined: tfr@32 turntable/orbit"))
@@ -191,6 +262,18 @@ static void test_study_on_sweep(void **state)
 	assert_non_null(strstr(html, "Thresholds (T at 1 JND)"));
 	if (!strstr(html, trow))
 		fail_msg("the report's thresholds lack '%s'", trow);
+	/* the predicted threshold beside the measured one (issue 28: report --model), the pooled row without one */
+	const char *sk[4] = {"tfr", "", "turntable", "orbit"};
+	double n_rated = tu_csv_lookup(q, sk, 4, 4);
+	tj = tu_csv_lookup(q, sk, 4, 5);
+	snprintf(trow, sizeof trow, isinf(tj) ? "<td>turntable</td><td>orbit</td><td>%d</td><td>inf [" :
+		 "<td>turntable</td><td>orbit</td><td>%d</td><td>%.2f [", (int)n_rated, tj);
+	char *at = strstr(html, trow);
+	if (!at || !strstr(at, "]</td><td>11.31 [8.00, 16.00]</td></tr>") ||
+	    strstr(at, "</tr>") < strstr(at, "11.31 [8.00, 16.00]"))
+		fail_msg("the report's thresholds lack the prediction beside '%s'", trow);
+	assert_non_null(strstr(html, "</td><td>–</td></tr>")); /* the pooled row: no prediction */
+	check_predicted(pred, n_rated);
 	assert_non_null(strstr(html, "no run in this sweep and are not joined: tfr@32 turntable/orbit"));
 	assert_non_null(strstr(html, "were checked against this sweep"));
 	int plotted = strstr(html, "plots/fig3.svg") != NULL;
@@ -222,6 +305,20 @@ static void test_study_on_sweep(void **state)
 	file_copy(p, q);
 	if (run_cli(args))
 		fail_msg("the restored study is refused:\n%s", out);
+
+	/* a sweep nobody rated: the predictions alone; a file that is not a model: one line, exit 2 */
+	snprintf(args, sizeof args, "report %s --model %s", sw, model);
+	if (run_cli(args))
+		fail_msg("%s", out);
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	html = tu_read_file(p, NULL);
+	if (!strstr(html, "<td>turntable</td><td>orbit</td><td>0</td><td>not rated</td>"
+			  "<td>11.31 [8.00, 16.00]</td></tr>"))
+		fail_msg("the report of an unrated sweep lacks the prediction alone");
+	free(html);
+	check_predicted(pred, 0);
+	snprintf(args, sizeof args, "report %s --study %s --model %s", sw, db, db);
+	expect_refused(args, 2, "not a model");
 }
 
 int main(void)

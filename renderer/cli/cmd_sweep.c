@@ -46,7 +46,7 @@ static int mono_rows(const sweep_spec *s, const char *mono_dir, sweep_spec **ms,
 	return rc;
 }
 
-int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric,
+int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *model, const char *jnd_metric,
 		     const char *mono_dir, bool report,
 		     bool quiet, size_t *incomplete, char *report_path, size_t report_path_size, char *err, size_t err_size)
 {
@@ -90,7 +90,7 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 	rc = mtr_sweep_write(s, dir, rows, count, err, err_size);
 	if (!rc && report) {
 		double t0 = tl_clock_s();
-		sty_report_desc rd = {.dir = dir, .spec = s, .rows = rows, .count = count, .study = study,
+		sty_report_desc rd = {.dir = dir, .spec = s, .rows = rows, .count = count, .study = study, .model = model,
 				      .jnd_metric = jnd_metric, .mono_dir = mono_dir, .mono_spec = ms, .mono_rows = mrows,
 				      .mono_count = mcount};
 		rc = sty_report_write(&rd, report_path, report_path_size, err, err_size);
@@ -329,7 +329,7 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 	if (rc)
 		goto done;
 	char report[TL_PATH_MAX];
-	if ((rc = cli_sweep_finish(spec, dir, NULL, NULL, NULL, !o->no_report, o->quiet, &incomplete, report, sizeof report, err,
+	if ((rc = cli_sweep_finish(spec, dir, NULL, NULL, NULL, NULL, !o->no_report, o->quiet, &incomplete, report, sizeof report, err,
 				   err_size)))
 		goto done;
 	if (!o->quiet)
@@ -395,6 +395,10 @@ static const cli_opt report_options[] = {
 	{.name = "study", .arg = "STUDY.db",
 	 .help = "add the study's Q, p_ref and JND per condition (method, T, period, scene, camera) beside the metrics",
 	 .type = CLI_STRING, .offset = offsetof(report_opts, study)},
+	{.name = "model", .arg = "MODEL.json",
+	 .help = "a metric-to-JND model ('taslab study model --out'): its predicted t_jnd with a 95% interval beside "
+		 "each measured threshold, and for every series of T of this sweep nobody rated",
+	 .type = CLI_STRING, .offset = offsetof(report_opts, model)},
 	{.name = "jnd-against", .arg = "COLUMN",
 	 .help = "summary.csv column to plot the JND against (default flip_mean; e.g. maxrgb_p99, exceed_T, flicker_mean)",
 	 .type = CLI_STRING, .offset = offsetof(report_opts, jnd_metric)},
@@ -438,7 +442,7 @@ static int report_main(void *opts, cli_ctx *ctx)
 	int rc = tl_is_file(path) ? sweep_spec_read(path, spec, ctx->err, sizeof ctx->err)
 				  : tl_error(ctx->err, sizeof ctx->err, TL_ERR_INPUT, "%s is not a sweep folder (no sweep.json)", dir);
 	if (!rc)
-		rc = cli_sweep_finish(spec, dir, o->study, o->jnd_metric, o->mono, true, o->quiet, &incomplete, report, sizeof report,
+		rc = cli_sweep_finish(spec, dir, o->study, o->model, o->jnd_metric, o->mono, true, o->quiet, &incomplete, report, sizeof report,
 				      ctx->err, sizeof ctx->err);
 	if (!rc) {
 		printf("%s\n", report);
@@ -454,10 +458,12 @@ static int report_main(void *opts, cli_ctx *ctx)
 const cli_command cli_cmd_report = {
 	.name = "report",
 	.summary = "rebuild a sweep's summary.csv, table1.md and report (optionally with a study's results)",
-	.synopsis = "taslab report SWEEP [--study STUDY.db] [--jnd-against COLUMN] [--mono MONO_SWEEP]",
+	.synopsis = "taslab report SWEEP [--study STUDY.db] [--model MODEL.json] [--jnd-against COLUMN] [--mono MONO_SWEEP]",
 	.description = "Reads SWEEP/sweep.json, computes comparisons still missing for complete runs, and writes\n"
 		       "SWEEP/summary.csv, SWEEP/table1.md and SWEEP/report/index.html. With --study, the study's tally\n"
 		       "(Q, p_ref, JND with 95% intervals) is joined per condition and the JND plotted against a metric.\n"
+		       "With --model (a saved 'taslab study model'), the predicted t_jnd is shown beside each measured\n"
+		       "threshold, and alone for the series of T nobody rated.\n"
 		       "Exit status 1 when runs of the sweep are incomplete (the report is written all the same).",
 	.options = report_options,
 	.opts_size = sizeof(report_opts),

@@ -101,6 +101,7 @@ typedef struct sweep_opts {
 /* `taslab report` (cmd_report.c). */
 typedef struct report_opts {
 	const char *study, *jnd_metric;
+	const char *model; /* --model MODEL.json: predicted thresholds beside the measured ones (study_model.h) */
 	const char *mono; /* --mono MONO_SWEEP: a stereo sweep's speedups beside this mono sweep's */
 	bool quiet;
 } report_opts;

@@ -58,8 +58,9 @@ int cli_sweep_slurm_check(const char *dir, char *err, size_t err_size);
 /* The closing step (and `taslab report`): clips and comparisons still missing for complete runs are made, then
  * DIR/summary.csv, DIR/table1.md and DIR/report/index.html (with the study's tallies when `study` is given).
  * *incomplete: runs without run, clip or metrics at the end. `mono_dir` (NULL: none): a mono sweep whose speedups the
- * report of this stereo sweep shows beside its own (TL_ERR_ARG when this sweep is not stereo or that one is). */
-int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *jnd_metric,
+ * report of this stereo sweep shows beside its own (TL_ERR_ARG when this sweep is not stereo or that one is).
+ * `model` (NULL: none): a saved metric-to-JND model whose predicted thresholds the report shows. */
+int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, const char *model, const char *jnd_metric,
 		     const char *mono_dir, bool report,
 		     bool quiet, size_t *incomplete, char *report_path, size_t report_path_size, char *err, size_t err_size);
 

@@ -8,7 +8,7 @@
 #include "taslab/study_model.h"
 
 typedef struct model_opts {
-	const char *sweep, *tally, *out, *metric, *predict, *predict_out;
+	const char *sweep, *tally, *out, *metric, *predict, *predict_out, *model;
 } model_opts;
 
 static const cli_opt model_options[] = {
@@ -24,20 +24,28 @@ static const cli_opt model_options[] = {
 	 "of this sweep", .type = CLI_STRING, .offset = offsetof(model_opts, predict)},
 	{.name = "predict-out", .arg = "CSV", .help = "the predictions (default: MODEL-predictions.csv beside --out)",
 	 .type = CLI_STRING, .offset = offsetof(model_opts, predict_out)},
+	{.name = "model", .arg = "MODEL.json", .help = "predict from this saved model (no --sweep/--tally, no refit); "
+	 "--out then writes a copy holding the new predictions", .type = CLI_STRING, .offset = offsetof(model_opts, model)},
 	{0},
 };
 
 static int model_main(void *opts, cli_ctx *ctx)
 {
 	model_opts *o = opts;
-	if (!o->sweep || !o->tally || !o->out)
-		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "need --sweep SWEEP, --tally DIR and --out MODEL.json");
+	if (!o->model && (!o->sweep || !o->tally || !o->out))
+		return tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "need --sweep SWEEP, --tally DIR and --out MODEL.json "
+				"(or --model MODEL.json --predict SWEEP2)");
 	sty_model_desc d = {.sweep = o->sweep, .tally = o->tally, .out = o->out, .metric = o->metric,
-			    .predict = o->predict, .predict_out = o->predict_out};
+			    .predict = o->predict, .predict_out = o->predict_out, .model = o->model};
 	sty_model_summary s;
 	int rc = sty_model_run(&d, &s, ctx->err, sizeof ctx->err);
 	if (rc)
 		return rc;
+	if (o->model) {
+		printf("model %s (metric at 1 JND = %g): %zu prediction(s) for %s\n", o->model, s.m_jnd, s.predictions,
+		       o->predict);
+		return TL_OK;
+	}
 	char rm[32] = "undefined (one scene)";
 	if (isfinite(s.loso_rmse_log2))
 		snprintf(rm, sizeof rm, "%.3f", s.loso_rmse_log2);
@@ -56,10 +64,12 @@ const cli_command cli_cmd_study_model = {
 	.name = "study model",
 	.summary = "metric-to-JND model: JOD of the rated conditions against a sweep metric; predicted thresholds",
 	.synopsis = "taslab study model --sweep SWEEP --tally DIR --out MODEL.json [--metric COLUMN] [--predict SWEEP2] "
-		    "[--predict-out CSV]",
+		    "[--predict-out CSV]\n"
+		    "       taslab study model --model MODEL.json --predict SWEEP2 [--predict-out CSV] [--out MODEL2.json]",
 	.description = "Fits -JOD of each rated condition (jod.csv) monotonically against log2 of a metric of the same "
 		       "clip (summary.csv), reports the leave-one-scene-out RMSE of log2 t_jnd against thresholds.csv, and "
-		       "with --predict writes t_jnd with a 95% interval for every series of T of another sweep.",
+		       "with --predict writes t_jnd with a 95% interval for every series of T of another sweep. With --model, predicts from a saved model without refitting (the same predictions "
+		       "as the fit that wrote it).",
 	.options = model_options,
 	.opts_size = sizeof(model_opts),
 	.run = model_main,

@@ -205,7 +205,7 @@ static int load_sweep(const char *dir, const char *metric, clip_pt **out, size_t
 	if ((rc = need_cols(&t, path, names, c, err, err_size)))
 		goto done;
 	if (strcmp(metric, "exceed_T") && mc < 0) {
-		rc = tl_error(err, err_size, TL_ERR_ARG, "--metric %s: %s has no such column (flip_mean, exceed_T, "
+		rc = tl_error(err, err_size, TL_ERR_ARG, "metric %s: %s has no such column (flip_mean, exceed_T, "
 			      "maxrgb_p99, flicker_mean or another numeric column)", metric, path);
 		goto done;
 	}
@@ -486,23 +486,21 @@ static int loso(const model *m, json_t *rows, sty_model_summary *s, char *err, s
 	return TL_OK;
 }
 
-static int predict(const sty_model_desc *d, double m_jnd, double half, const char *csv, json_t *preds,
-		   sty_model_summary *s, char *err, size_t err_size)
+/* The predictions for every series of T (at least two levels) of `sweep`: t_jnd where the sweep's `metric` reaches
+ * m_jnd, with t_jnd * 2^(+-half) (open without `half`). *out is malloc'ed. */
+static int predict_rows(const char *sweep, const char *metric, double m_jnd, double half, sty_model_pred **out,
+			size_t *count, char *err, size_t err_size)
 {
 	clip_pt *p = NULL;
 	size_t n = 0;
-	const char *metric = d->metric ? d->metric : "flip_mean";
-	int rc = load_sweep(d->predict, metric, &p, &n, err, err_size);
+	*out = NULL, *count = 0;
+	int rc = load_sweep(sweep, metric, &p, &n, err, err_size);
 	if (rc)
 		return rc;
-	char tmp[4200];
-	snprintf(tmp, sizeof tmp, "%s.tmp", csv);
-	FILE *f = fopen(tmp, "w");
-	if (!f) {
+	if (!(*out = calloc(n + 1, sizeof **out))) {
 		free(p);
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", csv, strerror(errno));
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
-	fprintf(f, "method,period,scene,camera,t_jnd,t_jnd_lo,t_jnd_hi,levels\n");
 	for (size_t i = 0; i < n;) {
 		size_t j = i + 1;
 		while (j < n && same_series(&p[i], &p[j]))
@@ -518,21 +516,41 @@ static int predict(const sty_model_desc *d, double m_jnd, double half, const cha
 				hi = isfinite(half) ? p[i].T * exp2(half) : INFINITY; /* above m_jnd at the smallest T */
 			if (isinf(t) && isfinite(half))
 				lo = p[j - 1].T * exp2(-half);
-			char b[4][64], sc[KEY_LEN + 8], ca[KEY_LEN + 8], pe[32];
-			snprintf(pe, sizeof pe, "%ld", p[i].period);
-			fprintf(f, "%s,%s,%s,%s,%s,%s,%s,%zu\n", p[i].method, p[i].period ? pe : "",
-				sty_csv_cell(p[i].scene, sc, sizeof sc), sty_csv_cell(p[i].camera, ca, sizeof ca),
-				sty_num_cell(t, "%.4f", b[0], sizeof b[0]), sty_num_cell(lo, "%.4f", b[1], sizeof b[1]),
-				sty_num_cell(hi, "%.4f", b[2], sizeof b[2]), levels);
-			json_array_append_new(preds, json_pack("{s:s, s:o, s:s, s:s, s:o, s:o, s:o}", "method", p[i].method,
-							       "period", p[i].period ? json_integer(p[i].period) : json_null(),
-							       "scene", p[i].scene, "camera", p[i].camera, "t_jnd", num_json(t),
-							       "t_jnd_lo", num_json(lo), "t_jnd_hi", num_json(hi)));
-			s->predictions++;
+			sty_model_pred *q = &(*out)[(*count)++];
+			snprintf(q->method, sizeof q->method, "%s", p[i].method);
+			snprintf(q->scene, sizeof q->scene, "%s", p[i].scene);
+			snprintf(q->camera, sizeof q->camera, "%s", p[i].camera);
+			q->period = p[i].period;
+			q->t_jnd = t, q->t_jnd_lo = lo, q->t_jnd_hi = hi, q->levels = levels;
 		}
 		i = j;
 	}
 	free(p);
+	return TL_OK;
+}
+
+/* Writes the predictions file (atomically) and appends them to `preds` (MODEL.json's "predictions"). */
+static int write_predictions(const char *csv, const sty_model_pred *q, size_t n, json_t *preds, char *err,
+			     size_t err_size)
+{
+	char tmp[4200];
+	snprintf(tmp, sizeof tmp, "%s.tmp", csv);
+	FILE *f = fopen(tmp, "w");
+	if (!f)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", csv, strerror(errno));
+	fprintf(f, "method,period,scene,camera,t_jnd,t_jnd_lo,t_jnd_hi,levels\n");
+	for (size_t i = 0; i < n; i++) {
+		char b[3][64], sc[KEY_LEN + 8], ca[KEY_LEN + 8], pe[32];
+		snprintf(pe, sizeof pe, "%ld", q[i].period);
+		fprintf(f, "%s,%s,%s,%s,%s,%s,%s,%zu\n", q[i].method, q[i].period ? pe : "",
+			sty_csv_cell(q[i].scene, sc, sizeof sc), sty_csv_cell(q[i].camera, ca, sizeof ca),
+			sty_num_cell(q[i].t_jnd, "%.4f", b[0], sizeof b[0]), sty_num_cell(q[i].t_jnd_lo, "%.4f", b[1], sizeof b[1]),
+			sty_num_cell(q[i].t_jnd_hi, "%.4f", b[2], sizeof b[2]), q[i].levels);
+		json_array_append_new(preds, json_pack("{s:s, s:o, s:s, s:s, s:o, s:o, s:o}", "method", q[i].method, "period",
+						       q[i].period ? json_integer(q[i].period) : json_null(), "scene",
+						       q[i].scene, "camera", q[i].camera, "t_jnd", num_json(q[i].t_jnd),
+						       "t_jnd_lo", num_json(q[i].t_jnd_lo), "t_jnd_hi", num_json(q[i].t_jnd_hi)));
+	}
 	if (fclose(f) || rename(tmp, csv)) {
 		remove(tmp);
 		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write", csv);
@@ -540,12 +558,168 @@ static int predict(const sty_model_desc *d, double m_jnd, double half, const cha
 	return TL_OK;
 }
 
+/* MODEL.json's numbers are written with 8 significant digits (write_json_atomic): the fit predicts with the values
+ * as the file states them, so a saved model (--model) predicts exactly what the fit that wrote it did. */
+static double as_stored(double v)
+{
+	if (!isfinite(v))
+		return v;
+	char b[64];
+	snprintf(b, sizeof b, "%.8g", v);
+	return strtod(b, NULL);
+}
+
+/* The predictions file: --predict-out, else MODEL.json's name with -predictions.csv. */
+static void predictions_path(const sty_model_desc *d, char *csv, size_t size)
+{
+	if (d->predict_out) {
+		snprintf(csv, size, "%s", d->predict_out);
+		return;
+	}
+	size_t len = d->out ? strlen(d->out) : 0;
+	if (len > 5 && !strcmp(d->out + len - 5, ".json"))
+		len -= 5;
+	snprintf(csv, size, "%.*s-predictions.csv", (int)len, d->out ? d->out : "model");
+}
+
+/* A saved model: what prediction needs from MODEL.json (the file's own JSON kept for --out). */
+typedef struct saved {
+	json_t *root;
+	char metric[64];
+	double m_jnd, half, rmse;
+	json_int_t conditions, scenes, loso_n, loso_open;
+} saved;
+
+/* A number of MODEL.json as num_json writes it: a JSON number, "inf"/"-inf", or null (NAN; only where `null_ok`). */
+static bool json_num(json_t *v, bool null_ok, double *out)
+{
+	const char *s = json_string_value(v);
+	if (json_is_number(v))
+		*out = json_number_value(v);
+	else if (s && (!strcmp(s, "inf") || !strcmp(s, "-inf")))
+		*out = s[0] == '-' ? -INFINITY : INFINITY;
+	else if (null_ok && json_is_null(v))
+		*out = NAN;
+	else
+		return false;
+	return true;
+}
+
+/* Reads and checks MODEL.json (`study model --out`). TL_ERR_ARG with one line naming the file and what is wrong:
+ * not JSON, another format (a model written before --model, whose stored numbers are not the ones it predicted
+ * with), or a missing or malformed member. */
+static int model_load(const char *path, saved *m, char *err, size_t err_size)
+{
+	memset(m, 0, sizeof *m);
+	json_error_t je;
+	if (!(m->root = json_load_file(path, JSON_REJECT_DUPLICATES, &je)))
+		return tl_error(err, err_size, TL_ERR_ARG, "--model %s: not a model: %s (line %d)", path, je.text, je.line);
+	const char *why = NULL;
+	json_t *r = m->root, *lo = json_object_get(r, "leave_one_scene_out");
+	const char *format = json_string_value(json_object_get(r, "format"));
+	const char *metric = json_string_value(json_object_get(r, "metric"));
+	if (!json_is_object(r))
+		why = "not a JSON object";
+	else if (!format)
+		why = "no \"format\": not a model of 'taslab study model', or one written before --model (fit it again "
+		      "with --sweep --tally --out)";
+	else if (strcmp(format, STY_MODEL_FORMAT))
+		why = "another \"format\" than \"" STY_MODEL_FORMAT "\" (fit it again with --sweep --tally --out)";
+	else if (!metric || !metric[0] || strlen(metric) >= sizeof m->metric || strchr(metric, '\n'))
+		why = "\"metric\" is not a column name";
+	else if (!json_num(json_object_get(r, "metric_at_1jnd"), false, &m->m_jnd) || !(m->m_jnd > 0))
+		why = "\"metric_at_1jnd\" is not a positive number or \"inf\"";
+	else if (!json_num(json_object_get(r, "interval_half_width_log2"), true, &m->half) || m->half < 0 ||
+		 (isinf(m->half)))
+		why = "\"interval_half_width_log2\" is not a number >= 0 or null";
+	else if (!json_is_object(lo) || !json_num(json_object_get(lo, "rmse_log2_t_jnd"), true, &m->rmse))
+		why = "no \"leave_one_scene_out\" error";
+	if (why) {
+		json_decref(m->root), m->root = NULL;
+		return tl_error(err, err_size, TL_ERR_ARG, "--model %s: %s", path, why);
+	}
+	snprintf(m->metric, sizeof m->metric, "%s", metric);
+	m->conditions = json_integer_value(json_object_get(r, "conditions"));
+	m->scenes = json_integer_value(json_object_get(r, "scenes"));
+	m->loso_n = json_integer_value(json_object_get(lo, "n"));
+	m->loso_open = json_integer_value(json_object_get(lo, "open"));
+	return TL_OK;
+}
+
+/* A sweep the saved model cannot predict (its metric not a column there, no summary.csv): the one line names the
+ * model too, since the metric is the model's, not a --metric the user gave. */
+static void saved_error(const char *model_json, const char *metric, char *err, size_t err_size)
+{
+	char why[1024];
+	snprintf(why, sizeof why, "%s", err);
+	tl_error(err, err_size, TL_ERR_ARG, "--model %s (metric %s): %s", model_json, metric, why);
+}
+
+int sty_model_predict(const char *model_json, const char *sweep, char *metric, size_t metric_size, sty_model_pred **out,
+		      size_t *n, char *err, size_t err_size)
+{
+	saved m;
+	*out = NULL, *n = 0;
+	int rc = model_load(model_json, &m, err, err_size);
+	if (rc)
+		return rc;
+	if (metric)
+		snprintf(metric, metric_size, "%s", m.metric);
+	if ((rc = predict_rows(sweep, m.metric, m.m_jnd, m.half, out, n, err, err_size)))
+		saved_error(model_json, m.metric, err, err_size);
+	json_decref(m.root);
+	return rc;
+}
+
+/* --model MODEL.json --predict SWEEP2: predictions from a saved model, no fit; with --out a copy of the model holding
+ * them (the prior of an adaptive design of SWEEP2's clips). */
+static int run_saved(const sty_model_desc *d, sty_model_summary *s, char *err, size_t err_size)
+{
+	if (d->sweep || d->tally)
+		return tl_error(err, err_size, TL_ERR_ARG, "--model predicts from a saved model: no --sweep or --tally "
+			      "(those fit a new one)");
+	if (!d->predict || (!d->out && !d->predict_out))
+		return tl_error(err, err_size, TL_ERR_ARG, "--model MODEL.json needs --predict SWEEP2 and --predict-out CSV "
+			      "or --out MODEL2.json");
+	saved m;
+	int rc = model_load(d->model, &m, err, err_size);
+	if (rc)
+		return rc;
+	if (d->metric && strcmp(d->metric, m.metric))
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--metric %s: the model %s is fitted on %s", d->metric, d->model,
+			      m.metric);
+	s->m_jnd = m.m_jnd, s->loso_rmse_log2 = m.rmse;
+	s->conditions = (size_t)m.conditions, s->scenes = (size_t)m.scenes;
+	s->loso_n = (size_t)m.loso_n, s->loso_open = (size_t)m.loso_open;
+	sty_model_pred *q = NULL;
+	size_t n = 0;
+	json_t *preds = json_array();
+	char csv[4200];
+	predictions_path(d, csv, sizeof csv);
+	if (!rc && (rc = predict_rows(d->predict, m.metric, m.m_jnd, m.half, &q, &n, err, err_size)))
+		saved_error(d->model, m.metric, err, err_size);
+	if (!rc)
+		rc = write_predictions(csv, q, n, preds, err, err_size);
+	s->predictions = n;
+	if (!rc && d->out) {
+		json_object_set_new(m.root, "predicted_sweep", json_string(d->predict));
+		json_object_set(m.root, "predictions", preds);
+		rc = write_json_atomic(m.root, d->out, err, err_size);
+	}
+	free(q);
+	json_decref(preds);
+	json_decref(m.root);
+	return rc;
+}
+
 int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size_t err_size)
 {
 	memset(s, 0, sizeof *s);
 	s->loso_rmse_log2 = NAN;
+	if (d->model)
+		return run_saved(d, s, err, err_size);
 	if (!d->sweep || !d->tally)
-		return tl_error(err, err_size, TL_ERR_ARG, "need --sweep SWEEP and --tally DIR");
+		return tl_error(err, err_size, TL_ERR_ARG, "need --sweep SWEEP and --tally DIR (or --model MODEL.json)");
 	const char *metric = d->metric ? d->metric : "flip_mean";
 	model m = {0};
 	fit f = {0};
@@ -561,7 +735,7 @@ int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size
 		rc = fit_model(m.c, m.n, NULL, &f, err, err_size);
 	if (!rc) {
 		s->conditions = m.n;
-		s->m_jnd = f.m_jnd;
+		s->m_jnd = f.m_jnd = as_stored(f.m_jnd);
 		for (size_t i = 0; i < m.n; i++) {
 			bool seen = false;
 			for (size_t j = 0; j < i && !seen; j++)
@@ -572,20 +746,21 @@ int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size
 			json_array_append_new(knots, json_pack("[f, f]", exp2(f.kx[i]), f.kd[i]));
 		rc = loso(&m, rows, s, err, err_size);
 	}
-	double half = 1.959964 * s->loso_rmse_log2; /* NAN without a leave-one-scene-out error: open intervals */
+	/* NAN without a leave-one-scene-out error: open intervals */
+	double half = as_stored(1.959964 * s->loso_rmse_log2);
 	if (!rc && d->predict) {
 		char csv[4200];
-		if (d->predict_out)
-			snprintf(csv, sizeof csv, "%s", d->predict_out);
-		else {
-			size_t len = d->out ? strlen(d->out) : 0;
-			if (len > 5 && !strcmp(d->out + len - 5, ".json"))
-				len -= 5;
-			snprintf(csv, sizeof csv, "%.*s-predictions.csv", (int)len, d->out ? d->out : "model");
-		}
-		rc = predict(d, f.m_jnd, half, csv, preds, s, err, err_size);
+		sty_model_pred *q = NULL;
+		size_t n = 0;
+		predictions_path(d, csv, sizeof csv);
+		rc = predict_rows(d->predict, metric, f.m_jnd, half, &q, &n, err, err_size);
+		if (!rc)
+			rc = write_predictions(csv, q, n, preds, err, err_size);
+		s->predictions = n;
+		free(q);
 	}
 	if (!rc && d->out) {
+		json_object_set_new(root, "format", json_string(STY_MODEL_FORMAT));
 		json_object_set_new(root, "metric", json_string(metric));
 		json_object_set_new(root, "fit", json_string("isotonic regression of -JOD on log2 metric, weighted by "
 							     "participants; knots interpolated linearly in log2 metric"));

@@ -124,12 +124,18 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	}
 	if (rc)
 		return rc;
-	sty_rpt_study study = {0};
+	sty_rpt_study study = {0}, model = {0};
+	if ((rc = sty_rpt_model_load(d, &model, err, err_size))) /* a bad model file: refused before the study is tallied */
+		return rc;
 	if (d->study) {
 		snprintf(path, sizeof path, "%s/study", rdir);
-		if ((rc = tl_mkdirs(path, err, err_size)) || (rc = sty_rpt_study_load(d, path, &study, err, err_size)))
+		if ((rc = tl_mkdirs(path, err, err_size)) || (rc = sty_rpt_study_load(d, path, &study, err, err_size))) {
+			sty_rpt_study_free(&model);
 			return rc;
+		}
 	}
+	study.pred = model.pred, study.npred = model.npred;
+	memcpy(study.pred_metric, model.pred_metric, sizeof study.pred_metric);
 	sty_rpt_group *gi = NULL;
 	size_t ng = 0;
 	bool gnuplot_note = false, jnd_plot = false;
@@ -139,6 +145,8 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	/* the study: joined table and JND against the chosen metric */
 	if (!rc && d->study)
 		rc = sty_rpt_study_files(d, rdir, &study, &jnd_plot, err, err_size);
+	if (!rc)
+		rc = sty_rpt_thresholds_csv(rdir, &study, err, err_size);
 	/* What the join could not do is said here (stderr) and on the page (issue 27.12). */
 	if (!rc && study.unchecked[0])
 		fprintf(stderr, "taslab report: note: %s\n", study.unchecked);

@@ -13,6 +13,7 @@
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
 #include "taslab/study.h"
+#include "taslab/study_model.h"
 #include "taslab/study_result.h"
 #include "taslab/sweep.h"
 
@@ -64,6 +65,9 @@ typedef struct sty_rpt_study {
 	size_t fig3_points;    /* pooled conditions with a T (Fig. 3's points) */
 	sty_threshold_row *thr; /* the tally's thresholds (issue 28), shown beside Fig. 3 */
 	size_t nthr;
+	sty_model_pred *pred;   /* a model's predicted thresholds for this sweep's series (report --model), or NULL */
+	size_t npred;
+	char pred_metric[64];   /* the model's metric */
 } sty_rpt_study;
 
 /* ---- study_report.c */
@@ -99,6 +103,17 @@ void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group 
  * keeps its conditions; the conditions no run has are listed in t->missing. TL_ERR_INPUT (one line) when its
  * stimuli are not the sweep's runs. */
 int sty_rpt_study_load(const sty_report_desc *d, const char *out, sty_rpt_study *t, char *err, size_t err_size);
+
+/* The predicted thresholds of d->model (sty_model_predict) for every series of T of the sweep into t->pred; TL_OK
+ * without a model. TL_ERR_ARG (one line) for a file that is not a model. */
+int sty_rpt_model_load(const sty_report_desc *d, sty_rpt_study *t, char *err, size_t err_size);
+/* The prediction for a measured threshold row (same method, period, scene, camera; NULL for pooled rows or none), and
+ * whether a prediction has a measured row. */
+const sty_model_pred *sty_rpt_pred_of(const sty_rpt_study *t, const sty_threshold_row *h);
+bool sty_rpt_pred_rated(const sty_rpt_study *t, const sty_model_pred *p);
+/* report/data/thresholds.csv: the measured thresholds with the model's prediction beside each, then the predictions
+ * nobody rated (n 0, measured cells empty); nothing without thresholds or a model. */
+int sty_rpt_thresholds_csv(const char *rdir, const sty_rpt_study *t, char *err, size_t err_size);
 
 /* ---- study_report_check.c */
 /* The stimuli of the open study `s` (named `db`) against the sweep d: TL_ERR_INPUT with one line when a set differs

@@ -181,8 +181,8 @@ static void page_head(FILE *f, const sty_report_desc *d, const sty_rpt_group *gi
 		   "<a style=\"color:#9cf\" href=\"../sweep.json\">sweep.json</a></p></header>\n<main>\n<nav>",
 		complete, d->count, when);
 	fprintf(f, "<a href=\"#table1\">Table 1</a>");
-	if (d->study)
-		fprintf(f, "<a href=\"#study\">Study</a>");
+	if (d->study || d->model)
+		fprintf(f, "<a href=\"#study\">%s</a>", d->study ? "Study" : "Predicted thresholds");
 	for (size_t g = 0; g < ng; g++) {
 		const sweep_scene *sc = &s->scenes[gi[g].scene];
 		char stem[256];
@@ -198,6 +198,78 @@ static void page_head(FILE *f, const sty_report_desc *d, const sty_rpt_group *gi
 	fprintf(f, "</nav>\n");
 	if (gnuplot_note)
 		fprintf(f, "<p class=\"missing\">gnuplot is not installed: no plots (the numbers are in summary.csv).</p>\n");
+}
+
+/* "t [lo, hi]" with two decimals, inf where open. */
+static void thr_text(char *buf, size_t n, double t, double lo, double hi)
+{
+	char v[3][32];
+	double x[3] = {t, lo, hi};
+	for (int k = 0; k < 3; k++)
+		snprintf(v[k], sizeof v[k], isinf(x[k]) ? "inf" : "%.2f", x[k]);
+	snprintf(buf, n, "%s [%s, %s]", v[0], v[1], v[2]);
+}
+
+static void thr_row_start(FILE *f, const char *method, long period, const char *scene, const char *camera)
+{
+	fprintf(f, "<tr><td>");
+	esc(f, method);
+	fprintf(f, "</td><td>");
+	if (period)
+		fprintf(f, "%ld", period);
+	fprintf(f, "</td><td>");
+	esc(f, scene);
+	fprintf(f, "</td><td>");
+	esc(f, camera);
+	fprintf(f, "</td>");
+}
+
+/* Issue 28: the measured thresholds (the tally's thresholds.csv) beside Fig. 3; with --model the model's predicted
+ * threshold beside each, then the series of this sweep nobody rated with their prediction alone. */
+static void page_thresholds(FILE *f, const sty_report_desc *d, const sty_rpt_study *t)
+{
+	if (!t->nthr && !d->model)
+		return;
+	char cell[128];
+	fprintf(f, "<h3>Thresholds (T at 1 JND)</h3>\n<table id=\"thresholds\"><tr><th>method</th><th>period</th>"
+		   "<th>scene</th><th>camera</th><th>trials</th><th>t_jnd [95%% CI]</th>");
+	if (d->model)
+		fprintf(f, "<th>predicted t_jnd [95%%]</th>");
+	fprintf(f, "</tr>\n");
+	for (size_t i = 0; i < t->nthr; i++) {
+		const sty_threshold_row *h = &t->thr[i];
+		thr_row_start(f, h->method, h->period, h->scene, h->camera);
+		thr_text(cell, sizeof cell, h->f.t_jnd, h->f.t_jnd_lo, h->f.t_jnd_hi);
+		fprintf(f, "<td>%zu</td><td>%s</td>", h->f.n, cell);
+		const sty_model_pred *p = sty_rpt_pred_of(t, h);
+		if (p)
+			thr_text(cell, sizeof cell, p->t_jnd, p->t_jnd_lo, p->t_jnd_hi);
+		if (d->model)
+			fprintf(f, "<td>%s</td>", p ? cell : "–");
+		fprintf(f, "</tr>\n");
+	}
+	for (size_t i = 0; i < t->npred; i++) {
+		const sty_model_pred *p = &t->pred[i];
+		if (sty_rpt_pred_rated(t, p))
+			continue;
+		thr_row_start(f, p->method, p->period, p->scene, p->camera);
+		thr_text(cell, sizeof cell, p->t_jnd, p->t_jnd_lo, p->t_jnd_hi);
+		fprintf(f, "<td>0</td><td>not rated</td><td>%s</td></tr>\n", cell);
+	}
+	fprintf(f, "</table>\n<p class=\"note\">t_jnd: the T at which the fitted p_ref of the median observer reaches "
+		   "75%% (README \"Thresholds\"); inf: not reached up to the largest rated T.");
+	if (t->nthr)
+		fprintf(f, " Measured: <a href=\"study/thresholds.csv\">study/thresholds.csv</a>.");
+	if (d->model) {
+		fprintf(f, " Predicted by the model ");
+		esc(f, d->model);
+		fprintf(f, " from this sweep's ");
+		esc(f, t->pred_metric);
+		fprintf(f, " (README \"Metric → JND model\"): where the metric of each series of T reaches its value at 1 JND; "
+			   "95%% interval from the model's leave-one-scene-out error; – for pooled rows and series this "
+			   "sweep lacks.");
+	}
+	fprintf(f, " Data: <a href=\"data/thresholds.csv\">data/thresholds.csv</a>.</p>\n");
 }
 
 /* The study section: where the tally is, what Q, p_ref and JND are, what the join could not do, Fig. 3 and the JND
@@ -235,30 +307,7 @@ static void page_study(FILE *f, const sty_report_desc *d, const sty_rpt_study *t
 		fprintf(f, "<p class=\"note\">%s</p>\n", t->fig3_points ? "Fig. 3 was not drawn (gnuplot failed or is missing); "
 									  "its data are in data/fig3.csv."
 									: "No rated condition has a threshold T: no Fig. 3.");
-	/* issue 28: the measured thresholds (the tally's thresholds.csv) beside Fig. 3 */
-	if (t->nthr) {
-		fprintf(f, "<h3>Thresholds (T at 1 JND)</h3>\n<table><tr><th>method</th><th>period</th><th>scene</th>"
-			   "<th>camera</th><th>trials</th><th>t_jnd [95%% CI]</th></tr>\n");
-		for (size_t i = 0; i < t->nthr; i++) {
-			const sty_threshold_row *h = &t->thr[i];
-			char v[3][32], per[16] = "";
-			if (h->period)
-				snprintf(per, sizeof per, "%u", h->period);
-			double x[3] = {h->f.t_jnd, h->f.t_jnd_lo, h->f.t_jnd_hi};
-			for (int k = 0; k < 3; k++)
-				snprintf(v[k], sizeof v[k], isinf(x[k]) ? "inf" : "%.2f", x[k]);
-			fprintf(f, "<tr><td>");
-			esc(f, h->method);
-			fprintf(f, "</td><td>%s</td><td>", per);
-			esc(f, h->scene);
-			fprintf(f, "</td><td>");
-			esc(f, h->camera);
-			fprintf(f, "</td><td>%zu</td><td>%s [%s, %s]</td></tr>\n", h->f.n, v[0], v[1], v[2]);
-		}
-		fprintf(f, "</table>\n<p class=\"note\">t_jnd: the T at which the fitted p_ref of the median observer reaches "
-			   "75%% (README \"Thresholds\"); inf: not reached up to the largest rated T. Data: "
-			   "<a href=\"study/thresholds.csv\">study/thresholds.csv</a>.</p>\n");
-	}
+	page_thresholds(f, d, t);
 	if (jnd_plot)
 		fprintf(f, "<h3>JND against %s</h3><figure class=\"wide\" style=\"max-width:720px\"><img src=\"plots/jnd.svg\" "
 			   "alt=\"JND against %s\"></figure>\n",
@@ -423,6 +472,11 @@ int sty_rpt_page_write(const sty_report_desc *d, const char *path, const sty_rpt
 	sty_rpt_page_stereo(f, d);
 	if (d->study)
 		page_study(f, d, study, jnd_plot);
+	else if (d->model) { /* a sweep nobody rated: the predictions alone */
+		fprintf(f, "<section id=\"study\"><h2>Predicted thresholds</h2>\n");
+		page_thresholds(f, d, study);
+		fprintf(f, "</section>\n");
+	}
 	for (size_t g = 0; g < ng; g++)
 		page_group(f, d, &gi[g], study, pairs, np);
 	free(pairs);

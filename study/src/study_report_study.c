@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "study_internal.h"
 #include "study_report_internal.h"
 #include "taslab/metrics.h"
 #include "taslab/study.h"
@@ -80,9 +81,83 @@ void sty_rpt_study_free(sty_rpt_study *t)
 {
 	free(t->c);
 	free(t->thr);
+	free(t->pred);
 	t->c = NULL;
 	t->thr = NULL;
-	t->n = t->nthr = 0;
+	t->pred = NULL;
+	t->n = t->nthr = t->npred = 0;
+}
+
+int sty_rpt_model_load(const sty_report_desc *d, sty_rpt_study *t, char *err, size_t err_size)
+{
+	if (!d->model)
+		return TL_OK;
+	return sty_model_predict(d->model, d->dir, t->pred_metric, sizeof t->pred_metric, &t->pred, &t->npred, err,
+				 err_size);
+}
+
+static bool pred_is(const sty_model_pred *p, const sty_threshold_row *h)
+{
+	return !h->pooled && !strcmp(p->method, h->method) && p->period == (long)h->period && !strcmp(p->scene, h->scene) &&
+	       !strcmp(p->camera, h->camera);
+}
+
+const sty_model_pred *sty_rpt_pred_of(const sty_rpt_study *t, const sty_threshold_row *h)
+{
+	for (size_t i = 0; i < t->npred; i++)
+		if (pred_is(&t->pred[i], h))
+			return &t->pred[i];
+	return NULL;
+}
+
+bool sty_rpt_pred_rated(const sty_rpt_study *t, const sty_model_pred *p)
+{
+	for (size_t i = 0; i < t->nthr; i++)
+		if (pred_is(p, &t->thr[i]))
+			return true;
+	return false;
+}
+
+/* One row of data/thresholds.csv; the predicted cells as `study model --predict` writes them (%.4f). */
+static void thr_line(FILE *f, const char *method, long period, const char *scene, const char *camera, size_t n,
+		     const double m[3], const sty_model_pred *p)
+{
+	char c[2][200], b[64];
+	fprintf(f, "%s,", sty_csv_cell(method, c[0], sizeof c[0]));
+	if (period)
+		fprintf(f, "%ld", period);
+	fprintf(f, ",%s,%s,%zu", sty_csv_cell(scene, c[0], sizeof c[0]), sty_csv_cell(camera, c[1], sizeof c[1]), n);
+	for (int k = 0; k < 3; k++)
+		fprintf(f, ",%s", sty_num_cell(m[k], "%.4f", b, sizeof b));
+	double q[3] = {p ? p->t_jnd : NAN, p ? p->t_jnd_lo : NAN, p ? p->t_jnd_hi : NAN};
+	for (int k = 0; k < 3; k++)
+		fprintf(f, ",%s", sty_num_cell(q[k], "%.4f", b, sizeof b));
+	fputc('\n', f);
+}
+
+int sty_rpt_thresholds_csv(const char *rdir, const sty_rpt_study *t, char *err, size_t err_size)
+{
+	if (!t->nthr && !t->npred)
+		return TL_OK;
+	char path[TL_PATH_MAX + 64];
+	tl_atomic a;
+	snprintf(path, sizeof path, "%s/data/thresholds.csv", rdir);
+	int rc = tl_atomic_open(&a, path, err, err_size);
+	if (rc)
+		return rc;
+	fprintf(a.f, "method,period,scene,camera,n,t_jnd,t_jnd_lo,t_jnd_hi,predicted_t_jnd,predicted_t_jnd_lo,"
+		     "predicted_t_jnd_hi\n");
+	for (size_t i = 0; i < t->nthr; i++) {
+		const sty_threshold_row *h = &t->thr[i];
+		double m[3] = {h->f.t_jnd, h->f.t_jnd_lo, h->f.t_jnd_hi};
+		thr_line(a.f, h->method, h->period, h->scene, h->camera, h->f.n, m, sty_rpt_pred_of(t, h));
+	}
+	for (size_t i = 0; i < t->npred; i++) {
+		const sty_model_pred *p = &t->pred[i];
+		if (!sty_rpt_pred_rated(t, p))
+			thr_line(a.f, p->method, p->period, p->scene, p->camera, 0, (double[3]){NAN, NAN, NAN}, p);
+	}
+	return tl_atomic_commit(&a, err, err_size);
 }
 
 const sty_rpt_cond *sty_rpt_study_find(const sty_rpt_study *t, const sweep_spec *s, const mtr_sweep_row *r)

@@ -31,7 +31,19 @@ typedef struct sty_model_desc {
 	const char *out;         /* MODEL.json (NULL: none) */
 	const char *predict;     /* a sweep folder to predict (NULL: none) */
 	const char *predict_out; /* its predictions.csv (NULL: MODEL.json's name with -predictions.csv) */
+	const char *model;       /* a saved MODEL.json to predict from (no fit: sweep and tally NULL; predict set) */
 } sty_model_desc;
+
+/* MODEL.json's "format": a model file without it (written before --model) or with another is refused by --model. */
+#define STY_MODEL_FORMAT "taslab study model 1"
+
+/* One predicted threshold: a series of T (at least two levels) of a sweep. */
+typedef struct sty_model_pred {
+	char method[32], scene[160], camera[160];
+	long period;             /* 0: none */
+	double t_jnd, t_jnd_lo, t_jnd_hi; /* inf / 0 beyond the rendered range, as thresholds.csv writes them */
+	size_t levels;
+} sty_model_pred;
 
 typedef struct sty_model_summary {
 	size_t conditions;       /* rated conditions joined with a metric value */
@@ -44,8 +56,17 @@ typedef struct sty_model_summary {
 } sty_model_summary;
 
 /* Fits, checks and (with d->predict) predicts; writes d->out and the predictions file atomically. TL_ERR_ARG or
- * TL_ERR_INPUT for a missing or unreadable file, an unknown metric column, or fewer than two joined conditions. */
+ * TL_ERR_INPUT for a missing or unreadable file, an unknown metric column, or fewer than two joined conditions.
+ * The fit predicts with m_jnd and the interval as MODEL.json states them (8 significant digits), so that
+ * d->model (a saved model, no fit) predicts byte for byte what the fit that wrote it did; with d->model, d->out is a
+ * copy of that model holding the new predictions, and a file that is not a model of this format is TL_ERR_ARG with
+ * one line. */
 int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size_t err_size);
+
+/* The predicted thresholds of every series of T of `sweep` (its summary.csv) from a saved model; `metric` (may be
+ * NULL) receives the model's metric. *out is malloc'ed. TL_ERR_ARG (one line) for a file that is not a model. */
+int sty_model_predict(const char *model_json, const char *sweep, char *metric, size_t metric_size, sty_model_pred **out,
+		      size_t *n, char *err, size_t err_size);
 
 /* Weighted isotonic (non-decreasing) regression of y[0..n) in the given order (pool adjacent violators): fit[i] is
  * the weighted mean of i's pooled block. Weights > 0. */

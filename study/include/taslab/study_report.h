@@ -7,7 +7,9 @@
  * SWEEP/analysis/<scene>/<camera>/coherence.csv exists (`taslab analyze coherence --out` there); thumbnails and
  * max-RGB difference heatmaps of each run's worst frame (largest p99); each variant's clip beside the reference's,
  * played in sync. With a study: Q, p_ref and JND with 95% intervals per condition (method, T, period, scene, camera)
- * beside the metrics, and a plot of JND against a chosen metric.
+ * beside the metrics, and a plot of JND against a chosen metric; the study's thresholds (t_jnd at 1 JND), and with a
+ * model (`study model --out`) the predicted threshold beside each and for every series nobody rated
+ * (report/data/thresholds.csv).
  *
  * Files: report/index.html, report/plots/ (SVG, gnuplot), report/img/ (PNG), report/data/ (CSV: what the plots show),
  * report/study/ (the tally, with a study). Clips are referenced in place (../clips/...). Every file is written
@@ -34,6 +36,8 @@ typedef struct sty_report_desc {
 	size_t count;
 	const char *study;           /* a study database (study.h) or NULL */
 	const char *jnd_metric;      /* summary.csv column the JND is plotted against (NULL: flip_mean) */
+	const char *model;           /* a saved metric-to-JND model (study_model.h, `study model --out`) or NULL: its
+				      * predicted thresholds for the sweep's series beside the measured ones */
 	/* A stereo sweep's report beside a mono sweep (issue 25): its folder, spec and rows (mtr_sweep_collect), or NULL:
 	 * SWEEP/stereo_vs_mono.csv and a "Stereo" section with each run's speedup and shaded samples in both. */
 	const char *mono_dir;
