@@ -24,6 +24,31 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint pad0, pad1, pad2;
 } counters;
 
+// COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
+// subgroup operations in fragment shaders; lavapipe: subgroups of 8) the subgroup's active invocations are counted
+// together, one atomic per subgroup by its lowest active invocation: subgroup operations act on the active
+// invocations, so it may be used in divergent control flow. Helper invocations (derivatives of the shading pass's
+// texture lookups on GPUs) may be active in subgroup operations but their atomics have no effect: they are left
+// out (gl_HelperInvocation; llvmpipe has none and cannot compile it: TL_NO_HELPERS). On lavapipe an atomic is a
+// loop over the lanes: one per fragment cost ~8 ms of the reproject pass and ~13 ms of the shading pass at 960x540.
+#ifdef TL_SUBGROUP
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#ifdef TL_NO_HELPERS
+#define TL_LIVE true
+#else
+#define TL_LIVE (!gl_HelperInvocation)
+#endif
+#define COUNT(field)                                                                                               \
+	{                                                                                                          \
+		uvec4 live_ = subgroupBallot(TL_LIVE);                                                             \
+		if (gl_SubgroupInvocationID == subgroupBallotFindLSB(live_))                                       \
+			atomicAdd(counters.field, subgroupBallotBitCount(live_));                                  \
+	}
+#else
+#define COUNT(field) atomicAdd(counters.field, 1u)
+#endif
+
 // state.z
 const uint AGE_MASK = 0xFFFFu;  // frames since the last shading at the current frame (saturates)
 const uint NEW_BIT = 1u << 29;  // no valid cache entry this frame
@@ -47,13 +72,10 @@ vec3 to_half(vec3 x)
 	return vec3(unpackHalf2x16(packHalf2x16(x.rg)), unpackHalf2x16(packHalf2x16(vec2(x.b, 0.0))).x);
 }
 
-// Where the surface point (object, p_obj) was in the frame of `slot`, in pixels (not rounded), and its view
-// distance there. False when behind the eye or outside the frame.
-bool reproject_f(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, out float dist)
+// Where the surface point was in the previous frame, in pixels (not rounded), from its clip position there
+// (reproject.vert). False when behind the eye or outside the frame.
+bool reproject_f(vec4 c, ivec2 size, out vec2 f)
 {
-	vec4 w = object_at(slot, object).world * vec4(p_obj, 1.0);
-	vec4 c = states[slot].view_proj * w;
-	dist = distance(w.xyz, states[slot].camera_time.xyz);
 	f = vec2(0.0);
 	if (c.w <= 0.0)
 		return false;
@@ -73,14 +95,14 @@ bool cached_here(uvec4 rec, uint object, float dist)
 // reuse is bit-exact), each tap tested on its own (object and 2% view-distance match, `was_visible`),
 // invalid taps weighted 0 and the rest renormalised; the discrete state comes from the valid tap with the
 // largest weight (ties: the lowest tap). False: a cache miss.
-bool cache_lookup(uint prev, uint object, vec3 p_obj, out vec3 colour, out uvec4 state)
+// prev_clip and dist: the surface point's clip position and view distance in the previous frame.
+bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out uvec4 state)
 {
 	ivec2 size = imageSize(prev_state);
 	vec2 f;
-	float dist;
 	colour = vec3(0.0);
 	state = uvec4(0u);
-	if (!reproject_f(prev, object, p_obj, size, f, dist))
+	if (!reproject_f(prev_clip, size, f))
 		return false;
 #ifdef NEAREST
 	ivec2 q = ivec2(f);

@@ -3,7 +3,8 @@
  * Frame t, in order (state slots t and t - 1, consecutive frames; a jump or the first frame starts over):
  *   shadow maps, depth pre-pass                     (shared passes)
  *   reproject  scene geometry, depth EQUAL: C' and the provisional state into the next cache, C' to HDR,
- *              G (tarc); clears the stencil
+ *              G (tarc); clears the stencil. Its vertex shader (reproject.vert) computes the previous clip
+ *              position and both view-distance vectors per vertex, so its fragments read no matrix
  *   filter     tarc: G -> 8x8 max -> 9x9 max = F     (passes/tas_filter.c, shared with the TFR analysis)
  *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
  *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading, the next cache
@@ -20,6 +21,7 @@
 #include <string.h>
 
 #include "method_debug.h"
+#include "shaders/reproj/reproject_vert.h"
 
 enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_COUNT };
 
@@ -41,15 +43,45 @@ typedef struct reproj_state {
 
 static reproj_state *state_of(render *r) { return r->method_state; }
 
+/* Ballot subgroup operations in fragment shaders (lavapipe: yes, subgroups of 8): the counters then take one atomic
+ * per subgroup (reproj.glsl COUNT). Without them, or with TASLAB_REPROJ_ATOMICS=1 in the environment (test_reuse
+ * compares the two), one atomic per fragment: the same counts, slower. The defines for the shaders, or "". */
+static const char *count_defines(VkPhysicalDevice pd)
+{
+	const char *force = getenv("TASLAB_REPROJ_ATOMICS");
+	if (force && strcmp(force, "1") == 0)
+		return "";
+	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES, .pNext = &dp};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
+	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+	if (!(sp.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) || (sp.supportedOperations & need) != need)
+		return "";
+	/* llvmpipe shades whole 4x4 blocks with the uncovered lanes masked off: no helper invocations to leave out */
+	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n"
+							 : "#define TL_SUBGROUP 1\n";
+}
+
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
 {
-	char defs[128];
-	snprintf(defs, sizeof defs, "%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
-		 s->v.nearest ? "#define NEAREST 1\n" : "");
-	int rc;
-	if ((rc = render_make_template_pipeline(r, "reproj/reproject.frag.in", defs, s->set_layout, RENDER_STENCIL_ATTACHED,
-						1, 0, &s->reproject, err, err_size)) ||
-	    (rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
+	char defs[192];
+	snprintf(defs, sizeof defs, "%s%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
+		 s->v.nearest ? "#define NEAREST 1\n" : "", count_defines(r->dev->physical));
+	/* reproject: its own vertex shader (the matrices per vertex, reproject.vert), position attribute only */
+	uint32_t *spv = NULL;
+	size_t spv_size = 0;
+	int rc = render_compile_defs(r, "reproj/reproject.frag.in", defs, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	if (rc)
+		return rc;
+	render_pipe_desc pd = {.vs = reproject_vert, .vs_size = sizeof reproject_vert, .fs = spv, .fs_size = spv_size,
+			       .attributes = RENDER_ATTR_POSITION, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
+			       .stencil = RENDER_STENCIL_ATTACHED, .method_set = s->set_layout};
+	VkResult res = render_make_graphics(r, &pd, &s->reproject);
+	free(spv);
+	if (res)
+		return render_vk_error(err, err_size, "reproj/reproject.frag.in", res);
+	if ((rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
 						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 1, 0, &s->shade,
 						err, err_size)))
 		return rc;
