@@ -1,7 +1,7 @@
 /* test_study_telemetry.c — remote participants' playback (issue 28; study_telemetry.h, README "Telemetry and
  * screening"), through the server's request logic (sty_server_handle, the code behind the libmicrohttpd adapter):
  *  - test_verdict_and_retake: the answer API takes the page's telemetry and stores it; the server's limits at their
- *    boundaries (dropped frames: more than 1 % of the frames, at least one allowed; hidden while a clip played, not
+ *    boundaries (dropped frames: more than 1 % of the frames and more than two; hidden while a clip played, not
  *    while the answer panel showed; a clip played longer than 1.5 x its 1 s duration + 1 s), a broken trial stored
  *    but not counted, its progress unchanged, retaken at the end of the plan at most twice, the tally and export
  *    honouring it; malformed telemetry refused with 400 and nothing stored;
@@ -124,14 +124,14 @@ static void test_verdict_and_retake(void **state)
 		assert_int_equal(answer(sv, codes[0], session, t.index, bad[i]), 400);
 	assert_int_equal(count(db, "SELECT count(*) FROM answers"), 0);
 	/* What each planned trial gets, in plan order, and whether the server must count it. The limits at their
-	 * boundaries: 1 dropped of 100 frames allowed (at least one), 2 of 100 not, 2 of 200 allowed (1 %); 2500 ms
+	 * boundaries: 2 dropped of 100 frames allowed (two always are), 3 of 100 not, 3 of 300 allowed (1 %); 2500 ms
 	 * (1.5 x 1000 + 1000) allowed, 2501 not; hidden outside playback allowed, during playback not. */
 	struct {
 		int a, b, dropped, frames, hidden, hidden_play, counted;
 		const char *why;
 	} plan[9] = {
-		{1010, 1005, 1, 100, 0, 0, 1, NULL},     {1010, 1005, 2, 100, 0, 0, 0, "dropped"},
-		{2500, 2500, 2, 200, 0, 0, 1, NULL},     {1000, 2501, 0, 120, 0, 0, 0, "long"},
+		{1010, 1005, 2, 100, 0, 0, 1, NULL},     {1010, 1005, 3, 100, 0, 0, 0, "dropped"},
+		{2500, 2500, 3, 300, 0, 0, 1, NULL},     {1000, 2501, 0, 120, 0, 0, 0, "long"},
 		{1000, 1000, 0, 120, 2, 0, 1, NULL},     {1000, 1000, 0, 120, 1, 1, 0, "hidden"},
 		{3000, 1000, 9, 100, 1, 1, 0, "dropped;hidden;long"}, {1000, 1000, 0, 0, 0, 0, 1, NULL},
 		{1000, 1000, 0, 120, 0, 0, 1, NULL},

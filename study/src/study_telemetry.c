@@ -18,7 +18,7 @@ const char *sty_playback_verdict(const sty_telemetry *t, double clip_ms, char *w
 {
 	if (why_size)
 		why[0] = 0;
-	/* dropped frames: more than 1 % of the frames played, at least one allowed (frames 0: the browser did not say) */
+	/* dropped frames: more than 1 % of the frames played and more than two (frames 0: the browser did not say) */
 	double allowed = fmax((double)STY_DROPPED_MIN, STY_DROPPED_SHARE * (double)t->frames);
 	if (t->frames > 0 && (double)t->dropped > allowed)
 		add_reason(why, why_size, "dropped");

@@ -51,9 +51,9 @@ const statusText = page => page.evaluate(() => {
 async function answered(code) { return (await (await fetch(`${base}/api/${code}/trial`)).json()).answered; }
 // Answers the trial on the ask panel by key and waits for what comes next.
 async function answerNow(page, key) {
-  const before = await page.locator('#progress').textContent();
-  await page.keyboard.press(key);
-  await page.waitForFunction(b => document.getElementById('progress').textContent !== b ||
+  const before = await page.evaluate(() => document.body.dataset.trial);    // the trial's index (a retake
+  await page.keyboard.press(key);                                            // keeps the progress text)
+  await page.waitForFunction(b => document.body.dataset.trial !== b ||
     ['done', 'problem'].some(id => getComputedStyle(document.getElementById(id)).display === 'block'), before, { timeout: 30000 });
 }
 
