@@ -205,7 +205,8 @@ try {
   if (rows[1][0] !== 'P002' || Number(rows[1][4]) < 2) fail('status page, participant 2 (two restarts expected): ' + JSON.stringify(rows[1]));
   // P001 answered its catch trial "much better" or not: the page shows what the tally's screening says
   const obs = spawnSync(taslab, ['study', 'tally', '--db', db, '--out', `${work}/tally`, '--keep-flagged', '--bootstrap', '10'], { encoding: 'utf8' });
-  const flaggedP1 = /\nP001,[^\n]*,1\n/.test(require_file(`${work}/tally/observers.csv`));
+  const obsLines = require_file(`${work}/tally/observers.csv`).trim().split('\n'), fcol = obsLines[0].split(',').indexOf('flagged');
+  const flaggedP1 = obsLines.some(l => l.startsWith('P001,') && l.split(',')[fcol] === '1');
   if (obs.status !== 0 || rows[0][5] !== (flaggedP1 ? 'yes' : 'no')) fail(`status page flags P001 '${rows[0][5]}', the tally: ${flaggedP1}`);
   const anon = await fetch(`${base}/admin/status`);
   if (anon.status !== 401) fail(`/admin/status without the token: ${anon.status}`);
