@@ -13,6 +13,10 @@
 #include "taslab/study.h"
 #include "test_study_util.h"
 
+/* Issue 28's columns after issue 27's (study_csv.c TELEMETRY_HEADER). */
+#define TELEMETRY_COLUMNS ",play_a_ms,play_b_ms,dropped_frames,total_frames,hidden,hidden_ms,hidden_play,fullscreen,broken," \
+			  "retake_of"
+
 static void test_import_export(void **state)
 {
 	(void)state;
@@ -60,7 +64,8 @@ static void test_import_export(void **state)
 	assert_int_equal(tu_count_lines(empty), 1); /* header only: nothing was imported */
 	free(empty);
 	/* The good file imports; exporting gives the same bytes back, with issue 27's three columns: each row a test
-	 * trial, answered at an unknown time ("imported"), completion unknown (empty). */
+	 * trial, answered at an unknown time ("imported"), completion unknown (empty); and issue 28's telemetry columns,
+	 * empty (no telemetry, counted, a planned trial). */
 	assert_int_equal(sty_import_long(s, REF_DIR "/study_ratings.csv", &rows, err, sizeof err), 0);
 	assert_int_equal(sty_export_long(s, exp, err, sizeof err), 0);
 	char *back = tu_read_file(exp, NULL);
@@ -69,7 +74,7 @@ static void test_import_export(void **state)
 	for (const char *line = src; *line;) {
 		size_t len = strcspn(line, "\n");
 		w += snprintf(w, want_size - (size_t)(w - want), "%.*s%s\n", (int)len, line,
-			      line == src ? ",trial_type,answered_at,completed" : ",test,imported,");
+			      line == src ? ",trial_type,answered_at,completed" TELEMETRY_COLUMNS : ",test,imported,,,,,,,,,,,");
 		line += len + (line[len] == '\n');
 	}
 	assert_string_equal(back, want);

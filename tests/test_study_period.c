@@ -102,7 +102,7 @@ static void check_period_tally(const char *res)
 		{"posthoc.csv", "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni"},
 		{"jod.csv", "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants"},
 		{"fig3.csv", "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent"},
-		{"observers.csv", "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged"},
+		{"observers.csv", "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910"},
 	};
 	for (int i = 0; i < 6; i++) {
 		snprintf(p, sizeof p, "%s/%s", res, heads[i][0]);
@@ -203,14 +203,15 @@ static void test_period_conditions(void **state)
 	assert_int_equal(sty_export_pwcmp(s, pw, err, sizeof err), 0);
 	char *csv = tu_read_file(exp, NULL);
 	const char *head = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms,"
-			   "trial_type,answered_at,completed\n";
+			   "trial_type,answered_at,completed,play_a_ms,play_b_ms,dropped_frames,total_frames,hidden,hidden_ms,"
+			   "hidden_play,fullscreen,broken,retake_of\n";
 	assert_int_equal(strncmp(csv, head, strlen(head)), 0);
 	/* every answered trial (issue 27.9): 6 test, 2 catch and 1 training trial per participant, all completed */
 	assert_int_equal(tu_count_lines(csv), 1 + 4 * 9);
 	assert_int_equal(count_lines_with(csv, ",test,"), 4 * 6);
 	assert_int_equal(count_lines_with(csv, ",catch,"), 4 * 2);
 	assert_int_equal(count_lines_with(csv, ",training,"), 4);
-	assert_int_equal(count_lines_with(csv, "Z,1\n"), 4 * 9);
+	assert_int_equal(count_lines_with(csv, "Z,1,,,,,,,,,,\n"), 4 * 9); /* no telemetry: sty_answer */
 	assert_int_equal(count_lines_with2(csv, ",rrc,,4,", ",test,"), 8);
 	assert_int_equal(count_lines_with2(csv, ",rrc,,8,", ",test,"), 8);
 	assert_int_equal(count_lines_with2(csv, ",tarc,8,,", ",test,"), 8);

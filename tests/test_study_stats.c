@@ -148,8 +148,9 @@ static void make_calm_stimuli(const char *root)
 }
 
 /* Observer screening (DESIGN section 7, README "Study"): four participants answer two catch trials (reference
- * against itself) each from a hand-made table, every test trial with +1; the expected observers.csv rows are worked
- * out by hand from the rule "flagged when more than half of the catch answers are much better (|a| = 2)". */
+ * against itself) and two test trials each from hand-made tables; the expected observers.csv rows are worked out by
+ * hand from the rule "flagged when more than half of the catch answers are much better (|a| = 2)" and the
+ * P.910-crowd rules (a catch answer outside -1..1 fails the gold question; test answers' variance below 0.1). */
 static void test_screening(void **state)
 {
 	(void)state;
@@ -166,10 +167,13 @@ static void test_screening(void **state)
 		fail_msg("%s", err);
 	commit(s);
 	static const int catch_answers[4][2] = {{2, -2}, {-2, 0}, {0, -1}, {1, 2}};
+	static const int test_answers[4][2] = {{1, 1}, {1, 1}, {0, 2}, {-1, 1}};
 	/* participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged — by hand from the table above: P001 has
-	 * 2 of 2 much better (flagged), P002 exactly half (1 of 2: not more than half, kept). */
-	static const char *const expect[4] = {"P001,2,2.0000,2,1", "P002,2,1.0000,1,0", "P003,2,0.5000,0,0",
-					      "P004,2,1.5000,1,0"};
+	 * 2 of 2 much better (flagged), P002 exactly half (1 of 2: not more than half, kept). Then broken (none),
+	 * rating_variance (sample variance of the two test answers: 0, 0, 2, 2) and the P.910-crowd flags: a catch answer
+	 * much better fails the gold question (P001, P002, P004), variance below 0.1 (P001, P002). */
+	static const char *const expect[4] = {"P001,2,2.0000,2,1,0,0.0000,gold;variance", "P002,2,1.0000,1,0,0,0.0000,gold;variance",
+					      "P003,2,0.5000,0,0,0,2.0000,", "P004,2,1.5000,1,0,0,2.0000,gold"};
 	char **codes = NULL;
 	size_t ncodes = 0;
 	if (sty_participant_codes(s, &codes, &ncodes, err, sizeof err))
@@ -182,7 +186,8 @@ static void test_screening(void **state)
 			int catch_trial = !strcmp(t.kind, "catch");
 			if (catch_trial)
 				assert_true(k < 2);
-			int64_t a = catch_trial ? catch_answers[i][k++] : 1;
+			assert_true(catch_trial || tests < 2);
+			int64_t a = catch_trial ? catch_answers[i][k++] : test_answers[i][tests];
 			tests += !catch_trial;
 			if (sty_answer(s, codes[i], t.index, a, 1000, err, sizeof err))
 				fail_msg("%s", err);
@@ -192,25 +197,28 @@ static void test_screening(void **state)
 		free(codes[i]);
 	}
 	free(codes);
-	for (int keep = 0; keep < 2; keep++) {
+	/* keep 0: the default (catch rule), 1: --keep-flagged, 2: --p910 (also the P.910-crowd flags left out) */
+	for (int keep = 0; keep < 3; keep++) {
 		snprintf(res, sizeof res, "%s/out%d", dir, keep);
-		sty_tally_desc td = {.out = res, .bootstrap = 10, .seed = 3, .no_plot = true, .keep_flagged = keep};
+		sty_tally_desc td = {.out = res, .bootstrap = 10, .seed = 3, .no_plot = true, .keep_flagged = keep == 1,
+				     .p910 = keep == 2};
 		if (sty_tally(s, &td, err, sizeof err))
 			fail_msg("%s", err);
 		snprintf(p, sizeof p, "%s/observers.csv", res);
 		char *obs = tu_read_file(p, NULL);
 		assert_non_null(obs);
 		char want[512];
-		snprintf(want, sizeof want, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged\n%s\n%s\n%s\n%s\n",
-			 expect[0], expect[1], expect[2], expect[3]);
+		snprintf(want, sizeof want, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,"
+			 "rating_variance,p910\n%s\n%s\n%s\n%s\n", expect[0], expect[1], expect[2], expect[3]);
 		assert_string_equal(obs, want);
 		free(obs);
-		/* The flagged observer's ratings are left out (3 of 4 participants per condition) unless kept. */
+		/* The flagged observer's ratings are left out (3 of 4 participants per condition) unless kept; with p910 also
+		 * those the P.910-crowd screening flags (P003 alone is left). */
 		snprintf(p, sizeof p, "%s/conditions.csv", res);
 		const char *Ts[2] = {"8", "16"};
 		for (int t = 0; t < 2; t++) {
 			const char *key[5] = {"tfr", Ts[t], "", "calm", "still"};
-			assert_int_equal((int)tu_csv_lookup(p, key, 5, 5), keep ? 4 : 3);
+			assert_int_equal((int)tu_csv_lookup(p, key, 5, 5), keep == 1 ? 4 : keep == 2 ? 1 : 3);
 		}
 	}
 	sty_close(&s);

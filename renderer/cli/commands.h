@@ -73,7 +73,7 @@ typedef struct study_opts {
 	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *prior;
 	uint32_t participants, training, catch_trials, break_every, port, threads, bootstrap, trials;
 	uint64_t seed;
-	bool keep_flagged, adaptive;
+	bool keep_flagged, adaptive, p910;
 	/* serve's connection limits (0: the server's default; sty_server_desc) */
 	uint32_t max_connections, max_per_client, max_reading, idle_timeout, head_timeout, body_timeout;
 } study_opts;

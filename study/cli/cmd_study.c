@@ -105,6 +105,9 @@ static const cli_opt tally_options[] = {
 	{.name = "keep-flagged", .arg = NULL,
 	 .help = "keep observers flagged by the catch-trial screening",
 	 .type = CLI_FLAG, .offset = offsetof(study_opts, keep_flagged)},
+	{.name = "p910", .arg = NULL,
+	 .help = "also leave out observers the P.910-crowd screening flags (a catch answer 'much better'; answer variance < 0.1)",
+	 .type = CLI_FLAG, .offset = offsetof(study_opts, p910)},
 	{.name = "bootstrap", .arg = "B",
 	 .help = "bootstrap resamples for the JOD intervals (1..100000, default 2000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, bootstrap), .lo = 1, .hi = 100000},
@@ -265,7 +268,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 			fprintf(stderr, "taslab study serve: stopped\n");
 		}
 	} else if (!strcmp(sub, "tally")) {
-		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .bootstrap = ov.bootstrap, .seed = ov.seed};
+		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .p910 = ov.p910, .bootstrap = ov.bootstrap,
+				    .seed = ov.seed};
 		if (!(rc = sty_tally(s, &t, err, err_size))) {
 			fprintf(stderr, "taslab: study statistics in %s (conditions.csv, anova.csv, posthoc.csv, observers.csv, "
 					"jod.csv, thresholds.csv, tables.md, fig3.png)\n", ov.out);
@@ -324,7 +328,7 @@ static const cli_command study_serve = {
 static const cli_command study_tally = {
 	.name = "study tally",
 	.summary = "Q, p_ref, JND, RM-ANOVA, post hoc tests, screening, JOD, Fig. 3",
-	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--bootstrap B] [--seed S]",
+	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--p910] [--bootstrap B] [--seed S]",
 	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, thresholds.csv, tables.md, "
 		       "fig3.png.",
 	.options = tally_options,

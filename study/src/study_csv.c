@@ -23,6 +23,14 @@ static const char *LONG_HEADER_NO_PERIOD = "participant,trial,scene,camera,camer
  * whether the participant completed the session, so that screening can be redone after export -> import. */
 static const char *LONG_HEADER_FULL = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,"
 				      "rt_ms,trial_type,answered_at,completed";
+/* Issue 28 (remote participants): the page's playback telemetry after them (empty when the answer came without it),
+ * the server's verdict `broken` (empty: counted) and `retake_of` (the planned trial a retake repeats). Import reads
+ * all three layouts. */
+#define TELEMETRY_HEADER ",play_a_ms,play_b_ms,dropped_frames,total_frames,hidden,hidden_ms,hidden_play,fullscreen,broken," \
+			 "retake_of"
+#define N_TELEMETRY 8 /* the whole-number telemetry columns, play_a_ms .. fullscreen */
+static const char *LONG_HEADER_TELEMETRY = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,"
+					   "rating,rt_ms,trial_type,answered_at,completed" TELEMETRY_HEADER;
 
 /* Query of every answered trial, one row per answer, in participant / trial order (columns 0-10 shared by both
  * exports; 11-13: type, time, completed — "" when unknown, as for ratings imported from a file without the column).
@@ -30,10 +38,12 @@ static const char *LONG_HEADER_FULL = "participant,trial,scene,camera,camera_mot
 #define ANSWERS_COLUMNS \
 	"SELECT p.label, t.idx, c.scene, c.camera, c.camera_motion, c.method, c.T, t.ref_first, a.answer, a.rt_ms, c.period," \
 	" t.kind, a.at, coalesce((SELECT value FROM meta WHERE key = 'completed:' || p.label)," \
-	" (SELECT count(*) FROM trials u WHERE u.participant = p.id) = (SELECT count(*) FROM answers v WHERE v.participant = p.id))" \
+	" (SELECT count(*) FROM trials u WHERE u.participant = p.id) = (SELECT count(*) FROM answers v WHERE v.participant = p.id))," \
+	" a.play_a_ms, a.play_b_ms, a.dropped_frames, a.total_frames, a.hidden, a.hidden_ms, a.hidden_play, a.fullscreen," \
+	" a.broken, t.retake_of" \
 	" FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx" \
 	" JOIN conditions c ON c.id = t.condition JOIN participants p ON p.id = a.participant"
-static const char *ANSWERS_SQL = ANSWERS_COLUMNS " WHERE t.kind = 'test' ORDER BY p.id, t.idx";
+static const char *ANSWERS_SQL = ANSWERS_COLUMNS " WHERE t.kind = 'test' AND a.broken IS NULL ORDER BY p.id, t.idx";
 static const char *ALL_ANSWERS_SQL = ANSWERS_COLUMNS " ORDER BY p.id, t.idx";
 
 int sty_csv_formula(const char *s)
@@ -102,7 +112,7 @@ int sty_check_output(const sty *s, const char *path, char *err, size_t err_size)
 static void write_long(sqlite3_stmt *st, FILE *f, const char *ref)
 {
 	(void)ref;
-	fprintf(f, "%s\n", LONG_HEADER_FULL);
+	fprintf(f, "%s\n", LONG_HEADER_TELEMETRY);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int ref_first = sqlite3_column_int(st, 7), answer = sqlite3_column_int(st, 8);
 		char c0[160], c2[160], c3[160], c4[40], c5[80];
@@ -117,7 +127,17 @@ static void write_long(sqlite3_stmt *st, FILE *f, const char *ref)
 		if (sqlite3_column_type(st, 9) != SQLITE_NULL)
 			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 9));
 		char c11[40], c12[80], c13[8];
-		fprintf(f, ",%s,%s,%s\n", CELL(st, 11, c11), CELL(st, 12, c12), CELL(st, 13, c13));
+		fprintf(f, ",%s,%s,%s", CELL(st, 11, c11), CELL(st, 12, c12), CELL(st, 13, c13));
+		for (int i = 14; i < 14 + N_TELEMETRY; i++) {
+			fputc(',', f);
+			if (sqlite3_column_type(st, i) != SQLITE_NULL)
+				fprintf(f, "%lld", (long long)sqlite3_column_int64(st, i));
+		}
+		char c22[64];
+		fprintf(f, ",%s,", sqlite3_column_type(st, 22) == SQLITE_NULL ? "" : CELL(st, 22, c22));
+		if (sqlite3_column_type(st, 23) != SQLITE_NULL)
+			fprintf(f, "%lld", (long long)sqlite3_column_int64(st, 23));
+		fputc('\n', f);
 	}
 }
 
@@ -207,6 +227,9 @@ typedef struct row {
 	char kind[16];   /* test, catch, training (files without trial_type: test) */
 	char at[40];     /* answered_at ("imported" for files without it) */
 	int completed;   /* 0, 1; -1: unknown */
+	long long tel[N_TELEMETRY]; /* play_a_ms .. fullscreen; -1: none */
+	char broken[48]; /* the server's verdict ("": counted) */
+	long retake_of;  /* -1: a planned trial */
 } row;
 
 static int split(char *line, char **f, int max)
@@ -256,7 +279,7 @@ static int safe_name(const char *s, size_t max)
 	return 1;
 }
 
-enum { LAYOUT_NO_PERIOD, LAYOUT_PERIOD, LAYOUT_FULL };
+enum { LAYOUT_NO_PERIOD, LAYOUT_PERIOD, LAYOUT_FULL, LAYOUT_TELEMETRY };
 
 /* One data row in `layout`: LAYOUT_FULL (LONG_HEADER_FULL), LAYOUT_PERIOD (LONG_HEADER: type test, answered_at
  * "imported", completion unknown) or LAYOUT_NO_PERIOD (the DESIGN section 7 layout, which reads as if it had the period
@@ -265,8 +288,8 @@ static int parse_row(const sty *s, char *line, int layout, row *r, char *why, si
 {
 	static char none[1] = "";
 	bool with_period = layout != LAYOUT_NO_PERIOD;
-	char *c[16], *f[16];
-	int cols = layout == LAYOUT_FULL ? 15 : with_period ? 12 : 11;
+	char *c[32], *f[16];
+	int cols = layout == LAYOUT_TELEMETRY ? 25 : layout == LAYOUT_FULL ? 15 : with_period ? 12 : 11;
 	int n = split(line, c, cols);
 	if (n != cols) {
 		snprintf(why, why_size, "expected %d columns, found %d", cols, n > cols ? cols + 1 : n);
@@ -348,7 +371,11 @@ static int parse_row(const sty *s, char *line, int layout, row *r, char *why, si
 	snprintf(r->kind, sizeof r->kind, "test");
 	snprintf(r->at, sizeof r->at, "imported");
 	r->completed = -1;
-	if (layout != LAYOUT_FULL)
+	for (int i = 0; i < N_TELEMETRY; i++)
+		r->tel[i] = -1;
+	r->broken[0] = 0;
+	r->retake_of = -1;
+	if (layout < LAYOUT_FULL)
 		return TL_OK;
 	if (strcmp(c[12], "test") && strcmp(c[12], "catch") && strcmp(c[12], "training")) {
 		snprintf(why, why_size, "trial_type '%s' is not test, catch or training", c[12]);
@@ -374,6 +401,29 @@ static int parse_row(const sty *s, char *line, int layout, row *r, char *why, si
 		return TL_ERR_INPUT;
 	}
 	r->completed = c[14][0] ? (int)done : -1;
+	if (layout != LAYOUT_TELEMETRY)
+		return TL_OK;
+	static const char *const tel_names[N_TELEMETRY] = {"play_a_ms", "play_b_ms", "dropped_frames", "total_frames", "hidden",
+							  "hidden_ms", "hidden_play", "fullscreen"};
+	for (int i = 0; i < N_TELEMETRY; i++)
+		if (c[15 + i][0]) {
+			if (!parse_long(c[15 + i], 0, i == 7 ? 1 : STY_RT_MS_MAX, &v)) {
+				snprintf(why, why_size, "%s '%.20s' is not a whole number >= 0%s (or empty)", tel_names[i], c[15 + i],
+					 i == 7 ? " (0 or 1)" : "");
+				return TL_ERR_INPUT;
+			}
+			r->tel[i] = v;
+		}
+	/* the verdict: the server's reasons, ';'-joined (study_telemetry.h) */
+	if (strlen(c[23]) >= sizeof r->broken || strspn(c[23], "abcdefghijklmnopqrstuvwxyz;") != strlen(c[23])) {
+		snprintf(why, why_size, "broken '%.20s' is not a list of reasons such as dropped;hidden;long (or empty)", c[23]);
+		return TL_ERR_INPUT;
+	}
+	snprintf(r->broken, sizeof r->broken, "%s", c[23]);
+	if (c[24][0] && !parse_long(c[24], 0, 1000000, &r->retake_of)) {
+		snprintf(why, why_size, "retake_of '%.20s' is not a trial number (or empty)", c[24]);
+		return TL_ERR_INPUT;
+	}
 	return TL_OK;
 }
 
@@ -404,12 +454,13 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	size_t n = 0, lineno = 1;
 	int rc = TL_ERR_INPUT; /* until the rows are stored: a malformed file */
 	bool have = fgets(line, sizeof line, f) != NULL;
-	int layout = !have ? -1 : header_is(line, LONG_HEADER_FULL) ? LAYOUT_FULL : header_is(line, LONG_HEADER) ? LAYOUT_PERIOD
+	int layout = !have ? -1 : header_is(line, LONG_HEADER_TELEMETRY) ? LAYOUT_TELEMETRY
+		     : header_is(line, LONG_HEADER_FULL) ? LAYOUT_FULL : header_is(line, LONG_HEADER) ? LAYOUT_PERIOD
 		     : header_is(line, LONG_HEADER_NO_PERIOD) ? LAYOUT_NO_PERIOD : -1;
 	if (layout < 0) {
-		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or, from before issue 27, the same without "
-			 "trial_type,answered_at,completed, or from before the period column without period either)", path,
-			 LONG_HEADER_FULL);
+		snprintf(err, err_size, "%s:1: the header must be exactly: %s (or the same without the telemetry columns from "
+			 "play_a_ms on, or, from before issue 27, without trial_type,answered_at,completed either, or from "
+			 "before the period column without period either)", path, LONG_HEADER_TELEMETRY);
 		goto done;
 	}
 	/* Validate everything before touching the database. */
@@ -462,9 +513,11 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 				  " is_catch) VALUES(?,?,?,?,?,?,'','',?)", -1, &ic, NULL);
 	sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE label=?", -1, &fp, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO participants(code, label) VALUES(?, ?)", -1, &ip, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind) VALUES(?,?,?,?,?)", -1,
-			   &it, NULL);
-	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at) VALUES(?,?,?,?,?)", -1, &ia, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind, retake_of)"
+				  " VALUES(?,?,?,?,?,?)", -1, &it, NULL);
+	sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at, play_a_ms, play_b_ms,"
+				  " dropped_frames, total_frames, hidden, hidden_ms, hidden_play, fullscreen, broken)"
+				  " VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?)", -1, &ia, NULL);
 	for (size_t i = 0; ok && i < n; i++) {
 		row *r = &rows[i];
 		sqlite3_int64 cid = -1, pid = -1;
@@ -515,6 +568,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 		sqlite3_bind_int64(it, 3, cid);
 		sqlite3_bind_int(it, 4, r->ref_first);
 		sqlite3_bind_text(it, 5, r->kind, -1, SQLITE_STATIC);
+		r->retake_of >= 0 ? sqlite3_bind_int64(it, 6, r->retake_of) : sqlite3_bind_null(it, 6);
 		ok = ok && sqlite3_step(it) == SQLITE_DONE;
 		sqlite3_reset(ia);
 		sqlite3_bind_int64(ia, 1, pid);
@@ -522,6 +576,9 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 		sqlite3_bind_int(ia, 3, r->answer);
 		r->rt_ms >= 0 ? sqlite3_bind_int64(ia, 4, r->rt_ms) : sqlite3_bind_null(ia, 4);
 		sqlite3_bind_text(ia, 5, r->at, -1, SQLITE_STATIC);
+		for (int k = 0; k < N_TELEMETRY; k++)
+			r->tel[k] >= 0 ? sqlite3_bind_int64(ia, 6 + k, r->tel[k]) : sqlite3_bind_null(ia, 6 + k);
+		r->broken[0] ? sqlite3_bind_text(ia, 14, r->broken, -1, SQLITE_STATIC) : sqlite3_bind_null(ia, 14);
 		ok = ok && sqlite3_step(ia) == SQLITE_DONE;
 	}
 	sqlite3_finalize(fc);

@@ -19,14 +19,16 @@ static const char *SCHEMA =
 	"CREATE TABLE IF NOT EXISTS conditions(id INTEGER PRIMARY KEY, scene TEXT NOT NULL, camera TEXT NOT NULL,"
 	" camera_motion TEXT NOT NULL CHECK(camera_motion IN ('stationary','moving')), method TEXT NOT NULL,"
 	" T REAL, period INTEGER CHECK(period IS NULL OR period IN (1, 2, 4, 8)), ref_clip TEXT NOT NULL,"
-	" test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0);"
+	" test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0, clip_ms REAL);"
 	"CREATE TABLE IF NOT EXISTS participants(id INTEGER PRIMARY KEY, code TEXT NOT NULL UNIQUE, label TEXT NOT NULL);"
 	"CREATE TABLE IF NOT EXISTS trials(participant INTEGER NOT NULL REFERENCES participants(id),"
 	" idx INTEGER NOT NULL, condition INTEGER NOT NULL REFERENCES conditions(id), ref_first INTEGER NOT NULL,"
 	" kind TEXT NOT NULL CHECK(kind IN ('test','catch','training')), break_before INTEGER NOT NULL DEFAULT 0,"
-	" PRIMARY KEY(participant, idx));"
+	" retake_of INTEGER, PRIMARY KEY(participant, idx));"
 	"CREATE TABLE IF NOT EXISTS answers(participant INTEGER NOT NULL, idx INTEGER NOT NULL,"
 	" answer INTEGER NOT NULL CHECK(answer BETWEEN -2 AND 2), rt_ms INTEGER, at TEXT NOT NULL,"
+	" play_a_ms INTEGER, play_b_ms INTEGER, dropped_frames INTEGER, total_frames INTEGER, hidden INTEGER, hidden_ms INTEGER,"
+	" hidden_play INTEGER, fullscreen INTEGER, broken TEXT,"
 	" PRIMARY KEY(participant, idx), FOREIGN KEY(participant, idx) REFERENCES trials(participant, idx));"
 	/* The opaque clip names of the trials served so far: slot 0 is the clip shown first (A), 1 the second. */
 	"CREATE TABLE IF NOT EXISTS clip_names(name TEXT PRIMARY KEY, participant INTEGER NOT NULL, idx INTEGER NOT NULL,"
@@ -81,37 +83,69 @@ static int sqlite_special_name(const char *path)
 	return !*path || !strcmp(path, ":memory:") || !strncmp(path, "file:", 5);
 }
 
-/* Whether the conditions table has the period column. */
-static int has_period_column(sty *s)
+/* Whether `table` has the column `column`. */
+static int has_column(sty *s, const char *table, const char *column)
 {
 	sqlite3_stmt *st;
 	int has = 0;
-	if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM pragma_table_info('conditions') WHERE name = 'period'", -1, &st,
-			       NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
-		has = sqlite3_column_int(st, 0) > 0;
+	if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM pragma_table_info(?) WHERE name = ?", -1, &st, NULL) == SQLITE_OK) {
+		sqlite3_bind_text(st, 1, table, -1, SQLITE_STATIC);
+		sqlite3_bind_text(st, 2, column, -1, SQLITE_STATIC);
+		if (sqlite3_step(st) == SQLITE_ROW)
+			has = sqlite3_column_int(st, 0) > 0;
+	}
 	sqlite3_finalize(st);
 	return has;
 }
 
-/* Brings a study made by an earlier taslab up to date. Studies made before conditions carried a period (method
- * x T x scene x camera only) get the period column, NULL for every condition: right for every method but rrc
- * and sau, whose period was never stored, so a study holding rrc or sau conditions without a period is refused
- * (its rrc/4 and rrc/8 conditions could not be told apart). A study that is up to date is only read (so a
- * read-only file still opens); the column is added in one transaction, so concurrent openers (a server and a
- * tally) do not both add it. */
+/* Columns added to the schema after studies were made with it: table, column, its declaration. The period (issue 27)
+ * and, for remote participants (issue 28), each condition's clip duration, a retake's planned trial and the playback
+ * telemetry of each answer (study_telemetry.c); NULL in rows made before. */
+static const char *const ADDED[][3] = {
+	{"conditions", "period", "period INTEGER CHECK(period IS NULL OR period IN (1, 2, 4, 8))"},
+	{"conditions", "clip_ms", "clip_ms REAL"},
+	{"trials", "retake_of", "retake_of INTEGER"},
+	{"answers", "play_a_ms", "play_a_ms INTEGER"},
+	{"answers", "play_b_ms", "play_b_ms INTEGER"},
+	{"answers", "dropped_frames", "dropped_frames INTEGER"},
+	{"answers", "total_frames", "total_frames INTEGER"},
+	{"answers", "hidden", "hidden INTEGER"},
+	{"answers", "hidden_ms", "hidden_ms INTEGER"},
+	{"answers", "hidden_play", "hidden_play INTEGER"},
+	{"answers", "fullscreen", "fullscreen INTEGER"},
+	{"answers", "broken", "broken TEXT"},
+};
+#define N_ADDED (sizeof ADDED / sizeof ADDED[0])
+
+static int schema_current(sty *s)
+{
+	for (size_t i = 0; i < N_ADDED; i++)
+		if (!has_column(s, ADDED[i][0], ADDED[i][1]))
+			return 0;
+	return 1;
+}
+
+/* Brings a study made by an earlier taslab up to date: the columns of ADDED it lacks are added (empty). Studies made
+ * before conditions carried a period (method x T x scene x camera only) get the period column, NULL for every
+ * condition: right for every method but rrc and sau, whose period was never stored, so a study holding rrc or sau
+ * conditions without a period is refused (its rrc/4 and rrc/8 conditions could not be told apart). A study that is
+ * up to date is only read (so a read-only file still opens); the columns are added in one transaction, so concurrent
+ * openers (a server and a tally) do not both add them. */
 static int upgrade(sty *s, char *err, size_t err_size)
 {
 	int rc = TL_OK, missing = 0;
-	if (!has_period_column(s)) {
+	if (!schema_current(s)) {
 		if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK)
-			return sty_db_fail(s, err, err_size, "adding the period column");
-		if (!has_period_column(s) &&
-		    sqlite3_exec(s->db, "ALTER TABLE conditions ADD COLUMN period INTEGER"
-					" CHECK(period IS NULL OR period IN (1, 2, 4, 8))", NULL, NULL, NULL) != SQLITE_OK)
-			rc = sty_db_fail(s, err, err_size, "adding the period column");
+			return sty_db_fail(s, err, err_size, "adding columns of a newer taslab");
+		for (size_t i = 0; !rc && i < N_ADDED; i++) {
+			char sql[256];
+			snprintf(sql, sizeof sql, "ALTER TABLE %s ADD COLUMN %s", ADDED[i][0], ADDED[i][2]);
+			if (!has_column(s, ADDED[i][0], ADDED[i][1]) && sqlite3_exec(s->db, sql, NULL, NULL, NULL) != SQLITE_OK)
+				rc = sty_db_fail(s, err, err_size, "adding columns of a newer taslab");
+		}
 		if (rc || sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
 			if (!rc)
-				rc = sty_db_fail(s, err, err_size, "adding the period column");
+				rc = sty_db_fail(s, err, err_size, "adding columns of a newer taslab");
 			sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
 			return rc;
 		}

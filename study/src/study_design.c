@@ -82,6 +82,7 @@ typedef struct cond {
 	char ref_clip[512], test_clip[512];
 	int is_catch;
 	char ref_method[32]; /* the reference's method name (pairs.json reference.method), for added catch trials */
+	double clip_ms;      /* a clip's duration from pairs.json frames and fps (the server's playback check) */
 } cond;
 
 /* Reads one pairs.json (from `taslab pair`, output/pairs.h) into conditions; `rel` is its folder relative to
@@ -147,6 +148,7 @@ static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs
 		snprintf(x->method, sizeof x->method, "%s", c->method);
 		x->T = c->T;
 		x->period = c->period;
+		x->clip_ms = set.fps > 0 ? (double)(set.last_frame - set.first_frame + 1) * 1000.0 / set.fps : NAN;
 		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", set.ref_clip);
 		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", c->clip);
 		/* reference against itself; the facts from the file, else the caller's (checked above) */
@@ -279,7 +281,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	}
 	sqlite3_stmt *ic;
 	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(id, scene, camera, camera_motion, method, T, ref_clip, test_clip, is_catch,"
-				  " period) VALUES(?,?,?,?,?,?,?,?,?,?)", -1, &ic, NULL);
+				  " period, clip_ms) VALUES(?,?,?,?,?,?,?,?,?,?,?)", -1, &ic, NULL);
 	int ok = 1;
 	for (size_t i = 0; i < nc && ok; i++) {
 		sqlite3_reset(ic);
@@ -299,6 +301,10 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 			sqlite3_bind_int64(ic, 10, cs[i].period);
 		else
 			sqlite3_bind_null(ic, 10);
+		if (isfinite(cs[i].clip_ms) && cs[i].clip_ms > 0)
+			sqlite3_bind_double(ic, 11, cs[i].clip_ms);
+		else
+			sqlite3_bind_null(ic, 11);
 		ok = sqlite3_step(ic) == SQLITE_DONE;
 	}
 	sqlite3_finalize(ic);

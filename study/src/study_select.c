@@ -31,8 +31,9 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	sqlite3_stmt *st = NULL;
 	int rc = TL_OK;
 	if (sqlite3_prepare_v2(s->db,
-			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1),"
-			       " (SELECT count(*) FROM answers WHERE participant = ?1),"
+			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL),"
+			       " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers"
+			       "  WHERE participant = ?1)),"
 			       " t.idx, t.ref_first, t.kind, t.break_before, c.ref_clip, c.test_clip"
 			       " FROM trials t JOIN conditions c ON c.id = t.condition"
 			       " WHERE t.participant = ?1 AND t.idx NOT IN (SELECT idx FROM answers WHERE participant = ?1)"
@@ -41,8 +42,10 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	sqlite3_bind_int64(st, 1, pid);
 	int r = sqlite3_step(st);
 	if (r == SQLITE_ROW) {
+		/* progress in planned trials (issue 28): a broken trial's retake (study_telemetry.h) is not one more */
 		p->total = (uint32_t)sqlite3_column_int(st, 0);
-		p->answered = (uint32_t)sqlite3_column_int(st, 1);
+		int left = sqlite3_column_int(st, 1);
+		p->answered = (uint32_t)(left < (int)p->total ? (int)p->total - left : 0);
 		p->index = (uint32_t)sqlite3_column_int64(st, 2);
 		p->ref_first = sqlite3_column_int(st, 3) != 0;
 		snprintf(p->kind, sizeof p->kind, "%s", (const char *)sqlite3_column_text(st, 4));
@@ -52,7 +55,8 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	} else if (r == SQLITE_DONE) {
 		sqlite3_finalize(st);
 		st = NULL;
-		if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM trials WHERE participant = ?", -1, &st, NULL))
+		if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM trials WHERE participant = ? AND retake_of IS NULL", -1, &st,
+				       NULL))
 			return sty_db_fail(s, err, err_size, "next trial");
 		sqlite3_bind_int64(st, 1, pid);
 		if (sqlite3_step(st) == SQLITE_ROW)

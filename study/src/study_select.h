@@ -19,7 +19,7 @@
 /* The trial a participant is at. */
 typedef struct sty_pick {
 	uint32_t index;              /* the trial's index in the participant's plan */
-	uint32_t total, answered;    /* trials in the plan, trials answered */
+	uint32_t total, answered;    /* planned trials (retakes not counted), of them done (total - unanswered) */
 	bool ref_first;              /* the reference is shown first (A) */
 	bool break_before;
 	bool done;                   /* every trial answered: total = answered, the other fields are unset */

@@ -23,6 +23,7 @@
 #include "study_internal.h"
 #include "study_serve_internal.h"
 #include "study_session.h"
+#include "study_telemetry.h"
 #include "taslab/study_status.h"
 #include "taslab/tl_fs.h"
 #include "web/status_html.h"
@@ -483,10 +484,44 @@ static void serve_export(struct sty_server *sv, const sty_request *rq, int pwcmp
 	r->file_size = (uint64_t)sb.st_size;
 }
 
+/* The page's playback telemetry (issue 28; study_telemetry.h): exactly {"play_ms": [a, b], "dropped": n, "frames": n,
+ * "hidden": n, "hidden_ms": n, "hidden_play": n, "fullscreen": 0|1}, whole numbers within sane bounds. NULL when
+ * valid, else why not. */
+static const char *parse_telemetry(const json_t *j, sty_telemetry *t)
+{
+	static const char *const keys[] = {"dropped", "frames", "hidden", "hidden_ms", "hidden_play", "fullscreen"};
+	int64_t *dst[] = {&t->dropped, &t->frames, &t->hidden, &t->hidden_ms, &t->hidden_play, NULL};
+	const json_int_t max[] = {10000000, 10000000, 100000, STY_RT_MS_MAX, 100000, 1};
+	const char *why = "telemetry must be {\"play_ms\": [int, int], \"dropped\", \"frames\", \"hidden\", \"hidden_ms\", "
+			  "\"hidden_play\": whole numbers >= 0, \"fullscreen\": 0 or 1}";
+	const json_t *pm = json_object_get(j, "play_ms");
+	memset(t, 0, sizeof *t);
+	if (!json_is_object(j) || json_object_size(j) != 7 || !json_is_array(pm) || json_array_size(pm) != 2)
+		return why;
+	for (size_t i = 0; i < 2; i++) {
+		const json_t *v = json_array_get(pm, i);
+		if (!json_is_integer(v) || json_integer_value(v) < 0 || json_integer_value(v) > STY_RT_MS_MAX)
+			return why;
+		t->play_ms[i] = (int64_t)json_integer_value(v);
+	}
+	for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+		const json_t *v = json_object_get(j, keys[i]);
+		if (!json_is_integer(v) || json_integer_value(v) < 0 || json_integer_value(v) > max[i])
+			return why;
+		if (dst[i])
+			*dst[i] = (int64_t)json_integer_value(v);
+		else
+			t->fullscreen = (int)json_integer_value(v);
+	}
+	if (t->dropped > t->frames || t->hidden_play > t->hidden)
+		return "telemetry: dropped must be <= frames and hidden_play <= hidden";
+	return NULL;
+}
+
 /* POST /api/<code>/answer: exactly {"trial": int, "answer": int, "rt_ms": int} and optionally "session": the id from
- * /session (JSON integers and a string, no other keys, no duplicates), range-checked before any narrowing conversion;
- * the storage rules are sty_answer's and sty_session_answer's. Each stored answer is a log line, and so is a
- * completed session (issue 27.8). */
+ * /session and "telemetry" (parse_telemetry) (JSON integers and a string, no other keys, no duplicates),
+ * range-checked before any narrowing conversion; the storage rules are sty_answer's and sty_session_answer's. Each
+ * stored answer is a log line, and so is a completed session (issue 27.8); a broken playback says so. */
 static void serve_answer(struct sty_server *sv, const sty_request *rq, const char *code, sty_response *r)
 {
 	if (rq->body_too_large) {
@@ -497,11 +532,12 @@ static void serve_answer(struct sty_server *sv, const sty_request *rq, const cha
 	json_t *j = json_loadb(rq->body, rq->body_size, JSON_REJECT_DUPLICATES, &je);
 	const char *why = NULL;
 	json_t *t = json_object_get(j, "trial"), *a = json_object_get(j, "answer"), *rt = json_object_get(j, "rt_ms");
-	json_t *ses = json_object_get(j, "session");
+	json_t *ses = json_object_get(j, "session"), *tel = json_object_get(j, "telemetry");
+	sty_telemetry tm;
 	if (!json_is_object(j))
 		why = "body must be a JSON object {\"trial\": int, \"answer\": int, \"rt_ms\": int}";
-	else if (json_object_size(j) != 3u + (ses != NULL) || !t || !a || !rt)
-		why = "body must have exactly the keys trial, answer and rt_ms (and session)";
+	else if (json_object_size(j) != 3u + (ses != NULL) + (tel != NULL) || !t || !a || !rt)
+		why = "body must have exactly the keys trial, answer and rt_ms (and session, telemetry)";
 	else if (!json_is_integer(t) || json_integer_value(t) < 0 || json_integer_value(t) > UINT32_MAX)
 		why = "trial must be a whole number >= 0";
 	else if (!json_is_integer(a) || json_integer_value(a) < -2 || json_integer_value(a) > 2)
@@ -510,6 +546,8 @@ static void serve_answer(struct sty_server *sv, const sty_request *rq, const cha
 		why = "rt_ms must be a whole number of milliseconds from 0 to 86400000";
 	else if (ses && (!json_is_string(ses) || !valid_hex32(json_string_value(ses), strlen(json_string_value(ses)))))
 		why = "session must be the id POST /api/<code>/session returned";
+	else if (tel)
+		why = parse_telemetry(tel, &tm);
 	if (why) {
 		json_decref(j);
 		set_error(r, 400, why);
@@ -521,12 +559,15 @@ static void serve_answer(struct sty_server *sv, const sty_request *rq, const cha
 	uint32_t trial = (uint32_t)json_integer_value(t);
 	sty_session_info info;
 	int rc = sty_session_answer(sv->study, code, ses ? session : NULL, trial, (int64_t)json_integer_value(a),
-				    (int64_t)json_integer_value(rt), &info, err, sizeof err);
+				    (int64_t)json_integer_value(rt), tel ? &tm : NULL, &info, err, sizeof err);
 	json_decref(j);
 	switch (rc) {
 	case TL_OK:
 		set_json(r, info.repeat ? json_pack("{s:b, s:b}", "ok", 1, "repeat", 1) : json_pack("{s:b}", "ok", 1));
-		if (!info.repeat)
+		if (!info.repeat && info.broken[0])
+			serve_event(sv, "%s answered trial %u with a broken playback (%s): not counted (%u/%u)", info.label, trial,
+				    info.broken, info.answered, info.total);
+		else if (!info.repeat)
 			serve_event(sv, "%s answered trial %u (%u/%u)", info.label, trial, info.answered, info.total);
 		if (!info.repeat && info.total && info.answered == info.total)
 			serve_event(sv, "%s completed the session (%u trials)", info.label, info.total);

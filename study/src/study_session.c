@@ -8,6 +8,7 @@
 
 #include "study_select.h"
 #include "study_session.h"
+#include "study_telemetry.h"
 
 /* Made on first use, so that a study file made before sessions existed still opens read-only elsewhere (status,
  * tally). last_idx/last_answer: the answer this session stored last (a retry of it is recognised). */
@@ -20,8 +21,10 @@ static void fill_info(sty *s, int64_t pid, sty_session_info *info)
 {
 	sqlite3_stmt *st;
 	if (sqlite3_prepare_v2(s->db,
-			       "SELECT label, (SELECT count(*) FROM answers WHERE participant = ?1),"
-			       " (SELECT count(*) FROM trials WHERE participant = ?1) FROM participants WHERE id = ?1", -1, &st,
+			       "SELECT label, (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL) -"
+			       " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers WHERE"
+			       " participant = ?1)), (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL)"
+			       " FROM participants WHERE id = ?1", -1, &st,
 			       NULL))
 		return;
 	sqlite3_bind_int64(st, 1, pid);
@@ -83,7 +86,7 @@ int sty_session_start(sty *s, const char *code, char session[33], sty_session_in
 
 /* Within the caller's transaction: the session check, the answer, the session's memory of it. */
 static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t trial, int64_t answer, int64_t rt_ms,
-			     sty_session_info *info, char *err, size_t err_size)
+			     const sty_telemetry *tm, sty_session_info *info, char *err, size_t err_size)
 {
 	sqlite3_stmt *st;
 	if (sqlite3_exec(s->db, SESSIONS, NULL, NULL, NULL) != SQLITE_OK ||
@@ -110,6 +113,8 @@ static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t 
 		info->repeat = true;
 		return TL_OK;
 	}
+	if (!rc && tm)
+		rc = sty_telemetry_store(s, pid, trial, tm, info->broken, sizeof info->broken, err, err_size);
 	if (rc)
 		return rc;
 	if (sqlite3_prepare_v2(s->db, "UPDATE sessions SET last_idx = ?, last_answer = ? WHERE participant = ?", -1, &st, NULL))
@@ -123,7 +128,7 @@ static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t 
 }
 
 int sty_session_answer(sty *s, const char *code, const char *session, uint32_t trial, int64_t answer, int64_t rt_ms,
-		       sty_session_info *info, char *err, size_t err_size)
+		       const sty_telemetry *tm, sty_session_info *info, char *err, size_t err_size)
 {
 	memset(info, 0, sizeof *info);
 	if (answer < -2 || answer > 2)
@@ -141,8 +146,10 @@ int sty_session_answer(sty *s, const char *code, const char *session, uint32_t t
 		 * stored already) waits for that commit too: its first request may still be waiting for it. */
 		rc = sty_batch_join(s, err, err_size);
 		if (!rc)
-			rc = session ? answer_in_session(s, pid, session, trial, answer, rt_ms, info, err, err_size)
+			rc = session ? answer_in_session(s, pid, session, trial, answer, rt_ms, tm, info, err, err_size)
 				     : sty_select_answer(s, pid, trial, answer, rt_ms, err, err_size);
+		if (!rc && !session && tm)
+			rc = sty_telemetry_store(s, pid, trial, tm, info->broken, sizeof info->broken, err, err_size);
 		rc = sty_batch_leave(s, rc, true, err, err_size);
 	}
 	if (pid >= 0)

@@ -19,6 +19,7 @@ typedef struct sty_session_info {
 	bool restart;             /* sty_session_start: the link had a session already (a reload or another browser) */
 	bool repeat;              /* sty_session_answer: this session had stored this very answer already (a retry) */
 	bool superseded;          /* sty_session_answer: TL_ERR_CONFLICT because a newer session took the link over */
+	char broken[48];          /* sty_session_answer with telemetry: why the playback was broken ("": it was not) */
 } sty_session_info;
 
 /* Starts a new session for the participant behind `code` (a random 128-bit id in `session`, stored in the sessions
@@ -29,9 +30,12 @@ int sty_session_start(sty *s, const char *code, char session[33], sty_session_in
 /* Stores an answer as sty_answer does (study.h), for session `session` (NULL: no session check, the API without one).
  * With a session: TL_ERR_CONFLICT with info->superseded when it is not the link's current session; TL_OK with
  * info->repeat when this session stored exactly this answer to this trial already (a retried request whose reply
- * was lost); TL_ERR_CONFLICT for any other answered trial. */
+ * was lost); TL_ERR_CONFLICT for any other answered trial. `tm` (NULL: none) is the page's playback telemetry, stored
+ * with the answer; a broken playback is stored, not counted, and retaken (study_telemetry.h; info->broken). Progress
+ * (info->answered, total) counts planned trials: a broken trial retaken is not one more. */
+struct sty_telemetry;
 int sty_session_answer(sty *s, const char *code, const char *session, uint32_t trial, int64_t answer, int64_t rt_ms,
-		       sty_session_info *info, char *err, size_t err_size);
+		       const struct sty_telemetry *tm, sty_session_info *info, char *err, size_t err_size);
 
 /* Blinding by size: every clip of a scene x camera path (the clips of the conditions sharing a reference clip) is
  * served at one byte length, that of the largest plus STY_PAD_MIN_B, the difference filled by the container's own

@@ -211,17 +211,28 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 {
 	memset(d, 0, sizeof *d);
 	sqlite3_stmt *st;
-	/* Screening from catch trials. */
+	/* Screening from catch trials (answers of broken playbacks left out: study_telemetry.h), and the P.910-crowd
+	 * screening (ITU-T P.808 / P.910 crowdsourcing, as the P.808 toolkit applies them to CCR): a hidden-reference
+	 * (catch) answer outside -1..1 fails the gold question; the test answers' sample variance below 0.1 is
+	 * straightlining. The test answers are the raw ones the participant chose (A much better .. B much better). */
 	if (sqlite3_prepare_v2(s->db,
-			       "SELECT p.id, p.label, count(a.answer), avg(abs(a.answer)), sum(abs(a.answer) = 2)"
+			       "SELECT p.id, p.label, count(a.answer), avg(abs(a.answer)), sum(abs(a.answer) = 2),"
+			       " (SELECT count(*) FROM answers b WHERE b.participant = p.id AND b.broken IS NOT NULL),"
+			       " (SELECT count(*) || ',' || coalesce(sum(b.answer), 0) || ',' || coalesce(sum(b.answer * b.answer), 0)"
+			       "  FROM answers b JOIN trials u ON u.participant = b.participant AND u.idx = b.idx"
+			       "  WHERE b.participant = p.id AND u.kind = 'test' AND b.broken IS NULL)"
 			       " FROM participants p LEFT JOIN trials t ON t.participant = p.id AND t.kind = 'catch'"
-			       " LEFT JOIN answers a ON a.participant = t.participant AND a.idx = t.idx GROUP BY p.id ORDER BY p.id",
+			       " LEFT JOIN answers a ON a.participant = t.participant AND a.idx = t.idx AND a.broken IS NULL"
+			       " GROUP BY p.id ORDER BY p.id",
 			       -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "tally");
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int64_t pid = sqlite3_column_int64(st, 0);
 		int n = sqlite3_column_int(st, 2), strong = sqlite3_column_int(st, 4);
 		int flag = n > 0 && 2 * strong > n;
+		long long tn = 0, sx = 0, sxx = 0;
+		if (sscanf((const char *)sqlite3_column_text(st, 6), "%lld,%lld,%lld", &tn, &sx, &sxx) != 3)
+			tn = 0;
 		sty_observer *no = realloc(res->observers, (res->observer_count + 1) * sizeof *no);
 		if (!no) {
 			sqlite3_finalize(st);
@@ -236,7 +247,11 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 		ob->catch_mean_abs = n ? sqlite3_column_double(st, 3) : NAN;
 		ob->catch_much_better = strong;
 		ob->flagged = flag;
-		if (flag && !td->keep_flagged) {
+		ob->broken = sqlite3_column_int(st, 5);
+		ob->rating_variance = tn >= 2 ? ((double)sxx - (double)sx * (double)sx / (double)tn) / (double)(tn - 1) : NAN;
+		ob->p910 = (strong > 0 ? STY_P910_GOLD : 0u) |
+			   (tn >= 2 && ob->rating_variance < STY_P910_MIN_VARIANCE ? STY_P910_VARIANCE : 0u);
+		if ((flag || (td->p910 && ob->p910)) && !td->keep_flagged) {
 			int64_t *nf = realloc(d->flagged, (d->nflagged + 1) * sizeof *nf);
 			if (nf) {
 				d->flagged = nf;
@@ -248,7 +263,7 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 	if (sqlite3_prepare_v2(s->db,
 			       "SELECT a.participant, c.method, c.T, c.scene, c.camera, c.camera_motion, t.ref_first, a.answer, c.period"
 			       " FROM answers a JOIN trials t ON t.participant = a.participant AND t.idx = a.idx"
-			       " JOIN conditions c ON c.id = t.condition WHERE t.kind = 'test' ORDER BY a.participant, t.idx",
+			       " JOIN conditions c ON c.id = t.condition WHERE t.kind = 'test' AND a.broken IS NULL ORDER BY a.participant, t.idx",
 			       -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "tally");
 	while (sqlite3_step(st) == SQLITE_ROW) {

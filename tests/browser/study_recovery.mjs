@@ -51,9 +51,9 @@ const statusText = page => page.evaluate(() => {
 async function answered(code) { return (await (await fetch(`${base}/api/${code}/trial`)).json()).answered; }
 // Answers the trial on the ask panel by key and waits for what comes next.
 async function answerNow(page, key) {
-  const before = await page.locator('#progress').textContent();
-  await page.keyboard.press(key);
-  await page.waitForFunction(b => document.getElementById('progress').textContent !== b ||
+  const before = await page.evaluate(() => document.body.dataset.trial);    // the trial's index (a retake
+  await page.keyboard.press(key);                                            // keeps the progress text)
+  await page.waitForFunction(b => document.body.dataset.trial !== b ||
     ['done', 'problem'].some(id => getComputedStyle(document.getElementById(id)).display === 'block'), before, { timeout: 30000 });
 }
 
@@ -205,7 +205,8 @@ try {
   if (rows[1][0] !== 'P002' || Number(rows[1][4]) < 2) fail('status page, participant 2 (two restarts expected): ' + JSON.stringify(rows[1]));
   // P001 answered its catch trial "much better" or not: the page shows what the tally's screening says
   const obs = spawnSync(taslab, ['study', 'tally', '--db', db, '--out', `${work}/tally`, '--keep-flagged', '--bootstrap', '10'], { encoding: 'utf8' });
-  const flaggedP1 = /\nP001,[^\n]*,1\n/.test(require_file(`${work}/tally/observers.csv`));
+  const obsLines = require_file(`${work}/tally/observers.csv`).trim().split('\n'), fcol = obsLines[0].split(',').indexOf('flagged');
+  const flaggedP1 = obsLines.some(l => l.startsWith('P001,') && l.split(',')[fcol] === '1');
   if (obs.status !== 0 || rows[0][5] !== (flaggedP1 ? 'yes' : 'no')) fail(`status page flags P001 '${rows[0][5]}', the tally: ${flaggedP1}`);
   const anon = await fetch(`${base}/admin/status`);
   if (anon.status !== 401) fail(`/admin/status without the token: ${anon.status}`);

@@ -39,10 +39,10 @@ try {
       await page.waitForFunction(() => getComputedStyle(document.getElementById('break')).display !== 'block');
       continue;
     }
-    const before = await page.locator('#progress').textContent();
-    await page.keyboard.press(String(1 + (answered % 5)));
+    const before = await page.evaluate(() => document.body.dataset.trial);   // the trial's index (progress
+    await page.keyboard.press(String(1 + (answered % 5)));                     // stays when it is retaken)
     answered++;
-    await page.waitForFunction(b => document.getElementById('progress').textContent !== b ||
+    await page.waitForFunction(b => document.body.dataset.trial !== b ||
       getComputedStyle(document.getElementById('done')).display === 'block', before, { timeout: 30000 });
     if (answered === 2 && !reloaded) {          // reload midway: the session resumes where it was
       reloaded = true;
@@ -54,14 +54,17 @@ try {
   // The admin token travels in a header (never in the URL); without it the export is refused.
   const refused = (await fetch(`${base}/admin/export.csv?token=${token}`)).status;
   const csv = await (await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } })).text();
-  const all = csv.trim().split('\n').slice(1);               // every answered trial, typed (issue 27.9)
-  const rows = all.filter(r => r.split(',')[12] === 'test');
+  const lines = csv.trim().split('\n'), broken = lines[0].split(',').indexOf('broken');
+  const all = lines.slice(1);                                // every answered trial, typed (issue 27.9)
+  // a trial whose playback the server judged broken (issue 28) is stored, not counted, and came again
+  const counted = all.filter(r => r.split(',')[broken] === '');
+  const rows = counted.filter(r => r.split(',')[12] === 'test');
   const trials = new Set(all.map(r => r.split(',').slice(0, 2).join(',')));
-  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${all.length} rows, ${rows.length} test ratings, ${trials.size} distinct`);
-  if (all.length !== state.total || trials.size !== all.length) { console.error('the export does not hold every answered trial once'); status = 1; }
+  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${all.length} rows (${all.length - counted.length} broken playbacks), ${rows.length} test ratings, ${trials.size} distinct`);
+  if (broken < 0 || counted.length !== state.total || trials.size !== all.length) { console.error('the export does not hold every answered trial once'); status = 1; }
   if (refused !== 401) { console.error(`export with ?token= answered ${refused}, expected 401`); status = 1; }
   if (!clipUrls.length || clipUrls.some(u => !/^\/clips\/[0-9a-f]{32}\.webm$/.test(u))) { console.error('clip URLs not opaque: ' + clipUrls.join(' ')); status = 1; }
-  if (!state.done || state.answered !== state.total || answered !== state.total || rows.length !== expected)
+  if (!state.done || state.answered !== state.total || answered !== all.length || rows.length !== expected)
     status = 1;
 } catch (e) {
   console.error('study_session: ' + String(e.message || e).split('\n')[0]);

@@ -177,7 +177,8 @@ int sty_import_long(sty *s, const char *path, size_t *rows, char *err, size_t er
  * value, without files, and the files from such a value: study_result.h. */
 typedef struct sty_tally_desc {
 	const char *out;
-	bool keep_flagged;        /* keep observers flagged by the catch-trial screening */
+	bool keep_flagged;        /* keep observers flagged by the catch-trial screening (and by P.910's with p910) */
+	bool p910;                /* also leave out observers flagged by the P.910-crowd screening (study_result.h) */
 	uint32_t bootstrap;       /* bootstrap resamples for JOD intervals (default 1000) */
 	uint64_t seed;            /* bootstrap seed */
 	bool no_plot;             /* skip the Fig. 3 plot (gnuplot; tests and fuzzing) */

@@ -77,7 +77,17 @@ typedef struct sty_observer {
 	double catch_mean_abs;       /* mean |answer| over them (NAN when none) */
 	int catch_much_better;       /* answers with |a| = 2 */
 	bool flagged;                /* more than half of them |a| = 2 */
+	int broken;                  /* answers stored from broken playbacks (not counted; README "Telemetry") */
+	double rating_variance;      /* sample variance of the counted test answers (NAN: fewer than two) */
+	unsigned p910;               /* P.910-crowd screening flags: STY_P910_GOLD | STY_P910_VARIANCE (0: passed) */
 } sty_observer;
+
+/* P.910-crowd screening (ITU-T P.808 crowdsourcing rules as the P.808 toolkit applies them to CCR; README
+ * "Telemetry and screening"): GOLD, a hidden-reference (catch) answer outside -1..1; VARIANCE, the test answers'
+ * sample variance below STY_P910_MIN_VARIANCE (the same answer throughout). */
+#define STY_P910_GOLD 1u
+#define STY_P910_VARIANCE 2u
+#define STY_P910_MIN_VARIANCE 0.1
 
 /* The JND threshold of a method (x period) in one scene and camera path, or pooled over them (issue 28; thresholds.csv):
  * the psychometric fit of study_threshold.h over the rated levels of T (at least two). */
