@@ -213,7 +213,7 @@ static void test_rates_all(void **state)
 	char err[1024];
 	vkdev *dev = tu_lavapipe();
 	scene *s = tu_load_scene("vbuf_pan");
-	enum { W = 96, H = 64, F = 3 };
+	enum { W = 64, H = 64, F = 3 };
 	/* README's map of --rates all: index -> w x h */
 	static const uint32_t map[11] = {RATE(4, 4), RATE(4, 4), RATE(4, 2), RATE(2, 4), RATE(2, 2), RATE(2, 2),
 					 RATE(2, 1), RATE(1, 2), RATE(1, 1), RATE(1, 1), RATE(1, 1)};
