@@ -244,5 +244,7 @@ int main(void)
 		cmocka_unit_test(test_fovea),
 		cmocka_unit_test(test_full_setting),
 	};
+	if (getenv("TU_FILTER")) /* iterating on one case: TU_FILTER=test_ramp build-test/tests/test_vbuf */
+		cmocka_set_test_filter(getenv("TU_FILTER"));
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -2,9 +2,9 @@
  * One renderer per variant over the same scene, camera path and size; frame f is rendered by every variant in
  * turn before frame f + 1, so machine noise at any moment hits all variants alike, and each renderer still sees
  * consecutive frames (its cache stays valid). Writes one CSV row per variant and frame:
- *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,allocated,q_mean=M,q_p99=P,<pass>=MS...
+ *   variant,frame,visible,shaded,reused,new,late,gpu_ms_total,allocated,q_mean=M,q_p99=P,q_e8=E,<pass>=MS...
  * q_mean / q_p99: mean and 99th percentile of the max-RGB difference of the display frame against the first
- * variant's (the reference) in the same frame. When a variant is labelled "sa", every row also has sa_e4, sa_e8,
+ * variant's (the reference) in the same frame; q_e8 the fraction of pixels more than 8 code values from it. When a variant is labelled "sa", every row also has sa_e4, sa_e8,
  * sa_e16, sa_e32, sa_e64: the fraction of pixels whose max-RGB difference to sa's frame exceeds T (TAS-METHODS A5:
  * at matched budgets tasa should exceed less often than sau against sa).
  *
@@ -169,10 +169,13 @@ int main(int argc, char **argv)
 			int p99 = 0;
 			for (size_t acc = 0; p99 < 255 && (acc += hist[p99]) * 100 < px * 99;)
 				p99++;
-			fprintf(out, "%s,%u,%lld,%lld,%lld,%lld,%lld,%.4f,%lld,q_mean=%.4f,q_p99=%d", v[i].label, f,
+			size_t e8 = 0; /* exceed_8: pixels more than 8 code values from the reference */
+			for (int k = 9; k < 256; k++)
+				e8 += hist[k];
+			fprintf(out, "%s,%u,%lld,%lld,%lld,%lld,%lld,%.4f,%lld,q_mean=%.4f,q_p99=%d,q_e8=%.6f", v[i].label, f,
 				(long long)st.visible_samples, (long long)st.shaded_samples, (long long)st.reused_samples,
 				(long long)st.new_units, (long long)st.late_samples, st.gpu_ms_total,
-				(long long)st.allocated_samples, sum / (double)px, p99);
+				(long long)st.allocated_samples, sum / (double)px, p99, (double)e8 / (double)px);
 			if (sa_disp) {
 				static const int T[5] = {4, 8, 16, 32, 64};
 				size_t over[5] = {0};

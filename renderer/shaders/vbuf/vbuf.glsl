@@ -16,7 +16,7 @@ layout(std430, set = 1, binding = 2) readonly buffer ObjInfo { uvec4 obj_info[];
 layout(std430, set = 1, binding = 3) buffer List { uvec2 list[]; };                 // samples: x | y << 16, w | h << 8
 // 0 appended this round, 1 listed this round (shade's bound), 2-4 the VkDispatchIndirectCommand of the shade,
 // 5 samples shaded (counted by the shading), 6 pixels interpolated (ads), 7 pixels filled by a copy (resolve),
-// 8 late pixels (--truth), 9 samples listed in the frame (all rounds), 10-15 method counters
+// 8 late pixels (--truth, truth.comp.in), 9 samples listed in the frame (all rounds), 10-15 method counters
 layout(std430, set = 1, binding = 4) buffer Counters { uint count[16]; };
 layout(std430, set = 1, binding = 5) buffer Rates { uint rate[]; };                 // per 16x16 tile: w | h << 8
 layout(set = 1, binding = 6, rgba32ui) uniform readonly uimage2D ids;              // passes/ids.h
@@ -101,6 +101,22 @@ ivec2 vbuf_leader(ivec2 p, uvec2 id, ivec2 size, uvec2 r)
 				return ivec2(x, y);
 		}
 	return p;
+}
+
+// The mean of the pixel centres of the coarse pixel (footprint r) holding p that show the primitive `id` (object + 1,
+// triangle): the centroid location of [V] sec. 3 (BASELINES.md A7 --centroid).
+vec2 vbuf_centroid(ivec2 p, uvec2 id, ivec2 size, uvec2 r)
+{
+	ivec2 o = p - (p % ivec2(r));
+	vec2 sum = vec2(0.0);
+	float n = 0.0;
+	for (int y = o.y; y < o.y + int(r.y); y++)
+		for (int x = o.x; x < o.x + int(r.x); x++)
+			if (x < size.x && y < size.y && imageLoad(ids, ivec2(x, y)).xy == id) {
+				sum += vec2(x, y) + 0.5;
+				n += 1.0;
+			}
+	return n > 0.0 ? sum / n : vec2(p) + 0.5;
 }
 
 // Appends sample (p, footprint r) to the list; every invocation of the workgroup calls it (uniform control flow),

@@ -19,9 +19,17 @@ layout(std430, set = 2, binding = 5) buffer TileDebug { vec4 tile_dbg[]; }; // p
 
 // The palette [P]: indices 0-2 -> 4x4, 3-5 -> 2x2, 6-10 -> 1x1 ([V] sec. 4.1: "index zero denotes a coarse shading
 // rate of 4x4 and index ten a supersampling shading rate of x8"; the rates of Table 5.1 at 1x MSAA).
+// VRS_RATES_ALL (--rates all) [P]: the seven rates of the palette at 1x MSAA in ascending shading density,
+// 0-1 -> 4x4, 2 -> 4x2, 3 -> 2x4, 4-5 -> 2x2, 6 -> 2x1, 7 -> 1x2, 8-10 -> 1x1 (w x h).
 uint vrs_palette(int i)
 {
+#ifdef VRS_RATES_ALL
+	const uint all_rates[11] = uint[11](4u | 4u << 8, 4u | 4u << 8, 4u | 2u << 8, 2u | 4u << 8, 2u | 2u << 8,
+					     2u | 2u << 8, 2u | 1u << 8, 1u | 2u << 8, 1u | 1u << 8, 1u | 1u << 8, 1u | 1u << 8);
+	return all_rates[clamp(i, 0, 10)];
+#else
 	return i <= 2 ? (4u | 4u << 8) : i <= 5 ? (2u | 2u << 8) : (1u | 1u << 8);
+#endif
 }
 
 #endif

@@ -13,6 +13,8 @@ typedef struct ads_options {
 	uint32_t step;
 	bool edge_guard;
 	bool force_reshade;
+	bool truth;
+	float truth_t;
 } ads_options;
 
 static const uint32_t ads_steps[] = {2, 4, 8, 16, 0};
@@ -27,13 +29,14 @@ static const method_option ads_option_table[] = {
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(ads_options, edge_guard)},
 	{.name = "force-reshade", .help = "debug: shade every covered pixel (the path's overhead; equals vref)",
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(ads_options, force_reshade)},
+	VBUF_TRUTH_OPTIONS(ads_options),
 };
 
 static int ads_init(render *r, char *err, size_t err_size)
 {
 	const ads_options *o = (const ads_options *)r->config.values.bytes;
 	vbuf_variant v = {.ads = true, .S = o->threshold, .step = o->step, .edge_guard = o->edge_guard,
-			  .force = o->force_reshade};
+			  .force = o->force_reshade, .truth = o->truth, .truth_t = o->truth_t};
 	return vbuf_family_init(r, &v, err, err_size);
 }
 

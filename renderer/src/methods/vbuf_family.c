@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const vbuf_rate_passes[9] = {"shadow", "ids", "rate", "select", "shade", "resolve", "blend", "display",
-					 "readback"};
-const char *const vbuf_vrs_passes[10] = {"shadow", "ids", "rate", "select", "shade", "history", "resolve", "blend",
-					"display", "readback"};
-const char *const vbuf_ads_passes[7] = {"shadow", "ids", "shade", "resolve", "blend", "display", "readback"};
+const char *const vbuf_rate_passes[10] = {"shadow", "ids",   "rate",    "select",  "shade",
+					  "resolve", "truth", "blend", "display", "readback"};
+const char *const vbuf_vrs_passes[11] = {"shadow", "ids", "rate", "select", "shade", "history", "resolve", "truth",
+					 "blend", "display", "readback"};
+const char *const vbuf_ads_passes[8] = {"shadow", "ids", "shade", "resolve", "truth", "blend", "display", "readback"};
 
 typedef struct vbuf_state {
 	vbuf_variant v;
@@ -28,6 +28,9 @@ int vbuf_family_init(render *r, const vbuf_variant *v, char *err, size_t err_siz
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	r->method_state = s;
 	s->v = *v;
+	s->p.centroid = v->centroid && !v->force;
+	s->p.truth = v->truth;
+	s->p.truth_t = v->truth_t;
 	int rc = vbuf_init(r, &s->p, v->ads, err, err_size);
 	if (!rc && v->rate_init && !v->force)
 		rc = v->rate_init(r, &s->p, v->user, err, err_size);
@@ -85,6 +88,8 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	vbuf_record_resolve(r, p, cmd);
 	render_ts(r, cmd);
+	vbuf_record_truth(r, p, cmd); /* its own interval, left out of the frame time (render.c) */
+	render_ts(r, cmd);
 	vbuf_record_finish(r, cmd);
 }
 
@@ -105,6 +110,7 @@ void vbuf_family_collect(render *r, frame_stats *st)
 	st->visible_units = st->visible_samples;
 	st->shaded_units = st->shaded_samples;
 	st->new_units = -1;
+	st->late_samples = s->v.truth ? (int64_t)c[VBUF_C_LATE] : -1;
 	put_extra(st, "interpolated_samples", s->v.ads ? (double)c[VBUF_C_INTERPOLATED] : 0.0);
 	put_extra(st, "filled_samples", (double)c[VBUF_C_FILLED]);
 	/* the tile-rate histogram of the rates the select read (rate methods; empty for ads) */

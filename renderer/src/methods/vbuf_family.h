@@ -3,9 +3,11 @@
  * uses VBUF_FRAME_OPS.
  *
  * Frame (state slot 0): shadow, ids, rate (rate methods: the method's tile rates; vref: none), select, shade,
- * resolve, blend, display, readback — ads: its select/shade rounds form the one "shade" interval. */
+ * resolve, truth (--truth only; left out of the frame time), blend, display, readback — ads: its select/shade rounds form the one "shade" interval. */
 #ifndef TASLAB_VBUF_FAMILY_H
 #define TASLAB_VBUF_FAMILY_H
+
+#include <stddef.h>
 
 #include "../passes/vbuf.h"
 
@@ -15,6 +17,9 @@ typedef struct vbuf_variant {
 	uint32_t step;      /* ads: the initial grid step s0 (a power of two >= 2) */
 	bool edge_guard;    /* ads: also shade where a neighbour shows another object or the background */
 	bool force;         /* --force-reshade: every covered pixel a 1x1 sample (the path's overhead) */
+	bool centroid;      /* --centroid: rate methods shade at the mean of the primitive's pixel centres */
+	bool truth;         /* --truth: count late_samples, pixels more than truth_t code values from vref's shading */
+	float truth_t;
 	/* rate methods: called at init (after the path exists) and to record the rate pass before the select (NULL:
 	 * the rates stay 1x1); `user` is theirs. */
 	int (*rate_init)(render *r, vbuf_pass *p, void *user, char *err, size_t err_size);
@@ -36,9 +41,17 @@ void vbuf_family_finish(render *r);
 vbuf_pass *vbuf_family_pass(render *r);
 void *vbuf_family_user(render *r);
 
-extern const char *const vbuf_rate_passes[9];
-extern const char *const vbuf_ads_passes[7];
-extern const char *const vbuf_vrs_passes[10]; /* methods with rate_after */
+extern const char *const vbuf_rate_passes[10];
+extern const char *const vbuf_ads_passes[8];
+extern const char *const vbuf_vrs_passes[11]; /* methods with rate_after */
+
+/* The --truth options of every method of the family (TYPE has `bool truth; float truth_t;`). */
+#define VBUF_TRUTH_OPTIONS(TYPE)                                                                                   \
+	{.name = "truth", .help = "also shade every covered pixel as vref does and count those shown more than T from "    \
+				  "it (late_samples; T = --truth-threshold)",                                           \
+	 .type = METHOD_OPT_BOOL, .offset = offsetof(TYPE, truth)},                                                 \
+	{.name = "truth-threshold", .arg = "T", .help = "with --truth: the T of late_samples, in code values",          \
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(TYPE, truth_t), .def = 8, .min = 0, .max = 255}
 
 #define VBUF_FRAME_OPS                                                                                             \
 	.prepare = vbuf_family_prepare, .record = vbuf_family_record, .collect = vbuf_family_collect,                \

@@ -20,6 +20,7 @@ static const char *const kind_define[] = {"CASEDGE", "CASTEXEL", "MAS", "FOVEA",
 
 typedef struct vrs_state {
 	vrs_kind kind;
+	bool rates_all;
 	float gaze[2], inner, outer; /* fovea */
 	vkdev_buffer index, dbg;
 	vkdev_image hc, hc2, hpos, haux;
@@ -36,13 +37,28 @@ typedef struct vrs_state {
 typedef struct vrs_options {
 	bool force_reshade;
 	float gaze_x, gaze_y, inner, outer;
+	bool centroid;
+	uint32_t rates;
+	bool truth;
+	float truth_t;
 } vrs_options;
+
+static const char *const rates_names[] = {"default", "all", NULL};
 
 #define VRS_FORCE                                                                                                  \
 	{.name = "force-reshade", .help = "debug: every tile 1x1 (the path's overhead; equals vref)",                    \
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(vrs_options, force_reshade)}
 
-static const method_option common_table[] = {VRS_FORCE};
+#define VRS_COMMON                                                                                                 \
+	{.name = "centroid", .help = "shade a coarse pixel's primitive at the mean of its covered pixel centres, not at "  \
+				     "the coarse pixel's centre",                                                     \
+	 .type = METHOD_OPT_BOOL, .offset = offsetof(vrs_options, centroid)},                                           \
+	{.name = "rates", .arg = "SET", .help = "palette: default (4x4, 2x2, 1x1) or all (4x4, 4x2, 2x4, 2x2, 2x1, 1x2, "  \
+						"1x1)",                                                               \
+	 .type = METHOD_OPT_CHOICE, .offset = offsetof(vrs_options, rates), .def = 0, .choices = rates_names},          \
+	VBUF_TRUTH_OPTIONS(vrs_options), VRS_FORCE
+
+static const method_option common_table[] = {VRS_COMMON};
 static const method_option fovea_table[] = {
 	{.name = "gaze-x", .arg = "X", .help = "gaze point, fraction of the width from the left",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, gaze_x), .def = 0.5, .min = 0, .max = 1},
@@ -52,7 +68,7 @@ static const method_option fovea_table[] = {
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, inner), .def = 10, .min = 0, .max = 180},
 	{.name = "outer", .arg = "DEG", .help = "eccentricity up to which tiles shade at 2x2, beyond at 4x4 (degrees)",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(vrs_options, outer), .def = 20, .min = 0, .max = 180},
-	VRS_FORCE,
+	VRS_COMMON,
 };
 
 static int fovea_check(const void *options, char *err, size_t err_size)
@@ -76,8 +92,8 @@ static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *ou
 
 static int make_compute(render *r, vrs_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
 {
-	char defs[64];
-	snprintf(defs, sizeof defs, "#define %s 1\n", kind_define[s->kind]);
+	char defs[96];
+	snprintf(defs, sizeof defs, "#define %s 1\n%s", kind_define[s->kind], s->rates_all ? "#define VRS_RATES_ALL 1\n" : "");
 	return render_compute_defs(r, path, defs, s->layout, out, err, err_size);
 }
 
@@ -233,10 +249,12 @@ static int vrs_init(render *r, vrs_kind kind, char *err, size_t err_size)
 	if (!s)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	s->kind = kind;
+	s->rates_all = o->rates == 1;
 	if (kind == VRS_FOVEA) {
 		s->gaze[0] = o->gaze_x, s->gaze[1] = o->gaze_y, s->inner = o->inner, s->outer = o->outer;
 	}
-	vbuf_variant v = {.force = o->force_reshade, .rate_init = vrs_rate_init, .rate_prepare = vrs_rate_prepare,
+	vbuf_variant v = {.force = o->force_reshade, .centroid = o->centroid, .truth = o->truth, .truth_t = o->truth_t,
+			  .rate_init = vrs_rate_init, .rate_prepare = vrs_rate_prepare,
 			  .rate_record = vrs_rate_record, .rate_after = vrs_rate_after, .rate_finish = vrs_rate_finish,
 			  .user = s};
 	return vbuf_family_init(r, &v, err, err_size);

@@ -94,14 +94,16 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 	const char *mode = ads ? "#define ADS 1\n" : "";
 	/* TASLAB_VBUF_GRADIENTS=analytic (diagnostic, README "Compacted sample path"): analytic texture gradients */
 	const char *g = getenv("TASLAB_VBUF_GRADIENTS");
-	char shade_defs[96];
-	snprintf(shade_defs, sizeof shade_defs, "%s%s", mode,
-		 g && !strcmp(g, "analytic") ? "#define VBUF_ANALYTIC_GRADIENTS 1\n" : "");
+	char shade_defs[128];
+	snprintf(shade_defs, sizeof shade_defs, "%s%s%s", mode,
+		 g && !strcmp(g, "analytic") ? "#define VBUF_ANALYTIC_GRADIENTS 1\n" : "",
+		 v->centroid ? "#define VBUF_CENTROID 1\n" : "");
 	if ((rc = vbuf_make_compute(r, v, "vbuf/args.comp.in", "", &v->args, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, "vbuf/shade.comp.in", shade_defs, &v->shade, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, "vbuf/resolve.comp.in", mode, &v->resolve, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, ads ? "vbuf/ads_select.comp.in" : "vbuf/select.comp.in", "",
-				    ads ? &v->ads_select : &v->select, err, err_size)))
+				    ads ? &v->ads_select : &v->select, err, err_size)) ||
+	    (v->truth && (rc = vbuf_make_compute(r, v, "vbuf/truth.comp.in", shade_defs, &v->truth_pipe, err, err_size))))
 		return rc;
 	/* the samples image starts at 0 in GENERAL layout */
 	VkCommandBuffer cmd;
@@ -121,8 +123,8 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 void vbuf_finish(render *r, vbuf_pass *v)
 {
 	VkDevice d = r->dev->device;
-	VkPipeline p[5] = {v->select, v->args, v->shade, v->resolve, v->ads_select};
-	for (int i = 0; i < 5; i++)
+	VkPipeline p[6] = {v->select, v->args, v->shade, v->resolve, v->ads_select, v->truth_pipe};
+	for (int i = 0; i < 6; i++)
 		if (p[i])
 			vkDestroyPipeline(d, p[i], NULL);
 	if (v->layout)
@@ -213,6 +215,18 @@ void vbuf_record_resolve(render *r, vbuf_pass *v, VkCommandBuffer cmd)
 		       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
 	vbuf_bind(r, v, cmd, v->resolve, 0, NULL);
 	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	vbuf_barrier(cmd);
+}
+
+void vbuf_record_truth(render *r, vbuf_pass *v, VkCommandBuffer cmd)
+{
+	if (v->truth_pipe) {
+		uint32_t aux[4] = {0, 0, 0, 0};
+		memcpy(&aux[0], &v->truth_t, sizeof aux[0]);
+		vbuf_bind(r, v, cmd, v->truth_pipe, 0, aux);
+		vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+		vbuf_barrier(cmd);
+	}
 	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
 			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
 			    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,

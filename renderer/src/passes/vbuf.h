@@ -29,6 +29,11 @@ enum {
 
 typedef struct vbuf_pass {
 	bool ads;
+	/* set by the caller before vbuf_init: --centroid (the shade pass samples at the mean of the primitive's pixel
+	 * centres in the coarse pixel, BASELINES.md A7) and --truth (the truth pass, late pixels at more than truth_t
+	 * code values from vref's shading, BASELINES.md section 0) */
+	bool centroid, truth;
+	float truth_t;
 	ids_pass ids;
 	vkdev_buffer objinfo, list, counters, rates;
 	vkdev_image svals;           /* RGBA16F: shaded values at leader pixels (ads: and the interpolated ones) */
@@ -36,7 +41,7 @@ typedef struct vbuf_pass {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set;
 	VkPipelineLayout layout;     /* sets 0 (scene) and 1 (this), push constants gpu_push */
-	VkPipeline select, args, shade, resolve, ads_select;
+	VkPipeline select, args, shade, resolve, ads_select, truth_pipe;
 } vbuf_pass;
 
 /* `ads`: the ads select pass instead of the rate select; `shade_defs`: extra #defines of the shade pass. */
@@ -59,8 +64,11 @@ void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd);
 void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard);
 /* The indirect shade of the list the last select built. */
 void vbuf_record_shade(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t slot);
-/* The HDR target cleared to the sky, the resolve, and the target made a colour attachment again (for BLEND). */
+/* The HDR target cleared to the sky and the resolve (the target stays GENERAL). */
 void vbuf_record_resolve(render *r, vbuf_pass *v, VkCommandBuffer cmd);
+/* With --truth the truth pass (truth.comp.in: counts VBUF_C_LATE); then, always, the HDR target made a colour
+ * attachment again (for BLEND). */
+void vbuf_record_truth(render *r, vbuf_pass *v, VkCommandBuffer cmd);
 /* The end of a frame on the path, after the method's last pass and its timestamp: BLEND objects composited over the
  * HDR target (in COLOR_ATTACHMENT_OPTIMAL), display, readback, each closed by a timestamp. */
 void vbuf_record_finish(render *r, VkCommandBuffer cmd);

@@ -1,0 +1,419 @@
+/* test_vrs_checks.c — more acceptance checks of the compacted sample path (BASELINES.md A7, section 0 and C) on
+ * lavapipe with the validation layer (any message fails), each with its expectation computed here:
+ *  V4  castexel on a fronto-parallel checker: rho = 1 texel per pixel -> r 10; rho = sqrt(N) -> r 8 (rho from the
+ *      camera height, field of view, uv scale and texture size; td, P' and r by Alg. 4.4's formulas);
+ *  V5  taas: flat -> t 0, r 0, every tile 4x4 from frame 1, frames equal vref; checker1 -> t = sqrt(3)/2 (a CPU
+ *      replica of the tile mean from the previous frame's display values), r 9, index 10, stays 1x1;
+ *  --rates all: mas on the pan at v = 16, 14, 12, 10, 8 px/frame reaches indices 2, 3, 4, 6, 7 = 4x2, 2x4, 2x2, 2x1,
+ *      1x2 (README's map); shaded = the CPU count of distinct (coarse pixel, object, triangle); frames equal vref;
+ *  --centroid: on the linear ramp with every tile 4x4 (fovea, 0 degrees), every pixel shows the mean of vref over
+ *      its (coarse pixel, primitive) group within 1 code value; without --centroid some group is off by more than 2;
+ *  --truth: vref counts 0 late (and its frames do not change); on checker1 fovea's late pixels are exactly the
+ *      covered pixels of its coarse tiles, ads@0's exactly the odd (x + y) pixels (interpolated from the other
+ *      colour); both equal the CPU count of pixels more than T from vref. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_vk.h"
+
+#include "../renderer/src/methods/method_debug.h"
+#include "taslab/colour.h"
+#include "taslab/render.h"
+#include "taslab/scene.h"
+#include "taslab/tl_math.h"
+#include "taslab/vkdev.h"
+
+#define RATE(w, h) ((uint32_t)(w) | (uint32_t)(h) << 8)
+
+static void frame_of(render *r, uint32_t f, frame_image *img, frame_stats *st)
+{
+	char err[1024];
+	if (render_frame(r, f, img, st, err, sizeof err))
+		fail_msg("frame %u: %s", f, err);
+}
+
+static float half_to_float(uint16_t h)
+{
+	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
+	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
+	return h & 0x8000u ? -v : v;
+}
+
+/* ---- V4 ---- */
+
+static void castexel_case(vkdev *dev, scene *s, double height)
+{
+	enum { W = 64, H = 64, F = 2 };
+	const double uv_per_metre = 1.0; /* tests/data/vbuf_checker1.json: uv_scale 1 */
+	scene_camera *cam = &s->cameras[0];
+	cam->keys[0].position.y = (float)height;
+	double N = s->texture_size, pixel = 2.0 * height * tan(cam->fov_deg * TLM_PI / 360.0) / H;
+	double rho = N * uv_per_metre * pixel;
+	double td = fmin(1.0, fmax(0.0, 0.5 + log2(rho) / (2.0 * log2(N))));
+	double P = 1.0 - (2.0 * td - 1.0) * (2.0 * td - 1.0);
+	int r_want = (int)fmin(10.0, fmax(0.0, floor(P * 11.0 + 1e-9)));
+	render *r = tu_render_open(dev, s, 0, "castexel", NULL, NULL, W, H, false);
+	for (uint32_t f = 0; f < F; f++) {
+		frame_image img;
+		frame_stats st;
+		frame_of(r, f, &img, &st);
+	}
+	uint32_t tx, ty;
+	const int32_t *S;
+	const float *dbg = vrs_debug_tiles(r, &S, &tx, &ty);
+	printf("V4: height %g: rho %.4f, td %.4f, P' %.4f (tile 0: %.4f), r %d\n", height, rho, td, P, (double)dbg[0], r_want);
+	for (uint32_t t = 0; t < tx * ty; t++) {
+		if (fabs(dbg[4 * t] - P) > 1e-3 || dbg[4 * t + 1] != (float)r_want)
+			fail_msg("height %g tile %u: P' %g r %g, expected %g, %d", height, t, (double)dbg[4 * t],
+				 (double)dbg[4 * t + 1], P, r_want);
+		assert_int_equal(S[t], 10); /* max(r, clamp(10, r - 1, r + 2)) */
+	}
+	render_destroy(&r);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+}
+
+static void test_castexel(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("vbuf_checker1");
+	castexel_case(dev, s, 2.0); /* rho = 1: td 1/2, P' 1 -> r 10 */
+	castexel_case(dev, s, 8.0); /* rho = 4 = sqrt(16): td 3/4, P' 3/4 -> r 8 */
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* ---- V5 ---- */
+
+/* taas' tile mean of t on a static view from the display image of the previous frame (rate 1x1 there: level
+ * L = 1, the 2x2 block mean; c_p = the pixel itself). */
+static double taas_tile(const uint8_t *disp, int W, int H, int tile_x, int tile_y)
+{
+	double sum = 0;
+	int n = 0;
+	for (int y = tile_y * 16; y < tile_y * 16 + 16 && y < H; y++)
+		for (int x = tile_x * 16; x < tile_x * 16 + 16 && x < W; x++) {
+			double t2 = 0;
+			for (int c = 0; c < 3; c++) {
+				double m = 0, m2 = 0;
+				int bx = x - x % 2, by = y - y % 2, k = 0;
+				for (int yy = by; yy < by + 2; yy++)
+					for (int xx = bx; xx < bx + 2; xx++)
+						if (xx < W && yy < H) {
+							double v = disp[4 * ((size_t)yy * W + xx) + c] / 255.0;
+							m += v, m2 += v * v, k++;
+						}
+				m /= k, m2 /= k;
+				double sd = fmax(sqrt(fmax(m2 - m * m, 0.0)), 0.5 / 255.0);
+				double d = fabs(disp[4 * ((size_t)y * W + x) + c] / 255.0 - m) / (2.0 * sd);
+				t2 += d * d;
+			}
+			sum += sqrt(t2);
+			n++;
+		}
+	return sum / n;
+}
+
+static void test_taas(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	enum { W = 64, H = 64, F = 3 };
+	/* checker1: t = sqrt(3)/2, r 9, stays 1x1 */
+	scene *s = tu_load_scene("vbuf_checker1");
+	render *r = tu_render_open(dev, s, 0, "taas", NULL, NULL, W, H, false);
+	uint8_t *prev = malloc((size_t)W * H * 4);
+	for (uint32_t f = 0; f < F; f++) {
+		frame_image img;
+		frame_stats st;
+		frame_of(r, f, &img, &st);
+		if (f > 0) {
+			uint32_t tx, ty;
+			const int32_t *S;
+			const float *dbg = vrs_debug_tiles(r, &S, &tx, &ty);
+			const uint32_t *rates = vbuf_debug_rates(r);
+			for (uint32_t t = 0; t < tx * ty; t++) {
+				double want = taas_tile(prev, W, H, (int)(t % tx), (int)(t / tx));
+				if (fabs(dbg[4 * t] - want) > 2e-3 || fabs(want - sqrt(3.0) / 2.0) > 1e-3)
+					fail_msg("checker1 frame %u tile %u: t %g, CPU %g, sqrt(3)/2 %g", f, t, (double)dbg[4 * t], want,
+						 sqrt(3.0) / 2.0);
+				assert_true(dbg[4 * t + 1] == 9.0f);
+				assert_int_equal(S[t], 10);
+				assert_int_equal(rates[t], RATE(1, 1));
+			}
+			if (f == 1)
+				printf("V5: checker1 t %.4f (sqrt(3)/2 = %.4f), r %g\n", (double)dbg[0], sqrt(3.0) / 2.0, (double)dbg[1]);
+		}
+		memcpy(prev, img.display_rgba, (size_t)W * H * 4);
+	}
+	free(prev);
+	render_destroy(&r);
+	scene_destroy(&s);
+	/* flat: t = 0, r 0, index 2 (4x4) from frame 1, frames equal vref */
+	s = tu_load_scene("vbuf_flat");
+	tu_clip v = tu_render_clip(dev, s, 0, "vref", NULL, NULL, W, H, F, false);
+	r = tu_render_open(dev, s, 0, "taas", NULL, NULL, W, H, false);
+	for (uint32_t f = 0; f < F; f++) {
+		frame_image img;
+		frame_stats st;
+		frame_of(r, f, &img, &st);
+		assert_int_equal(tu_max_diff(img.display_rgba, v.disp[f], (size_t)W * H), 0);
+		if (f == 0)
+			continue;
+		uint32_t tx, ty;
+		const int32_t *S;
+		const float *dbg = vrs_debug_tiles(r, &S, &tx, &ty);
+		const uint32_t *rates = vbuf_debug_rates(r);
+		for (uint32_t t = 0; t < tx * ty; t++) {
+			assert_true(dbg[4 * t] == 0.0f && dbg[4 * t + 1] == 0.0f);
+			assert_int_equal(S[t], 2);
+			assert_int_equal(rates[t], RATE(4, 4));
+		}
+		assert_true(st.shaded_samples < st.visible_samples / 8);
+	}
+	render_destroy(&r);
+	tu_clip_free(&v);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* ---- --rates all ---- */
+
+static int64_t cpu_distinct(const uint32_t *ids, const uint32_t *rates, int W, int H)
+{
+	int tx = (W + 15) / 16;
+	int64_t n = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			const uint32_t *id = ids + 4 * ((size_t)y * W + x);
+			if (!id[0])
+				continue;
+			uint32_t code = rates[(y / 16) * tx + x / 16];
+			int rw = (int)(code & 0xFF), rh = (int)(code >> 8 & 0xFF), ox = x - x % rw, oy = y - y % rh;
+			bool first = true;
+			for (int yy = oy; yy <= y && first; yy++)
+				for (int xx = ox; xx < ox + rw && first; xx++) {
+					if (yy == y && xx >= x)
+						break;
+					const uint32_t *o = ids + 4 * ((size_t)yy * W + xx);
+					if (xx < W && o[0] == id[0] && o[1] == id[1])
+						first = false;
+				}
+			n += first;
+		}
+	return n;
+}
+
+static void test_rates_all(void **state)
+{
+	(void)state;
+	char err[1024];
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("vbuf_pan");
+	enum { W = 64, H = 64, F = 3 };
+	/* README's map of --rates all: index -> w x h */
+	static const uint32_t map[11] = {RATE(4, 4), RATE(4, 4), RATE(4, 2), RATE(2, 4), RATE(2, 2), RATE(2, 2),
+					 RATE(2, 1), RATE(1, 2), RATE(1, 1), RATE(1, 1), RATE(1, 1)};
+	const double vs[] = {16, 14, 12, 10, 8};
+	scene_camera *cam = &s->cameras[0];
+	double speed = fabs((double)cam->keys[1].position.x - cam->keys[0].position.x) / (cam->keys[1].t - cam->keys[0].t);
+	double ppm = H / (2.0 * cam->keys[0].position.y);
+	uint32_t *ids = malloc((size_t)W * H * 16);
+	const char *opts[] = {"rates=all", NULL};
+	int seen[11] = {0};
+	/* the floor fills the view in every frame of the pan and is one colour: vref's frame is the same at any v */
+	tu_clip v = tu_render_clip(dev, s, 0, "vref", NULL, NULL, W, H, 1, false);
+	for (size_t k = 0; k < sizeof vs / sizeof vs[0]; k++) {
+		s->fps = (float)(speed * ppm / vs[k]);
+		/* mas: m_c = m_p = v / 16 tiles per frame, P' = 1 - v / 16 */
+		int r_want = (int)floor(11.0 * (1.0 - vs[k] / 16.0) + 1e-9);
+		int idx = r_want + 2 < 10 ? r_want + 2 : 10;
+		render *r = tu_render_open(dev, s, 0, "mas", opts, NULL, W, H, false);
+		for (uint32_t f = 0; f < F; f++) {
+			frame_image img;
+			frame_stats st;
+			frame_of(r, f, &img, &st);
+			assert_int_equal(tu_max_diff(img.display_rgba, v.disp[0], (size_t)W * H), 0); /* flat: any rate = vref */
+			assert_int_equal(st.visible_samples, W * H);
+			const uint32_t *rates = vbuf_debug_rates(r);
+			assert_int_equal(vbuf_debug_ids(r, ids, err, sizeof err), TL_OK);
+			assert_int_equal(st.shaded_samples, cpu_distinct(ids, rates, W, H));
+			if (f < 2)
+				continue;
+			uint32_t tx, ty;
+			const int32_t *S;
+			const float *dbg = vrs_debug_tiles(r, &S, &tx, &ty);
+			int reached = 0;
+			for (uint32_t t = 0; t < tx * ty; t++) {
+				if (dbg[4 * t + 3] >= 0.0f && dbg[4 * t + 1] != (float)r_want)
+					fail_msg("v %g tile %u: r %g, expected %d", vs[k], t, (double)dbg[4 * t + 1], r_want);
+				if (S[t] == 10)
+					continue; /* no source reached it */
+				reached++;
+				if (S[t] != idx || rates[t] != map[idx])
+					fail_msg("v %g tile %u: index %d rate %#x, expected %d %#x", vs[k], t, S[t], rates[t], idx, map[idx]);
+			}
+			assert_true(reached >= (int)(tx * ty) / 2);
+			seen[idx] = 1;
+			printf("rates all: v %g -> r %d, index %d, rate %ux%u, shaded %lld of %lld\n", vs[k], r_want, idx,
+			       map[idx] & 0xFF, map[idx] >> 8, (long long)st.shaded_samples, (long long)st.visible_samples);
+		}
+		render_destroy(&r);
+	}
+	tu_clip_free(&v);
+	assert_true(seen[2] && seen[3] && seen[4] && seen[6] && seen[7]); /* 4x2, 2x4, 2x2, 2x1, 1x2 */
+	free(ids);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* ---- --centroid ---- */
+
+/* The largest difference (code values of the raw display, from the HDR values) between a pixel of clip `c` and the
+ * mean of vref's values over the pixel's (4x4 coarse pixel, object, triangle) group. */
+static double group_error(const tu_clip *c, const tu_clip *v, const uint32_t *ids, int W, int H)
+{
+	double worst = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			const uint32_t *id = ids + 4 * ((size_t)y * W + x);
+			if (!id[0])
+				continue;
+			double mean = 0;
+			int n = 0;
+			for (int yy = y - y % 4; yy < y - y % 4 + 4 && yy < H; yy++)
+				for (int xx = x - x % 4; xx < x - x % 4 + 4 && xx < W; xx++) {
+					const uint32_t *o = ids + 4 * ((size_t)yy * W + xx);
+					if (o[0] == id[0] && o[1] == id[1]) {
+						mean += half_to_float(v->hdr[0][4 * ((size_t)yy * W + xx)]);
+						n++;
+					}
+				}
+			mean /= n;
+			double got = half_to_float(c->hdr[0][4 * ((size_t)y * W + x)]);
+			worst = fmax(worst, fabs(got - mean) * 255.0);
+		}
+	return worst;
+}
+
+static void test_centroid(void **state)
+{
+	(void)state;
+	char err[1024];
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("vbuf_ramp");
+	colour *raw = tu_raw_colour();
+	enum { W = 65, H = 65 };
+	const char *coarse[] = {"inner=0", "outer=0", NULL}, *cen[] = {"inner=0", "outer=0", "centroid", NULL};
+	tu_clip v = tu_render_clip(dev, s, 0, "vref", NULL, raw, W, H, 1, false);
+	tu_clip a = tu_render_clip(dev, s, 0, "fovea", coarse, raw, W, H, 1, false);
+	render *r = tu_render_open(dev, s, 0, "fovea", cen, raw, W, H, false);
+	frame_image img;
+	frame_stats st;
+	frame_of(r, 0, &img, &st);
+	tu_clip c = tu_render_clip(dev, s, 0, "fovea", cen, raw, W, H, 1, false);
+	uint32_t *ids = malloc((size_t)W * H * 16);
+	assert_int_equal(vbuf_debug_ids(r, ids, err, sizeof err), TL_OK);
+	const uint32_t *rates = vbuf_debug_rates(r);
+	for (uint32_t t = 0; t < 25; t++)
+		assert_int_equal(rates[t], RATE(4, 4));
+	double ec = group_error(&c, &v, ids, W, H), ea = group_error(&a, &v, ids, W, H);
+	printf("centroid: worst pixel vs its group's vref mean %.3f code values (centre sampling %.3f); shaded %lld\n", ec,
+	       ea, (long long)c.st[0].shaded_samples);
+	assert_true(ec <= 1.0);
+	assert_true(ea > 2.0); /* the check sees where the sample is */
+	assert_int_equal(c.st[0].shaded_samples, a.st[0].shaded_samples);
+	assert_int_equal(c.st[0].shaded_samples, cpu_distinct(ids, rates, W, H));
+	free(ids);
+	render_destroy(&r);
+	tu_clip_free(&v);
+	tu_clip_free(&a);
+	tu_clip_free(&c);
+	colour_destroy(&raw);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* ---- --truth ---- */
+
+static int64_t cpu_late(const uint8_t *a, const uint8_t *b, const uint16_t *hdr, int W, int H, int T)
+{
+	int64_t n = 0;
+	for (size_t i = 0; i < (size_t)W * H; i++)
+		n += half_to_float(hdr[4 * i + 3]) != 0.0f && tu_max_diff(a + 4 * i, b + 4 * i, 1) > T;
+	return n;
+}
+
+static void test_truth(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	enum { W = 64, H = 64 };
+	/* vref: 0 late, frames unchanged by the diagnostic, its interval left out of the frame time */
+	scene *m = tu_load_scene("scenes/moderate.json");
+	const char *truth0[] = {"truth", "truth-threshold=0", NULL};
+	tu_clip v0 = tu_render_clip(dev, m, 0, "vref", NULL, NULL, 48, 32, 2, false);
+	tu_clip v1 = tu_render_clip(dev, m, 0, "vref", truth0, NULL, 48, 32, 2, false);
+	tu_assert_same_frames(&v0, &v1, true);
+	for (uint32_t f = 0; f < 2; f++) {
+		assert_int_equal(v0.st[f].late_samples, -1);
+		assert_int_equal(v1.st[f].late_samples, 0);
+		double sum = 0;
+		for (uint32_t p = 0; p < v1.st[f].pass_count; p++)
+			if (strcmp(v1.st[f].pass_names[p], "truth"))
+				sum += v1.st[f].gpu_ms[p];
+		assert_true(fabs(sum - v1.st[f].gpu_ms_total) < 1e-6 * (1 + sum));
+	}
+	tu_clip_free(&v0);
+	tu_clip_free(&v1);
+	scene_destroy(&m);
+	/* checker1: fovea's coarse tiles are all late, ads@0's odd pixels are */
+	scene *s = tu_load_scene("vbuf_checker1");
+	tu_clip v = tu_render_clip(dev, s, 0, "vref", NULL, NULL, W, H, 1, false);
+	const char *fo[] = {"inner=25", "outer=40", "truth", NULL}; /* three rings at 64x64, 90 degrees */
+	render *r = tu_render_open(dev, s, 0, "fovea", fo, NULL, W, H, false);
+	frame_image img;
+	frame_stats st;
+	frame_of(r, 0, &img, &st);
+	const uint32_t *rates = vbuf_debug_rates(r);
+	int64_t coarse = 0;
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++)
+			coarse += rates[(y / 16) * (W / 16) + x / 16] != RATE(1, 1);
+	int64_t by_cpu = cpu_late(img.display_rgba, v.disp[0], v.hdr[0], W, H, 8);
+	printf("truth: fovea late %lld, covered pixels of coarse tiles %lld, CPU %lld\n", (long long)st.late_samples,
+	       (long long)coarse, (long long)by_cpu);
+	assert_true(coarse > 0 && coarse < W * H);
+	assert_int_equal(st.late_samples, coarse);
+	assert_int_equal(st.late_samples, by_cpu);
+	render_destroy(&r);
+	const char *ad[] = {"truth", NULL};
+	tu_clip a = tu_render_clip(dev, s, 0, "ads@0", ad, NULL, W, H, 1, false);
+	int64_t odd = (int64_t)W * H / 2;
+	by_cpu = cpu_late(a.disp[0], v.disp[0], v.hdr[0], W, H, 8);
+	printf("truth: ads@0 late %lld, odd pixels %lld, CPU %lld\n", (long long)a.st[0].late_samples, (long long)odd,
+	       (long long)by_cpu);
+	assert_int_equal(a.st[0].late_samples, odd);
+	assert_int_equal(a.st[0].late_samples, by_cpu);
+	tu_clip_free(&a);
+	tu_clip_free(&v);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_castexel), cmocka_unit_test(test_taas),  cmocka_unit_test(test_rates_all),
+		cmocka_unit_test(test_centroid), cmocka_unit_test(test_truth),
+	};
+	if (getenv("TU_FILTER")) /* iterating on one case: TU_FILTER=test_truth build-test/tests/test_vrs_checks */
+		cmocka_set_test_filter(getenv("TU_FILTER"));
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
