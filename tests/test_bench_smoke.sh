@@ -24,6 +24,7 @@ smokes=(
   "bench-methods|--size 64x36 --frames 0:3 --paths calm:walk|calm / walk"
   "bench-methods|--set table1 --size 64x36 --frames 0:3 --paths calm:walk|calm / walk"
   "bench-methods|--set vrs --size 64x36 --frames 0:3 --paths calm:fan_shadow|calm / fan_shadow"
+  "bench-methods|--set stereo --size 32x18 --frames 0:2 --paths calm:walk|calm / walk"
   "bench-metrics|--pairs 2 --runs 1 --compute-runs 1|metrics speed"
   "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"
   "bench-study|--participants 3|: 60 test ratings in the database (expected 60)"

@@ -100,12 +100,22 @@ static void test_sweep_stereo(void **state)
 	assert_true(ref_ratio > 1.9 && ref_ratio < 2.1);
 	assert_true(sa_ratio >= 1.0 && sa_ratio <= 2.0 && sa_ratio < ref_ratio);
 	assert_true(csv_value(csv, "ref", 6) == 1.0); /* ref against itself in both */
-	free(csv);
 	snprintf(p, sizeof p, "%s/report/index.html", st);
 	char *page = tu_read_file(p, NULL);
 	assert_non_null(page);
 	assert_non_null(strstr(page, "<section id=\"stereo\">"));
 	assert_non_null(strstr(page, "speedup stereo"));
+	/* the Stereo table: per variant its mono and stereo speedups vs ref side by side, the CSV's numbers */
+	const char *sec = strstr(page, "<section id=\"stereo\">");
+	for (int k = 0; k < 2; k++) {
+		const char *v = k ? "sa" : "ref";
+		char row[256];
+		snprintf(row, sizeof row, "<td class=\"l\">%s</td><td>%.2f×</td><td>%.2f×</td><td>%.2f</td>", v,
+			 csv_value(csv, v, 4), csv_value(csv, v, 5), csv_value(csv, v, 6));
+		if (!strstr(sec, row))
+			fail_msg("the report's Stereo section has no row %s", row);
+	}
+	free(csv);
 	free(page);
 	/* the report's thumbnails of a stereo run are its side-by-side frames */
 	snprintf(p, sizeof p, "find %s/report/img -name '*--ref--*.png' | head -1 > %s/thumb.txt", st, dir);

@@ -3,10 +3,21 @@
 
 #include <stdio.h>
 
+/* A pass boundary. llvmpipe (lavapipe's rasteriser) does not write a timestamp when the command is reached: it bins
+ * the write into its current rasteriser scene, and the value is taken when that scene is next flushed — at the next
+ * barrier, the next timestamp, or a dispatch or copy that touches an attachment of the scene's framebuffer. A compute
+ * pass that binds none of the last render pass's attachments therefore ran before the timestamp that opens it was
+ * taken, and its time went to the pass before (stereo atlas runs: eye 1's visibility pass was the last framebuffer and
+ * the shading binds eye 0's set, so gpu_ms_alloc held the shading and gpu_ms_shade ~0.1 ms; mono was right only
+ * because its shading binds the ids image, its framebuffer's attachment). The execution barrier after the write
+ * flushes the scene there, so the value is taken at the boundary (test_stereo's timestamp probe); on a GPU it only
+ * keeps the passes from overlapping across the boundary, which per-pass times assume anyway. */
 void render_ts(render *r, VkCommandBuffer cmd)
 {
-	if (r->ts_pool)
+	if (r->ts_pool) {
 		vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, r->ts_pool, r->ts_count);
+		render_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
+	}
 	r->ts_count++;
 }
 
