@@ -1,8 +1,9 @@
 // vreuse.glsl - the per-pixel cache of temporal reuse on the compacted sample path (renderer/src/methods/vreuse.c;
 // BASELINES.md A2, A6). Needs common/common.glsl and vbuf/vbuf.glsl first.
 //
-// The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: the colour as
-// shown (before BLEND) and per pixel (object + 1, view distance bits). Compiled per method: RRC_RANDOM,
+// The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: per pixel
+// (object + 1, view distance bits, the colour as shown before BLEND as three halves) in one texel, so that a tap of
+// the lookup is one load (amss and stu keep their colours in cache_col / sub-pixel buffers). Compiled per method: RRC_RANDOM,
 // RRC_INTERLEAVED, WARP, AMSS.
 #ifndef TASLAB_VREUSE_GLSL
 #define TASLAB_VREUSE_GLSL
@@ -17,6 +18,10 @@ layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
+
+// The cache texel of a covered pixel: record (object + 1, view distance bits) and colour (halves, as rgba16f holds it).
+uvec4 vreuse_pack(uvec2 rec, vec3 c) { return uvec4(rec, packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0))); }
+vec3 vreuse_unpack_colour(uvec4 t) { return vec3(unpackHalf2x16(t.z), unpackHalf2x16(t.w).x); }
 
 // The surface point of pixel p from the ids pass (object, triangle, perspective-correct barycentrics).
 vec3 vreuse_point(uvec4 id)
@@ -67,7 +72,7 @@ bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
 		uvec4 rec = imageLoad(cache_rec, q);
 		if (rec.x != object + 1u || abs(uintBitsToFloat(rec.y) - dist) > 0.02 * dist)
 			continue;
-		acc += w * imageLoad(cache_col, q).rgb;
+		acc += w * vreuse_unpack_colour(rec);
 		wsum += w;
 	}
 	if (wsum <= 0.0)

@@ -14,7 +14,7 @@ const char *const vreuse_warp_passes[9] = {"shadow", "depth", "shade", "ids", "w
 
 enum { VREUSE_BINDINGS = 7 };
 /* decide's aux[1] flags */
-enum { FLAG_HAVE_CACHE = 1u, FLAG_STORE_ONLY = 2u };
+enum { FLAG_HAVE_CACHE = 1u };
 
 typedef struct vreuse_state {
 	vreuse_variant v;
@@ -93,6 +93,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 			break;
 		w = (w + 1) / 2, h = (h + 1) / 2;
 	}
+	if (stu) /* stu keeps each pixel's world position and normal there (stu.comp.in) */
+		texels = 2 * (VkDeviceSize)r->desc.width * r->desc.height;
 	VkDevice d = r->dev->device;
 	VkResult res = vkdev_buffer_create(r->dev, texels * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
 					   "vreuse pull-push pyramid", &s->pyr);
@@ -223,10 +225,10 @@ static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 }
 
 /* Pull-push ([S] sec. 3.3): the valid pixels averaged up a pyramid (weights clamped to 1), then pushed down into the
- * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). */
+ * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). decide wrote level 0. */
 static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
-	for (uint32_t l = 0; l < s->levels; l++) {
+	for (uint32_t l = 1; l < s->levels; l++) {
 		uint32_t aux[4] = {l, 0, 0, 0};
 		bind(r, s, cmd, s->pull, aux);
 		uint32_t w = r->desc.width, h = r->desc.height;
@@ -291,8 +293,7 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	ids_pass_record(r, &p->ids, cmd, 0);
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
-	if (s->key) {
-		record_decide(r, s, cmd, frame, FLAG_STORE_ONLY);
+	if (s->key) { /* the cache := the keyframe (its record from the ids, in the same pass) */
 		record_resolve(r, s, cmd);
 	} else {
 		clear_to_sky(r, cmd);
@@ -348,7 +349,7 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	render_ts(r, cmd);
 	vbuf_record_shade(r, p, cmd, 0);
 	render_ts(r, cmd);
-	uint32_t aux[4] = {0, 0, 0, s->have_cache ? 1u : 0u};
+	uint32_t aux[4] = {frame, s->v.period, 0, s->have_cache ? 1u : 0u};
 	bind(r, s, cmd, s->stu_grad, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
