@@ -16,6 +16,8 @@ layout(std430, set = 2, binding = 4) buffer Pyramid { vec4 pyr[]; }; // pull-pus
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
+// warp: the reprojecting visibility pass (vis.frag.in): object + 1, the keyframe position (x, y), its view distance
+layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 
@@ -48,13 +50,11 @@ bool vreuse_project(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, 
 // The cache lookup of TAS-METHODS section 1 (the rule rrc uses): the four taps around f - 0.5, fractions quantised
 // to 1/64 (a static view gives weights exactly 0 and 1: reuse is bit-exact), each tap valid when it holds the same
 // object at a view distance within 2 %, invalid taps weighted 0 and the rest renormalised. False: a miss.
-bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
+bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 {
 	ivec2 size = imageSize(cache_rec);
-	vec2 f;
-	float dist;
 	colour = vec3(0.0);
-	if (!vreuse_project(slot, object, p_obj, size, f, dist))
+	if (any(lessThan(f, vec2(0.0))) || any(greaterThanEqual(f, vec2(size))))
 		return false;
 	vec2 g = f - 0.5;
 	vec2 x0 = floor(g);
@@ -80,11 +80,19 @@ bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
 	colour = wsum == 1.0 ? acc : acc / wsum;
 	return true;
 }
+// The same for the surface point (object, p_obj), projected into the frame of `slot`.
+bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
+{
+	vec2 f;
+	float dist;
+	colour = vec3(0.0);
+	return vreuse_project(slot, object, p_obj, imageSize(cache_rec), f, dist) && vreuse_lookup_at(object, f, dist, colour);
+}
 
 // Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other.
 ivec2 vreuse_level_size(uint l)
 {
-	ivec2 s = imageSize(ids);
+	ivec2 s = imageSize(flags);
 	for (uint k = 0u; k < l; k++)
 		s = (s + 1) / 2;
 	return s;
