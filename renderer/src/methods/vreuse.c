@@ -67,12 +67,14 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 {
 	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
 	size_t vn = 0, fn = 0, mn = 0;
-	int rc = render_compile_defs(r, "vreuse/vis.vert.in", "", SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
+	const char *rec = s->v.mode == VREUSE_WARP ? "" : "#define VIS_RECORD 1\n"; /* rrc: this frame's distance too */
+	char mask[64];
+	snprintf(mask, sizeof mask, "%s#define VIS_ALPHA_MASK 1\n", rec);
+	int rc = render_compile_defs(r, "vreuse/vis.vert.in", rec, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
-		rc = render_compile_defs(r, "vreuse/vis.frag.in", "", SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
+		rc = render_compile_defs(r, "vreuse/vis.frag.in", rec, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
 	if (!rc)
-		rc = render_compile_defs(r, "vreuse/vis.frag.in", "#define VIS_ALPHA_MASK 1\n", SHC_STAGE_FRAGMENT, &fm, &mn,
-					 err, err_size);
+		rc = render_compile_defs(r, "vreuse/vis.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
 	if (!rc) {
 		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
 				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
@@ -168,8 +170,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		if (r2)
 			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
 	}
-	bool warp = v->mode == VREUSE_WARP;
-	VkResult rv = vkdev_image_create(r->dev, warp ? r->desc.width : 1, warp ? r->desc.height : 1, 1, 1,
+	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
+	bool vis = warp || rrc; /* the methods that look up through the reprojecting visibility pass */
+	VkResult rv = vkdev_image_create(r->dev, vis ? r->desc.width : 1, vis ? r->desc.height : 1, 1, 1,
 					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
@@ -219,7 +222,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
 		return rc;
-	if (warp && (rc = make_vis_pipelines(r, s, err, err_size)))
+	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
 	if (amss && ((rc = make_compute(r, s, "vreuse/amss.comp.in", &s->amss, err, err_size)) ||
 		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
@@ -350,7 +353,8 @@ static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
 static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0);
+	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading */
+	record_vis(r, s, cmd, 1);            /* for the lookup (and the record): the previous frame is slot 1 */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
