@@ -171,7 +171,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
 	}
 	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
-	bool vis = warp || rrc; /* the methods that look up through the reprojecting visibility pass */
+	bool vis = warp || rrc || stu; /* the methods that look up through the reprojecting visibility pass */
 	VkResult rv = vkdev_image_create(r->dev, vis ? r->desc.width : 1, vis ? r->desc.height : 1, 1, 1,
 					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
@@ -435,7 +435,8 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0);
+	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading and the windows */
+	record_vis(r, s, cmd, 1);            /* for the lookups (decide, the history) and the record */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
