@@ -1,8 +1,9 @@
 // vreuse.glsl - the per-pixel cache of temporal reuse on the compacted sample path (renderer/src/methods/vreuse.c;
 // BASELINES.md A2, A6). Needs common/common.glsl and vbuf/vbuf.glsl first.
 //
-// The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: the colour as
-// shown (before BLEND) and per pixel (object + 1, view distance bits). Compiled per method: RRC_RANDOM,
+// The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: per pixel
+// (object + 1, view distance bits, the colour as shown before BLEND as three halves) in one texel, so that a tap of
+// the lookup is one load (amss and stu keep their colours in cache_col / sub-pixel buffers). Compiled per method: RRC_RANDOM,
 // RRC_INTERLEAVED, WARP, AMSS.
 #ifndef TASLAB_VREUSE_GLSL
 #define TASLAB_VREUSE_GLSL
@@ -15,8 +16,14 @@ layout(std430, set = 2, binding = 4) buffer Pyramid { vec4 pyr[]; }; // pull-pus
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
+// warp: the reprojecting visibility pass (vis.frag.in): object + 1, the keyframe position (x, y), its view distance
+layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
+
+// The cache texel of a covered pixel: record (object + 1, view distance bits) and colour (halves, as rgba16f holds it).
+uvec4 vreuse_pack(uvec2 rec, vec3 c) { return uvec4(rec, packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0))); }
+vec3 vreuse_unpack_colour(uvec4 t) { return vec3(unpackHalf2x16(t.z), unpackHalf2x16(t.w).x); }
 
 // The surface point of pixel p from the ids pass (object, triangle, perspective-correct barycentrics).
 vec3 vreuse_point(uvec4 id)
@@ -43,13 +50,11 @@ bool vreuse_project(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, 
 // The cache lookup of TAS-METHODS section 1 (the rule rrc uses): the four taps around f - 0.5, fractions quantised
 // to 1/64 (a static view gives weights exactly 0 and 1: reuse is bit-exact), each tap valid when it holds the same
 // object at a view distance within 2 %, invalid taps weighted 0 and the rest renormalised. False: a miss.
-bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
+bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 {
 	ivec2 size = imageSize(cache_rec);
-	vec2 f;
-	float dist;
 	colour = vec3(0.0);
-	if (!vreuse_project(slot, object, p_obj, size, f, dist))
+	if (any(lessThan(f, vec2(0.0))) || any(greaterThanEqual(f, vec2(size))))
 		return false;
 	vec2 g = f - 0.5;
 	vec2 x0 = floor(g);
@@ -67,7 +72,7 @@ bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
 		uvec4 rec = imageLoad(cache_rec, q);
 		if (rec.x != object + 1u || abs(uintBitsToFloat(rec.y) - dist) > 0.02 * dist)
 			continue;
-		acc += w * imageLoad(cache_col, q).rgb;
+		acc += w * vreuse_unpack_colour(rec);
 		wsum += w;
 	}
 	if (wsum <= 0.0)
@@ -75,11 +80,19 @@ bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
 	colour = wsum == 1.0 ? acc : acc / wsum;
 	return true;
 }
+// The same for the surface point (object, p_obj), projected into the frame of `slot`.
+bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
+{
+	vec2 f;
+	float dist;
+	colour = vec3(0.0);
+	return vreuse_project(slot, object, p_obj, imageSize(cache_rec), f, dist) && vreuse_lookup_at(object, f, dist, colour);
+}
 
 // Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other.
 ivec2 vreuse_level_size(uint l)
 {
-	ivec2 s = imageSize(ids);
+	ivec2 s = imageSize(flags);
 	for (uint k = 0u; k < l; k++)
 		s = (s + 1) / 2;
 	return s;

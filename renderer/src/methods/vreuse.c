@@ -12,9 +12,9 @@ const char *const vreuse_rrc_passes[8] = {"shadow", "ids", "decide", "shade", "r
 const char *const vreuse_warp_passes[9] = {"shadow", "depth", "shade", "ids", "warp", "fill", "blend", "display",
 					   "readback"};
 
-enum { VREUSE_BINDINGS = 7 };
+enum { VREUSE_BINDINGS = 8 };
 /* decide's aux[1] flags */
-enum { FLAG_HAVE_CACHE = 1u, FLAG_STORE_ONLY = 2u };
+enum { FLAG_HAVE_CACHE = 1u };
 
 typedef struct vreuse_state {
 	vreuse_variant v;
@@ -22,6 +22,8 @@ typedef struct vreuse_state {
 	vkdev_image cache_col, cache_rec, rec_new, flag;
 	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
+	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
+	render_pipeline vis_pipe, vis_pipe_mask;
 	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
 	uint32_t levels;
 	VkDescriptorSetLayout set_layout;
@@ -59,6 +61,88 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
 	return make_compute_x(r, s, path, "", out, err, err_size);
 }
 
+/* warp's reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
+ * scene's vertices and indices), writing what the lookup needs instead of the ids; MASK objects alpha-tested. */
+static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
+{
+	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
+	size_t vn = 0, fn = 0, mn = 0;
+	const char *rec = s->v.mode == VREUSE_WARP ? "" : "#define VIS_RECORD 1\n"; /* rrc: this frame's distance too */
+	char mask[64];
+	snprintf(mask, sizeof mask, "%s#define VIS_ALPHA_MASK 1\n", rec);
+	int rc = render_compile_defs(r, "vreuse/vis.vert.in", rec, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
+	if (!rc)
+		rc = render_compile_defs(r, "vreuse/vis.frag.in", rec, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
+	if (!rc)
+		rc = render_compile_defs(r, "vreuse/vis.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
+	if (!rc) {
+		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
+				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
+				       .method_set = s->p.ids.set_layout};
+		VkResult res = render_make_graphics(r, &pd, &s->vis_pipe);
+		if (!res) {
+			pd.fs = fm;
+			pd.fs_size = mn;
+			res = render_make_graphics(r, &pd, &s->vis_pipe_mask);
+		}
+		if (res)
+			rc = render_vk_error(err, err_size, "warp: visibility pipeline", res);
+	}
+	free(vs);
+	free(fs);
+	free(fm);
+	return rc;
+}
+
+/* The pass: the image cleared to 0 (background) and the depth target to 1, every opaque and masked object in scene
+ * order with depth LESS_OR_EQUAL (as ids_pass_record, so the same surfaces win and BLEND finds the same depth). */
+static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
+{
+	uint32_t w = r->desc.width, h = r->desc.height;
+	vkdev_barrier_image(cmd, &s->vis, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+	render_depth_discard(r, cmd);
+	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = s->vis.view,
+					.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
+	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
+					.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+					.clearValue = {.depthStencil = {1.0f, 0}}};
+	VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO, .renderArea = {{0, 0}, {w, h}}, .layerCount = 1,
+			      .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da};
+	vkCmdBeginRendering(cmd, &ri);
+	render_set_viewport(cmd, w, h);
+	VkDescriptorSet sets[2] = {r->scene_set, s->p.ids.set};
+	const scene *sc = r->scene;
+	const render_pipeline *bound = NULL;
+	for (size_t i = 0; i < sc->object_count; i++) {
+		const scene_object *o = &sc->objects[i];
+		if (o->mesh < 0 || sc->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND)
+			continue;
+		const render_pipeline *want =
+			sc->materials[o->material].alpha_mode == SCENE_ALPHA_MASK ? &s->vis_pipe_mask : &s->vis_pipe;
+		if (want != bound) {
+			vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->pipeline);
+			vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->layout, 0, 2, sets, 0, NULL);
+			bound = want;
+		}
+		gpu_push pc = {0, (uint32_t)i, (uint32_t)sc->object_count, 0,
+			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], key_slot, w | h << 16}};
+		vkCmdPushConstants(cmd, bound->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+				   sizeof pc, &pc);
+		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+		vkCmdDraw(cmd, sc->meshes[o->mesh].index_count, 1, 0, 0);
+	}
+	vkCmdEndRendering(cmd);
+	vkdev_barrier_image(cmd, &s->vis, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+}
+
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 {
 	vreuse_state *s = calloc(1, sizeof *s);
@@ -86,6 +170,14 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		if (r2)
 			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
 	}
+	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
+	bool vis = warp || rrc || stu; /* the methods that look up through the reprojecting visibility pass */
+	VkResult rv = vkdev_image_create(r->dev, vis ? r->desc.width : 1, vis ? r->desc.height : 1, 1, 1,
+					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
+	if (rv)
+		return render_vk_error(err, err_size, "warp visibility", rv);
 	VkDeviceSize texels = 0;
 	for (s->levels = 1;; s->levels++) {
 		texels += (VkDeviceSize)w * h;
@@ -93,6 +185,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 			break;
 		w = (w + 1) / 2, h = (h + 1) / 2;
 	}
+	if (stu) /* stu keeps each pixel's world position and normal there (stu.comp.in) */
+		texels = 2 * (VkDeviceSize)r->desc.width * r->desc.height;
 	VkDevice d = r->dev->device;
 	VkResult res = vkdev_buffer_create(r->dev, texels * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
 					   "vreuse pull-push pyramid", &s->pyr);
@@ -113,8 +207,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "vreuse: descriptor set", res);
 	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's */
 		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, NULL,
-							    &s->sub[1 - i], &s->sub[i]};
-		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL};
+							    &s->sub[1 - i], &s->sub[i], &s->vis};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL};
 		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
 	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
@@ -127,6 +221,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	    (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
+		return rc;
+	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
 	if (amss && ((rc = make_compute(r, s, "vreuse/amss.comp.in", &s->amss, err, err_size)) ||
 		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
@@ -141,8 +237,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[6] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1]};
-	for (int i = 0; i < 6; i++) {
+	const vkdev_image *im[7] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1], &s->vis};
+	for (int i = 0; i < 7; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -223,10 +319,10 @@ static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 }
 
 /* Pull-push ([S] sec. 3.3): the valid pixels averaged up a pyramid (weights clamped to 1), then pushed down into the
- * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). */
+ * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). decide wrote level 0. */
 static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
-	for (uint32_t l = 0; l < s->levels; l++) {
+	for (uint32_t l = 1; l < s->levels; l++) {
 		uint32_t aux[4] = {l, 0, 0, 0};
 		bind(r, s, cmd, s->pull, aux);
 		uint32_t w = r->desc.width, h = r->desc.height;
@@ -257,7 +353,8 @@ static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
 static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0);
+	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading */
+	record_vis(r, s, cmd, 1);            /* for the lookup (and the record): the previous frame is slot 1 */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
@@ -271,7 +368,6 @@ static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 
 static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
-	vbuf_pass *p = &s->p;
 	if (s->key) { /* ref's depth pre-pass and shading (warp/1 is ref), its counter zeroed first */
 		vkCmdFillBuffer(cmd, r->shade_count.buffer, 0, VK_WHOLE_SIZE, 0);
 		vbuf_barrier(cmd);
@@ -288,11 +384,10 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 		render_stats_begin(r, cmd);
 	}
 	render_ts(r, cmd);
-	ids_pass_record(r, &p->ids, cmd, 0);
+	record_vis(r, s, cmd, s->key ? 0 : 1); /* (on keyframes slot 1 is this frame too) */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
-	if (s->key) {
-		record_decide(r, s, cmd, frame, FLAG_STORE_ONLY);
+	if (s->key) { /* the cache := the keyframe (the record from the vis pass) */
 		record_resolve(r, s, cmd);
 	} else {
 		clear_to_sky(r, cmd);
@@ -340,7 +435,8 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0);
+	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading and the windows */
+	record_vis(r, s, cmd, 1);            /* for the lookups (decide, the history) and the record */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
@@ -348,7 +444,7 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	render_ts(r, cmd);
 	vbuf_record_shade(r, p, cmd, 0);
 	render_ts(r, cmd);
-	uint32_t aux[4] = {0, 0, 0, s->have_cache ? 1u : 0u};
+	uint32_t aux[4] = {frame, s->v.period, 0, s->have_cache ? 1u : 0u};
 	bind(r, s, cmd, s->stu_grad, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
@@ -417,9 +513,11 @@ void vreuse_finish(render *r)
 		vkDestroyPipelineLayout(d, s->layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
-	vkdev_image *im[6] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1]};
-	for (int i = 0; i < 6; i++)
+	vkdev_image *im[7] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1], &s->vis};
+	for (int i = 0; i < 7; i++)
 		vkdev_image_destroy(r->dev, im[i]);
+	render_pipeline_destroy(r, &s->vis_pipe);
+	render_pipeline_destroy(r, &s->vis_pipe_mask);
 	vkdev_buffer_destroy(r->dev, &s->pyr);
 	vbuf_finish(r, &s->p);
 	free(s);
