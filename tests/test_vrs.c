@@ -21,7 +21,7 @@
 #include "taslab/tl_math.h"
 #include "taslab/vkdev.h"
 
-#define RATE(w, h) ((uint32_t)(w) | (uint32_t)(h) << 8)
+#include "test_vrs.h"
 
 static void frame_of(render *r, uint32_t f, frame_image *img, frame_stats *st)
 {
@@ -55,32 +55,6 @@ static void test_full_setting(void **state)
 }
 
 /* ---- V2, V1 (r = 0), B3 ---- */
-
-static int64_t cpu_distinct(const uint32_t *ids, const uint32_t *rates, int W, int H)
-{
-	int tx = (W + 15) / 16;
-	int64_t n = 0;
-	for (int y = 0; y < H; y++)
-		for (int x = 0; x < W; x++) {
-			const uint32_t *id = ids + 4 * ((size_t)y * W + x);
-			if (!id[0])
-				continue;
-			uint32_t code = rates[(y / 16) * tx + x / 16];
-			int rw = (int)(code & 0xFF), rh = (int)(code >> 8 & 0xFF), ox = x - x % rw, oy = y - y % rh;
-			/* counted at the first pixel of the coarse pixel with this (object, triangle) */
-			bool first = true;
-			for (int yy = oy; yy <= y && first; yy++)
-				for (int xx = ox; xx < ox + rw && first; xx++) {
-					if (yy == y && xx >= x)
-						break;
-					const uint32_t *o = ids + 4 * ((size_t)yy * W + xx);
-					if (xx < W && o[0] == id[0] && o[1] == id[1])
-						first = false;
-				}
-			n += first;
-		}
-	return n;
-}
 
 static void test_split(void **state)
 {
@@ -119,7 +93,7 @@ static void test_split(void **state)
 		if (f > 0)
 			assert_true(tu_extra(&st, "tiles_4x4") == (double)(tx * ty));
 		assert_int_equal(vbuf_debug_ids(r, ids, err, sizeof err), TL_OK);
-		assert_int_equal(st.shaded_samples, cpu_distinct(ids, rates, W, H)); /* B3 */
+		assert_int_equal(st.shaded_samples, tu_vrs_cpu_samples(ids, rates, W, H)); /* B3 */
 		if (f > 0)
 			assert_true(st.shaded_samples < st.visible_samples / 8);
 	}

@@ -25,7 +25,7 @@
 #include "taslab/tl_math.h"
 #include "taslab/vkdev.h"
 
-#define RATE(w, h) ((uint32_t)(w) | (uint32_t)(h) << 8)
+#include "test_vrs.h"
 
 static void frame_of(render *r, uint32_t f, frame_image *img, frame_stats *st)
 {
@@ -182,31 +182,6 @@ static void test_taas(void **state)
 
 /* ---- --rates all ---- */
 
-static int64_t cpu_distinct(const uint32_t *ids, const uint32_t *rates, int W, int H)
-{
-	int tx = (W + 15) / 16;
-	int64_t n = 0;
-	for (int y = 0; y < H; y++)
-		for (int x = 0; x < W; x++) {
-			const uint32_t *id = ids + 4 * ((size_t)y * W + x);
-			if (!id[0])
-				continue;
-			uint32_t code = rates[(y / 16) * tx + x / 16];
-			int rw = (int)(code & 0xFF), rh = (int)(code >> 8 & 0xFF), ox = x - x % rw, oy = y - y % rh;
-			bool first = true;
-			for (int yy = oy; yy <= y && first; yy++)
-				for (int xx = ox; xx < ox + rw && first; xx++) {
-					if (yy == y && xx >= x)
-						break;
-					const uint32_t *o = ids + 4 * ((size_t)yy * W + xx);
-					if (xx < W && o[0] == id[0] && o[1] == id[1])
-						first = false;
-				}
-			n += first;
-		}
-	return n;
-}
-
 static void test_rates_all(void **state)
 {
 	(void)state;
@@ -240,7 +215,7 @@ static void test_rates_all(void **state)
 			assert_int_equal(st.visible_samples, W * H);
 			const uint32_t *rates = vbuf_debug_rates(r);
 			assert_int_equal(vbuf_debug_ids(r, ids, err, sizeof err), TL_OK);
-			assert_int_equal(st.shaded_samples, cpu_distinct(ids, rates, W, H));
+			assert_int_equal(st.shaded_samples, tu_vrs_cpu_samples(ids, rates, W, H));
 			if (f < 2)
 				continue;
 			uint32_t tx, ty;
@@ -327,7 +302,7 @@ static void test_centroid(void **state)
 	assert_true(ec <= 1.0);
 	assert_true(ea > 2.0); /* the check sees where the sample is */
 	assert_int_equal(c.st[0].shaded_samples, a.st[0].shaded_samples);
-	assert_int_equal(c.st[0].shaded_samples, cpu_distinct(ids, rates, W, H));
+	assert_int_equal(c.st[0].shaded_samples, tu_vrs_cpu_samples(ids, rates, W, H));
 	free(ids);
 	render_destroy(&r);
 	tu_clip_free(&v);
