@@ -3,6 +3,7 @@
  * (k mod a, floor(k / a)) are refreshed ("for a static scene and camera, interleaving n such images leads to an
  * accurate high resolution image"); misses are shaded too. `--group` applies the pattern to 2x2 or 4x2 blocks.
  * Shaded through the compacted sample path (vreuse.h): a per-pixel pattern defeats stencil rejection on lavapipe. */
+#include "vbuf_family.h" /* VBUF_TRUTH_OPTIONS */
 #include "vreuse.h"
 
 #include <stddef.h>
@@ -10,6 +11,8 @@
 typedef struct rrc_interleaved_options {
 	uint32_t period;
 	uint32_t group;
+	bool truth;
+	float truth_t;
 } rrc_interleaved_options;
 
 static const uint32_t periods[] = {1, 2, 4, 8, 0};
@@ -22,12 +25,14 @@ static const method_option rrc_interleaved_option_table[] = {
 	 .allowed = periods, .variant = '/', .variant_required = true},
 	{.name = "group", .arg = "G", .help = "the pattern's unit: 1 (a pixel), 2x2 or 4x2 blocks",
 	 .type = METHOD_OPT_CHOICE, .offset = offsetof(rrc_interleaved_options, group), .def = 0, .choices = groups},
+	VBUF_TRUTH_OPTIONS(rrc_interleaved_options),
 };
 
 static int rrc_interleaved_init(render *r, char *err, size_t err_size)
 {
 	const rrc_interleaved_options *o = (const rrc_interleaved_options *)r->config.values.bytes;
-	vreuse_variant v = {.mode = VREUSE_RRC_INTERLEAVED, .period = o->period, .group = o->group};
+	vreuse_variant v = {.mode = VREUSE_RRC_INTERLEAVED, .period = o->period, .group = o->group, .truth = o->truth,
+			    .truth_t = o->truth_t};
 	return vreuse_init(r, &v, err, err_size);
 }
 

@@ -4,6 +4,7 @@
  * "gives high-frequency noise, which is usually less objectionable" than tiles' seams. A per-pixel pattern defeats
  * stencil rejection on lavapipe (TAS-METHODS section 8), so the marked set (refresh and misses) is compacted and
  * shaded on the sample path (vreuse.h). */
+#include "vbuf_family.h" /* VBUF_TRUTH_OPTIONS */
 #include "vreuse.h"
 
 #include <stddef.h>
@@ -11,6 +12,8 @@
 typedef struct rrc_random_options {
 	uint32_t period;
 	uint32_t group;
+	bool truth;
+	float truth_t;
 } rrc_random_options;
 
 static const uint32_t periods[] = {1, 2, 4, 8, 0};
@@ -22,12 +25,14 @@ static const method_option rrc_random_option_table[] = {
 	 .allowed = periods, .variant = '/', .variant_required = true},
 	{.name = "group", .arg = "G", .help = "pixels sharing one refresh phase: 1 (each pixel), 2x2 or 4x2 blocks",
 	 .type = METHOD_OPT_CHOICE, .offset = offsetof(rrc_random_options, group), .def = 0, .choices = groups},
+	VBUF_TRUTH_OPTIONS(rrc_random_options),
 };
 
 static int rrc_random_init(render *r, char *err, size_t err_size)
 {
 	const rrc_random_options *o = (const rrc_random_options *)r->config.values.bytes;
-	vreuse_variant v = {.mode = VREUSE_RRC_RANDOM, .period = o->period, .group = o->group};
+	vreuse_variant v = {.mode = VREUSE_RRC_RANDOM, .period = o->period, .group = o->group, .truth = o->truth,
+			    .truth_t = o->truth_t};
 	return vreuse_init(r, &v, err, err_size);
 }
 

@@ -4,12 +4,15 @@
  * upsample S of the 5x5 window's phase samples (world-distance and normal weights, same object):
  * f = c H + (1 - c) S, c = [hit] clamp((8 - D) / 7.5, 0, 1), where D, the "temporal smoothing" of the gradient,
  * is 1/2 D_prev + 1/2 the 5x5 max of g_q = d(s_q, L_q). Shaded on the compacted sample path (vreuse.h). */
+#include "vbuf_family.h" /* VBUF_TRUTH_OPTIONS */
 #include "vreuse.h"
 
 #include <stddef.h>
 
 typedef struct stu_options {
 	uint32_t period;
+	bool truth;
+	float truth_t;
 } stu_options;
 
 static const uint32_t periods[] = {2, 4, 8, 0};
@@ -19,12 +22,13 @@ static const method_option stu_option_table[] = {
 					       "in turn",
 	 .type = METHOD_OPT_UINT, .offset = offsetof(stu_options, period), .def = 4, .allowed = periods, .variant = '/',
 	 .variant_required = true},
+	VBUF_TRUTH_OPTIONS(stu_options),
 };
 
 static int stu_init(render *r, char *err, size_t err_size)
 {
 	const stu_options *o = (const stu_options *)r->config.values.bytes;
-	vreuse_variant v = {.mode = VREUSE_STU, .period = o->period};
+	vreuse_variant v = {.mode = VREUSE_STU, .period = o->period, .truth = o->truth, .truth_t = o->truth_t};
 	return vreuse_init(r, &v, err, err_size);
 }
 

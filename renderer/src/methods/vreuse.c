@@ -8,9 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const vreuse_rrc_passes[8] = {"shadow", "ids", "decide", "shade", "resolve", "blend", "display", "readback"};
-const char *const vreuse_warp_passes[9] = {"shadow", "depth", "shade", "ids", "warp", "fill", "blend", "display",
-					   "readback"};
+const char *const vreuse_rrc_passes[9] = {"shadow", "ids",   "decide",  "shade",   "resolve",
+					 "truth",  "blend", "display", "readback"};
+const char *const vreuse_warp_passes[10] = {"shadow", "depth", "shade", "ids",     "warp",
+					    "fill",   "truth", "blend", "display", "readback"};
 
 enum { VREUSE_BINDINGS = 8 };
 /* decide's aux[1] flags */
@@ -151,6 +152,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	r->method_state = s;
 	s->v = *v;
 	s->last_frame = -1;
+	s->p.truth = v->truth; /* the path's truth pass (vbuf.c), recorded after the method's resolve */
+	s->p.truth_t = v->truth_t;
 	int rc = vbuf_init(r, &s->p, false, err, err_size);
 	if (rc)
 		return rc;
@@ -263,6 +266,8 @@ int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size)
 			s->key_frame = frame;
 		render_update_state(r, 1, (double)s->key_frame / fps);
 		s->shadows = s->key || r->blend_count; /* BLEND surfaces are shaded every frame */
+		if (!s->shadows && s->v.truth) /* the truth shades frame t: its shadow maps, in the truth interval */
+			return render_shadow_plan(r, 0, err, err_size);
 	} else {
 		s->have_cache = consecutive;
 		s->parity ^= 1u;
@@ -350,6 +355,27 @@ static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
 			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 }
 
+/* The "truth" interval (BASELINES.md section 0, left out of the frame time by render.c): with --truth, the path's
+ * truth pass compares what the method shows (the HDR target before BLEND) with vref's shading of every covered
+ * pixel of frame t. warp has no ids of frame t (its vis pass replaces them) and, on extrapolated frames, no shadow
+ * maps of frame t: both are recorded here, so the frame's own intervals are those of the run without --truth. */
+static void record_truth(render *r, vreuse_state *s, VkCommandBuffer cmd)
+{
+	render_ts(r, cmd);
+	if (!s->v.truth) {
+		hdr_to_attachment(r, cmd);
+		return;
+	}
+	if (s->v.mode == VREUSE_WARP) {
+		vbuf_barrier(cmd);
+		if (!s->shadows)
+			render_pass_shadows(r, cmd, 0);
+		ids_pass_record(r, &s->p.ids, cmd, 0);
+	}
+	vbuf_barrier(cmd);
+	vbuf_record_truth(r, &s->p, cmd);
+}
+
 static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
@@ -363,7 +389,7 @@ static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	vbuf_record_shade(r, p, cmd, 0);
 	render_ts(r, cmd);
 	record_resolve(r, s, cmd);
-	hdr_to_attachment(r, cmd);
+	record_truth(r, s, cmd);
 }
 
 static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
@@ -398,7 +424,7 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 		record_fill(r, s, cmd);
 		render_stats_end(r, cmd);
 	}
-	hdr_to_attachment(r, cmd);
+	record_truth(r, s, cmd);
 }
 
 /* amss: every covered pixel shaded once at the frame's sub-pixel offset (k = t mod 4: (-1/4, -1/4), (+1/4, -1/4),
@@ -428,7 +454,7 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
 	record_resolve(r, s, cmd);
-	hdr_to_attachment(r, cmd);
+	record_truth(r, s, cmd);
 }
 
 /* stu: the phase pixels shaded, then the gradient at the phase pixels and the combination of the others. */
@@ -452,7 +478,7 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
 	record_resolve(r, s, cmd);
-	hdr_to_attachment(r, cmd);
+	record_truth(r, s, cmd);
 }
 
 void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)
@@ -494,6 +520,7 @@ void vreuse_collect(render *r, frame_stats *st)
 	st->visible_units = st->visible_samples;
 	st->shaded_units = st->shaded_samples;
 	st->new_units = c[VBUF_C_METHOD]; /* cache misses (rrc: shaded; warp: holes) */
+	st->late_samples = s->v.truth ? (int64_t)c[VBUF_C_LATE] : -1;
 	put_extra(st, "filled_samples", (double)c[VBUF_C_FILLED]);
 	put_extra(st, "listed_samples", (double)c[VBUF_C_LISTED]);
 	put_extra(st, "key_frame", s->v.mode == VREUSE_WARP ? (double)key : NAN);

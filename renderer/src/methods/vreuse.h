@@ -6,10 +6,12 @@
  * (bilinear with per-tap validity, TAS-METHODS section 1) or, for warp, are filled by pull-push.
  *
  * Frame (rrc variants; state slot 0 = t, slot 1 = t-1): shadow, ids, decide (reproject, decide, append; the
- * dispatch arguments), shade (indirect), resolve (shaded values into the HDR target; the cache stored), blend,
+ * dispatch arguments), shade (indirect), resolve (shaded values into the HDR target; the cache stored), truth
+ * (--truth only, vbuf_record_truth; left out of the frame time), blend,
  * display, readback.
  * Frame (warp; slot 1 = the keyframe): key frames are ref's passes (depth pre-pass, shading), then ids and a store
- * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes), blend, display,
+ * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes); then truth
+ * (--truth: this frame's ids, shadows on extrapolated frames, the truth pass), blend, display,
  * readback - no shading of opaque surfaces is launched.
  * Frame (amss; slot 1 = t-1): as the rrc variants, every covered pixel shaded once at the frame's sub-pixel offset;
  * the "resolve" interval combines it with the reprojected 2x2 sub-pixel buffer (amss.comp.in).
@@ -28,6 +30,8 @@ typedef struct vreuse_variant {
 	uint32_t group;  /* rrc variants: 0 per pixel, 1 2x2, 2 4x2 */
 	uint32_t buffers; /* amss: 1 or 4 */
 	float alpha;      /* amss: the weight of the new sample */
+	bool truth;       /* --truth (not amss): count late_samples against vref's shading (vbuf truth pass) */
+	float truth_t;
 } vreuse_variant;
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size);
@@ -36,8 +40,8 @@ void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame);
 void vreuse_collect(render *r, frame_stats *st);
 void vreuse_finish(render *r);
 
-extern const char *const vreuse_rrc_passes[8];
-extern const char *const vreuse_warp_passes[9];
+extern const char *const vreuse_rrc_passes[9];
+extern const char *const vreuse_warp_passes[10];
 
 #define VREUSE_FRAME_OPS                                                                                           \
 	.state_ring = 2, .prepare = vreuse_prepare, .record = vreuse_record, .collect = vreuse_collect, \

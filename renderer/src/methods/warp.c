@@ -4,24 +4,28 @@
  * test) - and fill the disocclusion holes by pull-push ([S] sec. 3.3; `filled_samples`). No shading of opaque
  * surfaces is launched on those frames; warp/1 is ref. [S]: 40 -> 120 Hz "almost indistinguishable from an
  * actually-rendered 120 Hz sequence". vreuse.h. */
+#include "vbuf_family.h" /* VBUF_TRUTH_OPTIONS */
 #include "vreuse.h"
 
 #include <stddef.h>
 
 typedef struct warp_options {
 	uint32_t period;
+	bool truth;
+	float truth_t;
 } warp_options;
 
 static const method_option warp_option_table[] = {
 	{.name = "period", .arg = "N", .help = "shade every N-th frame, extrapolate the others from it (1 equals ref)",
 	 .type = METHOD_OPT_UINT, .offset = offsetof(warp_options, period), .def = 2, .min = 1, .max = 16, .variant = '/',
 	 .variant_required = true},
+	VBUF_TRUTH_OPTIONS(warp_options),
 };
 
 static int warp_init(render *r, char *err, size_t err_size)
 {
 	const warp_options *o = (const warp_options *)r->config.values.bytes;
-	vreuse_variant v = {.mode = VREUSE_WARP, .period = o->period};
+	vreuse_variant v = {.mode = VREUSE_WARP, .period = o->period, .truth = o->truth, .truth_t = o->truth_t};
 	return vreuse_init(r, &v, err, err_size);
 }
 
