@@ -288,8 +288,10 @@ static void test_slow_clients(void **state)
 	fprintf(stderr, "deadlines of 2 s: trickled head closed after %.2f s, trickled body after %.2f s; server: %llu head, "
 			"%llu body timeouts\n",
 		head_closed, body_closed, (unsigned long long)st.head_timeouts, (unsigned long long)st.body_timeouts);
-	assert_true(head_closed >= 2.0 && head_closed < 4.0);
-	assert_true(body_closed >= 2.0 && body_closed < 4.0);
+	/* the server's 2 s run from its accept, the client's clock from just after its connect returned: a close
+	 * measured a few ms under 2 s (seen: 2.00 printed, the assertion failing under load) is still the deadline */
+	assert_true(head_closed >= 1.9 && head_closed < 4.0);
+	assert_true(body_closed >= 1.9 && body_closed < 4.0);
 	assert_int_equal(st.head_timeouts, 1);
 	assert_int_equal(st.body_timeouts, 1);
 	/* and an ordinary participant still gets an answer */

@@ -140,7 +140,9 @@ try {
   if (!(await panel(page, 'done'))) fail('participant 1 did not reach the end');
   if (!sawBreakDown || !sawClipKill) fail(`scenarios not reached (break with server down ${sawBreakDown}, clip kill ${sawClipKill})`);
   const state1 = await (await fetch(`${base}/api/${codes[0]}/trial`)).json();
-  if (!state1.done || state1.answered !== acknowledged)
+  // a playback the server judges broken (frames dropped on a loaded machine) is stored, not counted, and retaken, so
+  // the page may acknowledge more answers than the plan counts; the status page below counts every stored answer
+  if (!state1.done || state1.answered !== state1.total || acknowledged < state1.total)
     fail(`participant 1: server holds ${state1.answered}/${state1.total} answers, the page had ${acknowledged} acknowledged`);
   console.log(`participant 1: ${acknowledged} answers, the server killed twice (at a break, at a clip download); server ${state1.answered}/${state1.total}`);
 
@@ -200,7 +202,7 @@ try {
     null, { timeout: 20000 });
   const rows = await st.$$eval('#participants tbody tr', trs => trs.map(tr => [...tr.children].map(td => td.textContent)));
   await st.screenshot({ path: `${work}/status.png`, fullPage: true });
-  if (rows[0][0] !== 'P001' || !rows[0][1].startsWith(`${state1.total}/${state1.total}`) || rows[0][2] !== 'yes')
+  if (rows[0][0] !== 'P001' || !rows[0][1].startsWith(`${acknowledged}/${acknowledged}`) || rows[0][2] !== 'yes')
     fail('status page, participant 1: ' + JSON.stringify(rows[0]));
   if (rows[1][0] !== 'P002' || Number(rows[1][4]) < 2) fail('status page, participant 2 (two restarts expected): ' + JSON.stringify(rows[1]));
   // P001 answered its catch trial "much better" or not: the page shows what the tally's screening says
