@@ -54,18 +54,30 @@ try {
   // The admin token travels in a header (never in the URL); without it the export is refused.
   const refused = (await fetch(`${base}/admin/export.csv?token=${token}`)).status;
   const csv = await (await fetch(`${base}/admin/export.csv`, { headers: { authorization: `Bearer ${token}` } })).text();
-  const lines = csv.trim().split('\n'), broken = lines[0].split(',').indexOf('broken');
-  const all = lines.slice(1);                                // every answered trial, typed (issue 27.9)
-  // a trial whose playback the server judged broken (issue 28) is stored, not counted, and came again
-  const counted = all.filter(r => r.split(',')[broken] === '');
-  const rows = counted.filter(r => r.split(',')[12] === 'test');
-  const trials = new Set(all.map(r => r.split(',').slice(0, 2).join(',')));
-  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${all.length} rows (${all.length - counted.length} broken playbacks), ${rows.length} test ratings, ${trials.size} distinct`);
-  if (broken < 0 || counted.length !== state.total || trials.size !== all.length) { console.error('the export does not hold every answered trial once'); status = 1; }
+  const [head, ...lines] = csv.trim().split('\n');
+  const cols = head.split(',');
+  const all = lines.map(l => Object.fromEntries(l.split(',').map((v, i) => [cols[i], v])));   // every answered trial
+  // A playback the server judged broken (issue 28: frames dropped on a loaded machine) is stored, not counted, and
+  // comes again as a retake (retake_of = the planned trial) at most twice; training trials are not retaken. So: every
+  // planned trial once, each retake of a planned trial whose earlier playback was broken, at most one counted answer
+  // per planned trial, and the planned test trials are the design's.
+  const planned = all.filter(r => r.retake_of === ''), retakes = all.filter(r => r.retake_of !== '');
+  const counted = all.filter(r => r.broken === '');
+  const tests = planned.filter(r => r.trial_type === 'test');
+  const distinct = new Set(all.map(r => r.participant + ',' + r.trial));
+  const once = new Set(counted.map(r => r.retake_of || r.trial));
+  const badRetake = retakes.find(r => !all.some(o => (o.trial === r.retake_of || o.retake_of === r.retake_of) &&
+                                                    Number(o.trial) < Number(r.trial) && o.broken !== ''));
+  console.log(`answered ${answered} in the browser (reloaded once, ${breaks} break(s)), ${clipUrls.length} clip downloads; server: ${state.answered}/${state.total} done=${state.done}; export: ${all.length} rows (${all.length - counted.length} broken playbacks, ${retakes.length} retakes), ${tests.length} test trials, ${distinct.size} distinct`);
+  if (!('broken' in (all[0] || {})) || !('retake_of' in (all[0] || {})) || planned.length !== state.total ||
+      distinct.size !== all.length || once.size !== counted.length || badRetake) {
+    console.error('the export does not hold every answered trial once'); status = 1;
+  }
   if (refused !== 401) { console.error(`export with ?token= answered ${refused}, expected 401`); status = 1; }
   if (!clipUrls.length || clipUrls.some(u => !/^\/clips\/[0-9a-f]{32}\.webm$/.test(u))) { console.error('clip URLs not opaque: ' + clipUrls.join(' ')); status = 1; }
-  if (!state.done || state.answered !== state.total || answered !== all.length || rows.length !== expected)
-    status = 1;
+  if (!state.done || state.answered !== state.total || answered !== all.length || tests.length !== expected) {
+    console.error(`expected ${expected} test trials, every one answered`); status = 1;
+  }
 } catch (e) {
   console.error('study_session: ' + String(e.message || e).split('\n')[0]);
   if (globalThis.dumpState) console.error((await globalThis.dumpState().catch(() => [])).join('\n'));
