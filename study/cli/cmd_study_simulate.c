@@ -10,7 +10,7 @@
 
 typedef struct simulate_opts {
 	const char *design, *t_levels, *out;
-	uint32_t participants, trials, studies;
+	uint32_t participants, trials, studies, jobs;
 	double t_jnd, observer_sd, slope, lapse, ties;
 	uint64_t seed;
 } simulate_opts;
@@ -39,6 +39,8 @@ static const cli_opt simulate_options[] = {
 	 .type = CLI_UINT, .offset = offsetof(simulate_opts, studies), .lo = 1, .hi = 1000000},
 	{.name = "seed", .arg = "K", .help = "seed (study k uses K + k; default 1)",
 	 .type = CLI_U64, .offset = offsetof(simulate_opts, seed), .lo = 0, .hi = 1e18},
+	{.name = "jobs", .arg = "N", .help = "studies fitted at a time (default: one per CPU; the output is the same for any N)",
+	 .type = CLI_UINT, .offset = offsetof(simulate_opts, jobs), .lo = 1, .hi = 256},
 	{.name = "out", .arg = "DIR", .help = "folder for simulation.csv (one row per study)",
 	 .type = CLI_STRING, .offset = offsetof(simulate_opts, out)},
 	{0},
@@ -93,7 +95,7 @@ static int simulate_main(void *opts, cli_ctx *ctx)
 	sty_sim_desc d = {.adaptive = !strcmp(design, "adaptive"), .participants = o->participants,
 			  .trials = o->trials ? o->trials : (uint32_t)n, .T = T, .nlevels = n, .t_jnd = o->t_jnd,
 			  .observer_sd = o->observer_sd, .slope = o->slope, .lapse = o->lapse, .ties = o->ties,
-			  .studies = o->studies, .seed = o->seed, .out = o->out};
+			  .studies = o->studies, .seed = o->seed, .out = o->out, .jobs = o->jobs};
 	sty_sim_summary s;
 	if ((rc = sty_simulate(&d, &s, ctx->err, sizeof ctx->err)))
 		return rc;
@@ -108,7 +110,7 @@ const cli_command cli_cmd_study_simulate = {
 	.name = "study simulate",
 	.summary = "seeded simulated studies: the threshold fit's RMSE and interval coverage, full vs adaptive design",
 	.synopsis = "taslab study simulate [--design full|adaptive] [--participants P] [--trials N] [--t-levels 2,4,8,16,32,64] "
-		    "[--t-jnd X] [--observer-sd S] [--slope B] [--lapse L] [--ties F] [--studies M] [--seed K] [--out DIR]",
+		    "[--t-jnd X] [--observer-sd S] [--slope B] [--lapse L] [--ties F] [--studies M] [--seed K] [--jobs N] [--out DIR]",
 	.description = "Observers with a known psychometric function (log2 thresholds normal around --t-jnd with SD "
 		       "--observer-sd) answer on the five-point scale; trials are chosen as 'study design' (full) or "
 		       "'study serve' (adaptive) would, each study is fitted as 'study tally' fits thresholds.csv. Prints one "

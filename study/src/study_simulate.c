@@ -8,13 +8,20 @@
  * reference with p = sty_psychometric(log2 T, log2 t_jnd + u_i, slope, lapse). Ties: P(same) = ties * (1 - |2p - 1|),
  * the rest split so that P(ref) + P(same)/2 = p (the tally's p_ref is unchanged); a preference is "much better" with
  * probability |2p - 1|. Participants come one after another (a lab study); in the adaptive design each trial's T is
- * chosen from the answers of everyone so far. */
+ * chosen from the answers of everyone so far.
+ *
+ * Studies are independent (study k is seeded with seed + k), so they run on d->jobs threads, each taking the next
+ * study number; the rows and the summary are written in study order afterwards: the output does not depend on the
+ * number of threads. */
 #include <gsl/gsl_randist.h>
 #include <gsl/gsl_rng.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "taslab/study_threshold.h"
 #include "taslab/tl_error.h"
@@ -71,6 +78,43 @@ done:
 	return rc;
 }
 
+/* The studies shared by the threads: each takes the next study number and fits it into fits[k]. */
+typedef struct sim_work {
+	const sty_sim_desc *d;
+	sty_tfit *fits;
+	atomic_uint next, done;
+	atomic_int failed;      /* a study failed (its code in rc, its message in err: the first only) */
+	int rc;
+	pthread_mutex_t lock;   /* err and the progress line */
+	char err[512];
+} sim_work;
+
+static void *sim_worker(void *arg)
+{
+	sim_work *w = arg;
+	const sty_sim_desc *d = w->d;
+	sty_tobs *o = malloc((size_t)d->participants * d->trials * sizeof *o);
+	char err[512];
+	for (;;) {
+		unsigned k = atomic_fetch_add(&w->next, 1);
+		if (k >= d->studies || atomic_load(&w->failed))
+			break;
+		int rc = o ? one_study(d, d->seed + k, o, &w->fits[k], err, sizeof err)
+			   : tl_error(err, sizeof err, TL_ERR_NOMEM, "out of memory");
+		pthread_mutex_lock(&w->lock);
+		if (rc && !atomic_exchange(&w->failed, 1))
+			w->rc = rc, snprintf(w->err, sizeof w->err, "%s", err);
+		unsigned n = atomic_fetch_add(&w->done, 1) + 1;
+		if (!rc && !d->quiet && d->studies >= 20 && n % (d->studies / 10) == 0)
+			fprintf(stderr, "taslab study simulate: %u of %u studies\n", n, d->studies);
+		pthread_mutex_unlock(&w->lock);
+		if (rc)
+			break;
+	}
+	free(o);
+	return NULL;
+}
+
 static void csv_num(FILE *f, double v)
 {
 	if (isnan(v))
@@ -118,17 +162,30 @@ int sty_simulate(const sty_sim_desc *d, sty_sim_summary *sum, char *err, size_t 
 			return rc;
 		fprintf(out.f, "study,design,trials,t_jnd_true,t_jnd,t_jnd_lo,t_jnd_hi,log2_t_jnd,slope,lapse,observer_sd\n");
 	}
-	sty_tobs *o = malloc((size_t)d->participants * d->trials * sizeof *o);
-	if (!o) {
+	sim_work w = {.d = d, .fits = calloc(d->studies, sizeof *w.fits)};
+	if (!w.fits || pthread_mutex_init(&w.lock, NULL)) {
+		free(w.fits);
 		tl_atomic_abort(&out);
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 	}
+	long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+	unsigned jobs = d->jobs ? d->jobs : cpus > 0 ? (unsigned)cpus : 1;
+	jobs = jobs > d->studies ? d->studies : jobs > 256 ? 256 : jobs;
+	pthread_t th[256];
+	unsigned started = 0;
+	for (unsigned j = 1; j < jobs; j++) /* this thread is the first worker; fewer threads if the system says no */
+		if (!pthread_create(&th[started], NULL, sim_worker, &w))
+			started++;
+	sim_worker(&w);
+	for (unsigned j = 0; j < started; j++)
+		pthread_join(th[j], NULL);
+	pthread_mutex_destroy(&w.lock);
+	if (atomic_load(&w.failed))
+		rc = tl_error(err, err_size, w.rc, "%s", w.err);
 	double truth = log2(d->t_jnd), se = 0, bias = 0, width = 0;
 	uint32_t covered = 0;
 	for (uint32_t k = 0; k < d->studies && !rc; k++) {
-		sty_tfit f;
-		if ((rc = one_study(d, d->seed + k, o, &f, err, err_size)))
-			break;
+		const sty_tfit f = w.fits[k];
 		se += (f.theta - truth) * (f.theta - truth);
 		bias += f.theta - truth;
 		width += f.theta_hi - f.theta_lo;
@@ -141,10 +198,8 @@ int sty_simulate(const sty_sim_desc *d, sty_sim_summary *sum, char *err, size_t 
 			csv_num(out.f, f.t_jnd_hi);
 			fprintf(out.f, ",%.6f,%.6f,%.6f,%.6f\n", f.theta, f.slope, f.lapse, f.observer_sd);
 		}
-		if (!d->quiet && d->studies >= 20 && (k + 1) % (d->studies / 10) == 0)
-			fprintf(stderr, "taslab study simulate: %u of %u studies\n", k + 1, d->studies);
 	}
-	free(o);
+	free(w.fits);
 	if (!rc && out.f)
 		rc = tl_atomic_commit(&out, err, err_size);
 	tl_atomic_abort(&out);

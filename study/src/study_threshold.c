@@ -37,7 +37,7 @@ typedef struct model {
 	size_t np, nl;
 	double *x;         /* log2 T of the levels */
 	double *n, *k;     /* np x nl */
-	double node[NODES], weight[NODES]; /* standard normal quadrature, weights sum to 1 */
+	double node[NODES], log_weight[NODES]; /* standard normal quadrature (weights sum to 1), their logs */
 	double xmin, xmax;
 	double theta_fixed; /* the profile's theta (NAN: free) */
 } model;
@@ -64,7 +64,7 @@ static double loglik(const model *m, double theta, double slope, double lapse, d
 		double lp[NODES], mx = -INFINITY;
 		const double *n = m->n + i * m->nl, *k = m->k + i * m->nl;
 		for (int q = 0; q < NODES; q++) {
-			double s = log(m->weight[q]);
+			double s = m->log_weight[q];
 			for (size_t l = 0; l < m->nl; l++)
 				s += k[l] * lp1[q * m->nl + l] + (n[l] - k[l]) * lp0[q * m->nl + l];
 			lp[q] = s;
@@ -254,7 +254,7 @@ static bool quadrature(model *m)
 		sum += wt[q];
 	for (int q = 0; q < NODES; q++) {
 		m->node[q] = x[q];
-		m->weight[q] = wt[q] / sum;
+		m->log_weight[q] = log(wt[q] / sum);
 	}
 	gsl_integration_fixed_free(w);
 	return true;

@@ -6,7 +6,6 @@
  *   - the statistics (tally, without the plot) run on whatever was accepted without failing.
  * Temporary files live in a private folder (in /dev/shm when there is one: fsync is cheap there). */
 #define _GNU_SOURCE /* mkdtemp, nftw */
-#include <ftw.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,30 +15,14 @@
 
 #include "taslab/study.h"
 #include "../test_study_methods.h"
+#include "fuzz_tmp.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char dir[256];
-
-static int rm_one(const char *p, const struct stat *sb, int flag, struct FTW *ftw)
-{
-	(void)sb, (void)flag, (void)ftw;
-	return remove(p);
-}
-
-static void cleanup(void)
-{
-	if (dir[0])
-		nftw(dir, rm_one, 8, FTW_DEPTH | FTW_PHYS);
-}
 
 static void setup(void)
 {
-	const char *base = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
-	snprintf(dir, sizeof dir, "%s/taslab-fuzz-import-XXXXXX", base);
-	if (!mkdtemp(dir))
-		abort();
-	atexit(cleanup);
+	fuzz_tmp_make("import", NULL);
 }
 
 static void one_line(const char *err)
@@ -100,16 +83,16 @@ static char *slurp(const char *path)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-	if (!dir[0])
+	if (!fuzz_dir[0])
 		setup();
 	char csv[300], db[300], db2[300], e1[300], e2[300], pw[300], out[300], err[1024];
-	snprintf(csv, sizeof csv, "%s/ratings.csv", dir);
-	snprintf(db, sizeof db, "%s/a.db", dir);
-	snprintf(db2, sizeof db2, "%s/b.db", dir);
-	snprintf(e1, sizeof e1, "%s/e1.csv", dir);
-	snprintf(e2, sizeof e2, "%s/e2.csv", dir);
-	snprintf(pw, sizeof pw, "%s/pw.csv", dir);
-	snprintf(out, sizeof out, "%s/tally", dir);
+	snprintf(csv, sizeof csv, "%s/ratings.csv", fuzz_dir);
+	snprintf(db, sizeof db, "%s/a.db", fuzz_dir);
+	snprintf(db2, sizeof db2, "%s/b.db", fuzz_dir);
+	snprintf(e1, sizeof e1, "%s/e1.csv", fuzz_dir);
+	snprintf(e2, sizeof e2, "%s/e2.csv", fuzz_dir);
+	snprintf(pw, sizeof pw, "%s/pw.csv", fuzz_dir);
+	snprintf(out, sizeof out, "%s/tally", fuzz_dir);
 	FILE *f = fopen(csv, "wb");
 	if (!f || fwrite(data, 1, size, f) != size || fclose(f))
 		abort();

@@ -7,7 +7,6 @@
  *     never NaN: a threshold, its interval and the open ends as thresholds.csv writes them.
  * Temporary files live in a private folder (in /dev/shm when there is one). */
 #define _GNU_SOURCE /* mkdtemp, nftw */
-#include <ftw.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -17,32 +16,16 @@
 #include <unistd.h>
 
 #include "taslab/study_model.h"
+#include "fuzz_tmp.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char dir[256];
-
-static int rm_one(const char *p, const struct stat *sb, int flag, struct FTW *ftw)
-{
-	(void)sb, (void)flag, (void)ftw;
-	return remove(p);
-}
-
-static void cleanup(void)
-{
-	if (dir[0])
-		nftw(dir, rm_one, 8, FTW_DEPTH | FTW_PHYS);
-}
 
 static void setup(void)
 {
-	const char *base = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
-	snprintf(dir, sizeof dir, "%s/taslab-fuzz-model-XXXXXX", base);
-	if (!mkdtemp(dir))
-		abort();
-	atexit(cleanup);
+	fuzz_tmp_make("model", NULL);
 	char path[320];
-	snprintf(path, sizeof path, "%s/summary.csv", dir);
+	snprintf(path, sizeof path, "%s/summary.csv", fuzz_dir);
 	FILE *f = fopen(path, "w");
 	if (!f)
 		abort();
@@ -58,17 +41,17 @@ static void setup(void)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-	if (!dir[0])
+	if (!fuzz_dir[0])
 		setup();
 	char in[320], err[1024] = "";
-	snprintf(in, sizeof in, "%s/model.json", dir);
+	snprintf(in, sizeof in, "%s/model.json", fuzz_dir);
 	FILE *f = fopen(in, "wb");
 	if (!f || fwrite(data, 1, size, f) != size || fclose(f))
 		abort();
 	sty_model_pred *p = NULL;
 	size_t n = 0;
 	char metric[64];
-	if (sty_model_predict(in, dir, metric, sizeof metric, &p, &n, err, sizeof err)) {
+	if (sty_model_predict(in, fuzz_dir, metric, sizeof metric, &p, &n, err, sizeof err)) {
 		if (!err[0] || strchr(err, '\n') || !strstr(err, in))
 			__builtin_trap(); /* one line, naming the file */
 		free(p);

@@ -14,7 +14,6 @@
  *   - a file response lies inside its file, and a 206 says which part.
  * Answers stored by one input are deleted before the next, so inputs do not depend on each other. */
 #define _GNU_SOURCE /* mkdtemp, nftw, memmem */
-#include <ftw.h>
 #include <sqlite3.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -26,27 +25,21 @@
 #include "taslab/study.h"
 #include "taslab/study_serve.h"
 #include "../test_study_methods.h"
+#include "fuzz_tmp.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char dir[256], code[2][40], clip[2][64], token[40];
+static char code[2][40], clip[2][64], token[40];
 static sty *study;
 static sty_server *server;
 static sqlite3 *side; /* resets the answers between inputs */
-
-static int rm_one(const char *p, const struct stat *sb, int flag, struct FTW *ftw)
-{
-	(void)sb, (void)flag, (void)ftw;
-	return remove(p);
-}
 
 static void cleanup(void)
 {
 	sty_server_stop(&server);
 	sty_close(&study);
 	sqlite3_close(side);
-	if (dir[0])
-		nftw(dir, rm_one, 8, FTW_DEPTH | FTW_PHYS);
+	fuzz_tmp_remove();
 }
 
 static void quiet(void *cls, const char *line) { (void)cls, (void)line; }
@@ -62,13 +55,9 @@ static void write_file(const char *path, const char *text)
  * participants with training, catch trials and breaks, the server (not listening), and the placeholders' values. */
 static void setup(void)
 {
-	const char *base = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
-	snprintf(dir, sizeof dir, "%s/taslab-fuzz-serve-XXXXXX", base);
-	if (!mkdtemp(dir))
-		abort();
-	atexit(cleanup);
+	fuzz_tmp_make("serve", cleanup);
 	char p[512], stim[300], err[1024];
-	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	snprintf(stim, sizeof stim, "%s/stimuli", fuzz_dir);
 	mkdir(stim, 0755);
 	const char *sets[2][2] = {{"still", "stationary"}, {"walk", "moving"}};
 	for (int i = 0; i < 2; i++) {
@@ -153,7 +142,7 @@ static void check(const sty_request *rq, const sty_response *r, const uint8_t *d
 {
 	if (r->status < 200 || r->status > 599 || r->status == 500 || !r->content_type)
 		__builtin_trap();
-	if (r->body && r->status >= 400 && strstr(r->body, dir))
+	if (r->body && r->status >= 400 && strstr(r->body, fuzz_dir))
 		__builtin_trap(); /* an error names a server path */
 	int with_token = memmem(data, size, "{token}", 7) != NULL, with_clip = memmem(data, size, "{clip", 5) != NULL;
 	const char *path = rq->path ? rq->path : "";

@@ -8,7 +8,6 @@
  *     paths stay inside the sweep folder (no '..', names are single folder names).
  * Temporary files live in a private folder (in /dev/shm when there is one). */
 #define _GNU_SOURCE /* mkdtemp, nftw */
-#include <ftw.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,37 +16,21 @@
 #include <unistd.h>
 
 #include "taslab/sweep.h"
+#include "fuzz_tmp.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char dir[256];
 static sweep_request *req;
 static sweep_spec *spec, *again;
 
-static int rm_one(const char *p, const struct stat *sb, int flag, struct FTW *ftw)
-{
-	(void)sb, (void)flag, (void)ftw;
-	return remove(p);
-}
-
-static void cleanup(void)
-{
-	if (dir[0])
-		nftw(dir, rm_one, 8, FTW_DEPTH | FTW_PHYS);
-}
-
 static void setup(void)
 {
-	const char *base = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
-	snprintf(dir, sizeof dir, "%s/taslab-fuzz-sweep-XXXXXX", base);
-	if (!mkdtemp(dir))
-		abort();
+	fuzz_tmp_make("sweep", NULL);
 	req = malloc(sizeof *req);
 	spec = malloc(sizeof *spec);
 	again = malloc(sizeof *again);
 	if (!req || !spec || !again)
 		abort();
-	atexit(cleanup);
 }
 
 static void refused(const char *err, const char *file)
@@ -77,13 +60,13 @@ static char *slurp(const char *path)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-	if (!dir[0])
+	if (!fuzz_dir[0])
 		setup();
 	char in[300], in_toml[300], out[300], out2[300], err[1024] = "", what[512];
-	snprintf(in, sizeof in, "%s/in.json", dir);
-	snprintf(in_toml, sizeof in_toml, "%s/in.toml", dir);
-	snprintf(out, sizeof out, "%s/sweep.json", dir);
-	snprintf(out2, sizeof out2, "%s/again.json", dir);
+	snprintf(in, sizeof in, "%s/in.json", fuzz_dir);
+	snprintf(in_toml, sizeof in_toml, "%s/in.toml", fuzz_dir);
+	snprintf(out, sizeof out, "%s/sweep.json", fuzz_dir);
+	snprintf(out2, sizeof out2, "%s/again.json", fuzz_dir);
 	FILE *f = fopen(in, "wb");
 	if (!f || fwrite(data, 1, size, f) != size || fclose(f))
 		abort();

@@ -95,6 +95,7 @@ typedef struct sty_sim_desc {
 	uint64_t seed;
 	const char *out;           /* folder for simulation.csv (NULL: none) */
 	bool quiet;                /* no progress on stderr */
+	unsigned jobs;             /* threads (0: one per online CPU); the output does not depend on it */
 } sty_sim_desc;
 
 typedef struct sty_sim_summary {
