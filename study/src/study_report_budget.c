@@ -59,13 +59,13 @@ int sty_rpt_budget_plot(const char *rdir, const char *stem, const sty_rpt_group 
 	FILE *f = mtr_plot_begin(&plot, gp, err, err_size);
 	if (!f)
 		return TL_ERR_OUTPUT;
-	fprintf(f, "set terminal svg size 460,300 dynamic font 'sans,10' background rgb 'white'\nset datafile separator ','\n"
-		   "set grid\nset key outside right noenhanced\nset termoption noenhanced\nset xrange [0:1.05]\n"
+	mtr_plot_svg_preamble(f, nm);
+	fprintf(f, "set datafile separator ','\nset grid\nset termoption noenhanced\nset xrange [0:1.05]\n"
 		   "set output '%s/plots/%s--budget.svg'\nset title 'matched budget: exceed_8 against shaded fraction'\n"
 		   "set xlabel 'shaded fraction (shaded / visible samples)'\nset ylabel 'fraction of pixels with d > 8'\nplot ",
 		rdir, stem);
 	for (size_t m = 0; m < nm; m++)
-		fprintf(f, "%s'%s' index %zu using 1:2 with linespoints lw 2 pt 7 title '%s'", m ? ", " : "", path, m,
+		fprintf(f, "%s'%s' index %zu using 1:2 with linespoints title '%s'", m ? ", " : "", path, m,
 			methods[m]);
 	fputc('\n', f);
 	rc = mtr_plot_end(&plot, err, err_size);

@@ -92,8 +92,11 @@ int sty_rpt_group_plots(const char *rdir, const char *stem, sty_rpt_row *g, size
 			tmin = fmin(tmin, g[i].v->T);
 			tmax = fmax(tmax, g[i].v->T);
 		}
-	fprintf(f, "set terminal svg size 460,300 dynamic font 'sans,10' background rgb 'white'\nset datafile separator ','\n"
-		   "set grid\nset key outside bottom center horizontal noenhanced\nset logscale x 2\nset xrange [%g:%g]\n"
+	size_t entries = nm;
+	for (size_t i = 0; i < ng; i++)
+		entries += !isfinite(g[i].v->T) && g[i].r->status.run;
+	mtr_plot_svg_preamble(f, entries);
+	fprintf(f, "set datafile separator ','\nset grid\nset logscale x 2\nset xrange [%g:%g]\n"
 		   "set xlabel 'threshold T (code values)'\nset termoption noenhanced\n",
 		tmin / 1.25, tmax * 1.25);
 	for (size_t k = 0; k < STY_RPT_PLOT_COUNT; k++) {
@@ -103,7 +106,7 @@ int sty_rpt_group_plots(const char *rdir, const char *stem, sty_rpt_row *g, size
 		size_t len = 0;
 		for (size_t m = 0; m < nm; m++)
 			len += (size_t)snprintf(parts + len, sizeof parts - len,
-						"%s'%s/data/%s.csv' index %zu using 1:%zu with linespoints lw 2 pt 7 title '%s'",
+						"%s'%s/data/%s.csv' index %zu using 1:%zu with linespoints title '%s'",
 						len ? ", " : "", rdir, stem, m, k + 2, methods[m]);
 		for (size_t i = 0; i < ng; i++) {
 			const sweep_variant *v = g[i].v;

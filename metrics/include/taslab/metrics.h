@@ -164,6 +164,12 @@ typedef struct mtr_plot {
 FILE *mtr_plot_begin(mtr_plot *p, const char *script_path, char *err, size_t err_size);
 int mtr_plot_end(mtr_plot *p, char *err, size_t err_size);
 
+/* The report's SVG plots whose key lists `entries` lines (a sweep of every method: twenty or more): writes the
+ * terminal, a key below the plot in three columns, and line types 1..32: sixteen distinct colours (gnuplot's own eight
+ * repeat from the ninth line on), solid with filled points, then the same colours dash-dotted with open points. The canvas grows by one key row per three entries so that the plot area
+ * keeps its size (460 px wide, about 190 px high) however many methods the key lists. */
+void mtr_plot_svg_preamble(FILE *f, size_t entries);
+
 #ifdef __cplusplus
 }
 #endif
