@@ -73,7 +73,8 @@ static json_t *period_json(const sty_variant *v) { return v->period ? json_integ
 
 static void write_observers(FILE *f, const sty_result *r)
 {
-	fprintf(f, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910\n");
+	fprintf(f, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910,gold_n,"
+		   "gold_wrong\n");
 	for (size_t i = 0; i < r->observer_count; i++) {
 		const sty_observer *o = &r->observers[i];
 		char label[160];
@@ -82,10 +83,15 @@ static void write_observers(FILE *f, const sty_result *r)
 			fprintf(f, "%.4f", o->catch_mean_abs);
 		fprintf(f, ",%d,%d,%d,", o->catch_much_better, o->flagged, o->broken);
 		csv_num(f, o->rating_variance, "%.4f");
-		/* the P.910-crowd flags, ';'-joined: gold (a catch answer outside -1..1), variance (straightlining) */
-		fprintf(f, ",%s%s%s\n", o->p910 & STY_P910_GOLD ? "gold" : "",
-			(o->p910 & STY_P910_GOLD) && (o->p910 & STY_P910_VARIANCE) ? ";" : "",
-			o->p910 & STY_P910_VARIANCE ? "variance" : "");
+		/* the P.910-crowd flags, ';'-joined (study_result.h): catch (a catch answer outside -1..1), gold (a gold
+		 * answer more than one step from "reference much better"), variance (straightlining) */
+		static const struct { unsigned bit; const char *name; } flags[] = {
+			{STY_P910_CATCH, "catch"}, {STY_P910_GOLD, "gold"}, {STY_P910_VARIANCE, "variance"}};
+		fputc(',', f);
+		for (size_t k = 0, any = 0; k < sizeof flags / sizeof *flags; k++)
+			if (o->p910 & flags[k].bit)
+				fprintf(f, "%s%s", any++ ? ";" : "", flags[k].name);
+		fprintf(f, ",%d,%d\n", o->gold_n, o->gold_wrong);
 	}
 }
 
@@ -248,15 +254,18 @@ static void write_tables(FILE *f, const sty_result *r)
 	fprintf(f, "\nFlagged: more than half of the catch answers (reference against itself) \"much better\". %zu of %zu "
 		   "flagged; %zu left out of the statistics%s.\n",
 		flagged, r->observer_count, r->left_out, flagged && !r->left_out ? " (--keep-flagged)" : "");
-	size_t gold = 0, variance = 0, broken = 0;
+	size_t catches = 0, gold = 0, gold_n = 0, variance = 0, broken = 0;
 	for (size_t i = 0; i < r->observer_count; i++) {
+		catches += (r->observers[i].p910 & STY_P910_CATCH) != 0;
 		gold += (r->observers[i].p910 & STY_P910_GOLD) != 0;
+		gold_n += (size_t)r->observers[i].gold_n;
 		variance += (r->observers[i].p910 & STY_P910_VARIANCE) != 0;
 		broken += (size_t)r->observers[i].broken;
 	}
-	fprintf(f, "P.910-crowd screening (observers.csv p910): %zu failed a gold question (a catch answer \"much better\"), "
-		   "%zu answered without variance (< 0.1); left out only with --p910. Answers of broken playbacks, not "
-		   "counted: %zu.\n", gold, variance, broken);
+	fprintf(f, "P.910-crowd screening (observers.csv p910): %zu answered a catch trial \"much better\" (catch), %zu "
+		   "failed a gold trial (gold: %zu gold answers in all; one more than a step from \"reference much better\" "
+		   "fails), %zu answered without variance (< 0.1); left out only with --p910. Answers of broken playbacks, not "
+		   "counted: %zu.\n", catches, gold, gold_n, variance, broken);
 
 	fprintf(f, "\n## JOD (Thurstone Case V, reference at 0)\n\n| method | T | period | scene | camera | JOD [95%% CI] | "
 		   "participants |\n|---|---|---|---|---|---|---|\n");
