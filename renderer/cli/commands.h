@@ -70,7 +70,7 @@ typedef struct analyze_opts {
 } analyze_opts;
 
 typedef struct study_opts {
-	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *prior, *gold_variant, *model;
+	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *prior, *gold_variant, *model, *sweep;
 	uint32_t participants, training, catch_trials, gold_trials, break_every, port, threads, bootstrap, trials;
 	uint64_t seed;
 	bool keep_flagged, adaptive, p910;

@@ -116,6 +116,12 @@ static const cli_opt tally_options[] = {
 	 .help = "also leave out observers the P.910-crowd screening flags (a catch answer 'much better', a gold answer not "
 		 "'reference better', answer variance < 0.1)",
 	 .type = CLI_FLAG, .offset = offsetof(study_opts, p910)},
+	{.name = "model", .arg = "MODEL.json",
+	 .help = "with --sweep: the model's predicted t_jnd beside each measured one (thresholds.csv, tables.md)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, model)},
+	{.name = "sweep", .arg = "SWEEP",
+	 .help = "with --model: the sweep whose clips were rated (the model predicts from its summary.csv)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, sweep)},
 	{.name = "bootstrap", .arg = "B",
 	 .help = "bootstrap resamples for the JOD intervals (1..100000, default 2000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, bootstrap), .lo = 1, .hi = 100000},
@@ -278,6 +284,7 @@ static int study_main(void *opts, cli_ctx *ctx)
 		}
 	} else if (!strcmp(sub, "tally")) {
 		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .p910 = ov.p910, .bootstrap = ov.bootstrap,
+				    .model = ov.model, .sweep = ov.sweep,
 				    .seed = ov.seed};
 		if (!(rc = sty_tally(s, &t, err, err_size))) {
 			fprintf(stderr, "taslab: study statistics in %s (conditions.csv, anova.csv, posthoc.csv, observers.csv, "
@@ -337,7 +344,8 @@ static const cli_command study_serve = {
 static const cli_command study_tally = {
 	.name = "study tally",
 	.summary = "Q, p_ref, JND, RM-ANOVA, post hoc tests, screening, JOD, Fig. 3",
-	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--p910] [--bootstrap B] [--seed S]",
+	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--p910] [--model MODEL.json --sweep SWEEP] "
+		    "[--bootstrap B] [--seed S]",
 	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, thresholds.csv, tables.md, "
 		       "fig3.png.",
 	.options = tally_options,

@@ -185,6 +185,9 @@ typedef struct sty_tally_desc {
 	uint32_t bootstrap;       /* bootstrap resamples for JOD intervals (default 1000) */
 	uint64_t seed;            /* bootstrap seed */
 	bool no_plot;             /* skip the Fig. 3 plot (gnuplot; tests and fuzzing) */
+	const char *model;        /* issue 28: a saved MODEL.json (study_model.h) whose predicted t_jnd for `sweep`'s series
+				   * thresholds.csv and tables.md show beside the measured ones (as `report --model`) */
+	const char *sweep;        /* with model: the sweep whose clips were rated (its summary.csv) */
 } sty_tally_desc;
 
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size);
