@@ -102,7 +102,8 @@ static void check_period_tally(const char *res)
 		{"posthoc.csv", "method,T,period,factor,level_1,level_2,t,df,p,p_bonferroni"},
 		{"jod.csv", "method,T,period,scene,camera,jod,jod_lo,jod_hi,participants"},
 		{"fig3.csv", "method,T,period,Q,Q_lo,Q_hi,p_ref_percent,p_ref_lo_percent,p_ref_hi_percent"},
-		{"observers.csv", "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910"},
+		{"observers.csv", "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910,"
+				  "gold_n,gold_wrong"},
 	};
 	for (int i = 0; i < 6; i++) {
 		snprintf(p, sizeof p, "%s/%s", res, heads[i][0]);

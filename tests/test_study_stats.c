@@ -150,7 +150,7 @@ static void make_calm_stimuli(const char *root)
 /* Observer screening (DESIGN section 7, README "Study"): four participants answer two catch trials (reference
  * against itself) and two test trials each from hand-made tables; the expected observers.csv rows are worked out by
  * hand from the rule "flagged when more than half of the catch answers are much better (|a| = 2)" and the
- * P.910-crowd rules (a catch answer outside -1..1 fails the gold question; test answers' variance below 0.1). */
+ * P.910-crowd rules (a catch answer outside -1..1; test answers' variance below 0.1). */
 static void test_screening(void **state)
 {
 	(void)state;
@@ -171,9 +171,10 @@ static void test_screening(void **state)
 	/* participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged — by hand from the table above: P001 has
 	 * 2 of 2 much better (flagged), P002 exactly half (1 of 2: not more than half, kept). Then broken (none),
 	 * rating_variance (sample variance of the two test answers: 0, 0, 2, 2) and the P.910-crowd flags: a catch answer
-	 * much better fails the gold question (P001, P002, P004), variance below 0.1 (P001, P002). */
-	static const char *const expect[4] = {"P001,2,2.0000,2,1,0,0.0000,gold;variance", "P002,2,1.0000,1,0,0,0.0000,gold;variance",
-					      "P003,2,0.5000,0,0,0,2.0000,", "P004,2,1.5000,1,0,0,2.0000,gold"};
+	 * much better (catch: P001, P002, P004), variance below 0.1 (P001, P002); no gold trials (gold_n, gold_wrong 0). */
+	static const char *const expect[4] = {"P001,2,2.0000,2,1,0,0.0000,catch;variance,0,0",
+					      "P002,2,1.0000,1,0,0,0.0000,catch;variance,0,0", "P003,2,0.5000,0,0,0,2.0000,,0,0",
+					      "P004,2,1.5000,1,0,0,2.0000,catch,0,0"};
 	char **codes = NULL;
 	size_t ncodes = 0;
 	if (sty_participant_codes(s, &codes, &ncodes, err, sizeof err))
@@ -209,7 +210,7 @@ static void test_screening(void **state)
 		assert_non_null(obs);
 		char want[512];
 		snprintf(want, sizeof want, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,"
-			 "rating_variance,p910\n%s\n%s\n%s\n%s\n", expect[0], expect[1], expect[2], expect[3]);
+			 "rating_variance,p910,gold_n,gold_wrong\n%s\n%s\n%s\n%s\n", expect[0], expect[1], expect[2], expect[3]);
 		assert_string_equal(obs, want);
 		free(obs);
 		/* The flagged observer's ratings are left out (3 of 4 participants per condition) unless kept; with p910 also

@@ -9,7 +9,8 @@
  *  - with --model (issue 28) it shows the model's predicted t_jnd with its interval beside the measured one (the model's
  *    own predictions file, cell for cell, in data/thresholds.csv, and 2^3.5 [8, 16] for a model whose metric at 1 JND
  *    lies halfway in log2 between tfr@8's and tfr@16's flip_mean, half width 0.5 octave), and without a study the
- *    prediction alone ("not rated"); a file that is not a model is one line, exit 2.
+ *    prediction alone ("not rated"); a file that is not a model is one line, exit 2; `study tally --model --sweep`
+ *    puts the same predictions beside the tally's thresholds (thresholds.csv, tables.md).
  * The sweep is tiny (48x32, two frames, ref, tfr@8, tfr@16 on the tests' device, lavapipe, with validation) so the test stays short. */
 #define _DEFAULT_SOURCE
 #include <math.h>
@@ -274,6 +275,29 @@ static void test_study_on_sweep(void **state)
 		fail_msg("the report's thresholds lack the prediction beside '%s'", trow);
 	assert_non_null(strstr(html, "</td><td>–</td></tr>")); /* the pooled row: no prediction */
 	check_predicted(pred, n_rated);
+	/* the same beside the tally's own thresholds (issue 28: tally --model, the report's code): thresholds.csv's
+	 * predicted cells are the model's predictions file's, the pooled row has none, tables.md shows them */
+	snprintf(args, sizeof args, "study tally --db %s --out %s/tally --bootstrap 10 --model %s --sweep %s", db, dir, model, sw);
+	if (run_cli(args))
+		fail_msg("%s", out);
+	snprintf(p, sizeof p, "%s/tally/thresholds.csv", dir);
+	for (int c = 0; c < 3; c++) {
+		double got = tu_csv_lookup(p, sk, 4, 14 + c), want = tu_csv_lookup(pred, sk, 4, 4 + c);
+		if (!(got == want) || !(fabs(got - exp2(3.5 + 0.5 * (c == 0 ? 0 : c == 1 ? -1 : 1))) < 2e-4))
+			fail_msg("tally thresholds.csv predicted cell %d: %g, the model's %g", c, got, want);
+		assert_true(isnan(tu_csv_lookup(p, tk, 4, 14 + c)));
+	}
+	assert_true(tu_csv_lookup(p, sk, 4, 5) == tu_csv_lookup(q, sk, 4, 5)); /* the measured t_jnd as before */
+	snprintf(p, sizeof p, "%s/tally/tables.md", dir);
+	char *md = tu_read_file(p, NULL);
+	assert_non_null(md);
+	if (!strstr(md, "| predicted t_jnd [95%] |") || !strstr(md, "| 11.31 [8.00, 16.00] |\n"))
+		fail_msg("tables.md lacks the prediction:\n%s", md);
+	free(md);
+	snprintf(args, sizeof args, "study tally --db %s --out %s/tally2 --model %s", db, dir, model);
+	expect_refused(args, 2, "--model needs --sweep");
+	snprintf(args, sizeof args, "study tally --db %s --out %s/tally2 --model %s --sweep %s", db, dir, db, sw);
+	expect_refused(args, 2, "not a model");
 	assert_non_null(strstr(html, "no run in this sweep and are not joined: tfr@32 turntable/orbit"));
 	assert_non_null(strstr(html, "were checked against this sweep"));
 	int plotted = strstr(html, "plots/fig3.svg") != NULL;

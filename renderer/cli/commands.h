@@ -70,8 +70,8 @@ typedef struct analyze_opts {
 } analyze_opts;
 
 typedef struct study_opts {
-	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *prior;
-	uint32_t participants, training, catch_trials, break_every, port, threads, bootstrap, trials;
+	const char *db, *stimuli, *out, *pwcmp, *base, *bind, *prior, *gold_variant, *model, *sweep;
+	uint32_t participants, training, catch_trials, gold_trials, break_every, port, threads, bootstrap, trials;
 	uint64_t seed;
 	bool keep_flagged, adaptive, p910;
 	/* serve's connection limits (0: the server's default; sty_server_desc) */

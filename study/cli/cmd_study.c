@@ -36,6 +36,13 @@ static const cli_opt design_options[] = {
 	{.name = "catch", .arg = "K",
 	 .help = "catch trials (reference against itself) for observer screening (0..100)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, catch_trials), .lo = 0, .hi = 100},
+	{.name = "gold", .arg = "K",
+	 .help = "gold trials (the reference against a strongly degraded variant: answer known) for P.910-crowd screening "
+		 "(0..100)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, gold_trials), .lo = 0, .hi = 100},
+	{.name = "gold-variant", .arg = "ID",
+	 .help = "with --gold: the gold condition's pairs.json id in every set (default: each set's largest T or period)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, gold_variant)},
 	{.name = "break-every", .arg = "N",
 	 .help = "a break after every N trials (0: none)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, break_every), .lo = 0, .hi = 10000},
@@ -106,8 +113,15 @@ static const cli_opt tally_options[] = {
 	 .help = "keep observers flagged by the catch-trial screening",
 	 .type = CLI_FLAG, .offset = offsetof(study_opts, keep_flagged)},
 	{.name = "p910", .arg = NULL,
-	 .help = "also leave out observers the P.910-crowd screening flags (a catch answer 'much better'; answer variance < 0.1)",
+	 .help = "also leave out observers the P.910-crowd screening flags (a catch answer 'much better', a gold answer not "
+		 "'reference better', answer variance < 0.1)",
 	 .type = CLI_FLAG, .offset = offsetof(study_opts, p910)},
+	{.name = "model", .arg = "MODEL.json",
+	 .help = "with --sweep: the model's predicted t_jnd beside each measured one (thresholds.csv, tables.md)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, model)},
+	{.name = "sweep", .arg = "SWEEP",
+	 .help = "with --model: the sweep whose clips were rated (the model predicts from its summary.csv)",
+	 .type = CLI_STRING, .offset = offsetof(study_opts, sweep)},
 	{.name = "bootstrap", .arg = "B",
 	 .help = "bootstrap resamples for the JOD intervals (1..100000, default 2000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, bootstrap), .lo = 1, .hi = 100000},
@@ -213,7 +227,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 	}
 	if (!strcmp(sub, "design")) {
 		sty_design_desc d = {.stimuli = ov.stimuli, .participants = ov.participants, .seed = ov.seed,
-				     .training = ov.training, .catch_trials = ov.catch_trials, .break_every = ov.break_every,
+				     .training = ov.training, .catch_trials = ov.catch_trials, .gold_trials = ov.gold_trials,
+				     .gold_variant = ov.gold_variant, .break_every = ov.break_every,
 				     .adaptive = ov.adaptive, .trials = ov.trials, .prior = ov.prior};
 		sty_design_summary sm;
 		if (!(rc = sty_design(s, &d, &sm, err, err_size)) && !(rc = sty_commit(s, err, err_size))) {
@@ -269,6 +284,7 @@ static int study_main(void *opts, cli_ctx *ctx)
 		}
 	} else if (!strcmp(sub, "tally")) {
 		sty_tally_desc t = {.out = ov.out, .keep_flagged = ov.keep_flagged, .p910 = ov.p910, .bootstrap = ov.bootstrap,
+				    .model = ov.model, .sweep = ov.sweep,
 				    .seed = ov.seed};
 		if (!(rc = sty_tally(s, &t, err, err_size))) {
 			fprintf(stderr, "taslab: study statistics in %s (conditions.csv, anova.csv, posthoc.csv, observers.csv, "
@@ -293,7 +309,7 @@ static const cli_command study_design = {
 	.name = "study design",
 	.summary = "randomised within-subject plan from the pairs.json sets of a stimulus folder",
 	.synopsis = "taslab study design --db STUDY.db --stimuli DIR --participants N [--seed S] [--training K] [--catch K] "
-		    "[--break-every N] [--adaptive --trials N [--prior MODEL.json]]",
+		    "[--gold K [--gold-variant ID]] [--break-every N] [--adaptive --trials N [--prior MODEL.json]]",
 	.options = design_options,
 	STUDY_SUB,
 };
@@ -328,7 +344,8 @@ static const cli_command study_serve = {
 static const cli_command study_tally = {
 	.name = "study tally",
 	.summary = "Q, p_ref, JND, RM-ANOVA, post hoc tests, screening, JOD, Fig. 3",
-	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--p910] [--bootstrap B] [--seed S]",
+	.synopsis = "taslab study tally --db STUDY.db --out DIR [--keep-flagged] [--p910] [--model MODEL.json --sweep SWEEP] "
+		    "[--bootstrap B] [--seed S]",
 	.description = "Writes conditions.csv, anova.csv, posthoc.csv, observers.csv, jod.csv, thresholds.csv, tables.md, "
 		       "fig3.png.",
 	.options = tally_options,

@@ -19,7 +19,7 @@
 static const char *LONG_HEADER = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms";
 static const char *LONG_HEADER_NO_PERIOD = "participant,trial,scene,camera,camera_motion,method,T,ref_first,answer,rating,rt_ms";
 
-/* Issue 27.9: the export holds every answered trial (test, catch and training) with its type, when it was answered and
+/* Issue 27.9: the export holds every answered trial (test, catch, gold and training) with its type, when it was answered and
  * whether the participant completed the session, so that screening can be redone after export -> import. */
 static const char *LONG_HEADER_FULL = "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,"
 				      "rt_ms,trial_type,answered_at,completed";
@@ -224,7 +224,7 @@ typedef struct row {
 	long period; /* 0: none */
 	int ref_first, answer, rating;
 	long long rt_ms; /* -1: none */
-	char kind[16];   /* test, catch, training (files without trial_type: test) */
+	char kind[16];   /* test, catch, gold, training (files without trial_type: test) */
 	char at[40];     /* answered_at ("imported" for files without it) */
 	int completed;   /* 0, 1; -1: unknown */
 	long long tel[N_TELEMETRY]; /* play_a_ms .. fullscreen; -1: none */
@@ -377,13 +377,18 @@ static int parse_row(const sty *s, char *line, int layout, row *r, char *why, si
 	r->retake_of = -1;
 	if (layout < LAYOUT_FULL)
 		return TL_OK;
-	if (strcmp(c[12], "test") && strcmp(c[12], "catch") && strcmp(c[12], "training")) {
-		snprintf(why, why_size, "trial_type '%s' is not test, catch or training", c[12]);
+	if (strcmp(c[12], "test") && strcmp(c[12], "catch") && strcmp(c[12], "gold") && strcmp(c[12], "training")) {
+		snprintf(why, why_size, "trial_type '%s' is not test, catch, gold or training", c[12]);
 		return TL_ERR_INPUT;
 	}
 	snprintf(r->kind, sizeof r->kind, "%s", c[12]);
 	if (!strcmp(r->kind, "catch") && !facts->reference) {
 		snprintf(why, why_size, "a catch trial compares the reference with itself: method %s is not the reference", r->method);
+		return TL_ERR_INPUT;
+	}
+	if (!strcmp(r->kind, "gold") && facts->reference) {
+		snprintf(why, why_size, "a gold trial compares the reference with a degraded variant: method %s is the reference",
+			 r->method);
 		return TL_ERR_INPUT;
 	}
 	/* an ISO 8601 time as the server writes it (2026-11-26T04:50:01.123Z), or "imported" */
@@ -507,7 +512,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 	int ok = 1;
 	sqlite3_stmt *fc, *ic, *fp, *ip, *it, *ia;
 	sqlite3_prepare_v2(s->db, "SELECT id FROM conditions WHERE scene=? AND camera=? AND camera_motion=? AND method=? AND T IS ?"
-				  " AND period IS ?",
+				  " AND period IS ? AND is_catch = ?",
 			   -1, &fc, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO conditions(scene, camera, camera_motion, method, T, period, ref_clip, test_clip,"
 				  " is_catch) VALUES(?,?,?,?,?,?,'','',?)", -1, &ic, NULL);
@@ -528,6 +533,9 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 		sqlite3_bind_text(fc, 4, r->method, -1, SQLITE_STATIC);
 		isnan(r->T) ? sqlite3_bind_null(fc, 5) : sqlite3_bind_double(fc, 5, r->T);
 		r->period ? sqlite3_bind_int64(fc, 6, r->period) : sqlite3_bind_null(fc, 6);
+		/* the condition's role (study_db.c): a gold trial's condition is kept apart from the test condition it copies */
+		int role = !strcmp(r->kind, "gold") ? 2 : !strcmp(r->kind, "catch");
+		sqlite3_bind_int(fc, 7, role);
 		if (sqlite3_step(fc) == SQLITE_ROW)
 			cid = sqlite3_column_int64(fc, 0);
 		else {
@@ -538,7 +546,7 @@ int sty_import_long(sty *s, const char *path, size_t *rows_out, char *err, size_
 			sqlite3_bind_text(ic, 4, r->method, -1, SQLITE_STATIC);
 			isnan(r->T) ? sqlite3_bind_null(ic, 5) : sqlite3_bind_double(ic, 5, r->T);
 			r->period ? sqlite3_bind_int64(ic, 6, r->period) : sqlite3_bind_null(ic, 6);
-			sqlite3_bind_int(ic, 7, !strcmp(r->kind, "catch"));
+			sqlite3_bind_int(ic, 7, role);
 			ok = sqlite3_step(ic) == SQLITE_DONE;
 			cid = sqlite3_last_insert_rowid(s->db);
 		}

@@ -19,11 +19,11 @@ static const char *SCHEMA =
 	"CREATE TABLE IF NOT EXISTS conditions(id INTEGER PRIMARY KEY, scene TEXT NOT NULL, camera TEXT NOT NULL,"
 	" camera_motion TEXT NOT NULL CHECK(camera_motion IN ('stationary','moving')), method TEXT NOT NULL,"
 	" T REAL, period INTEGER CHECK(period IS NULL OR period IN (1, 2, 4, 8)), ref_clip TEXT NOT NULL,"
-	" test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0, clip_ms REAL);"
+	" test_clip TEXT NOT NULL, is_catch INTEGER NOT NULL DEFAULT 0, clip_ms REAL);" /* is_catch: 0 test, 1 catch, 2 gold */
 	"CREATE TABLE IF NOT EXISTS participants(id INTEGER PRIMARY KEY, code TEXT NOT NULL UNIQUE, label TEXT NOT NULL);"
 	"CREATE TABLE IF NOT EXISTS trials(participant INTEGER NOT NULL REFERENCES participants(id),"
 	" idx INTEGER NOT NULL, condition INTEGER NOT NULL REFERENCES conditions(id), ref_first INTEGER NOT NULL,"
-	" kind TEXT NOT NULL CHECK(kind IN ('test','catch','training')), break_before INTEGER NOT NULL DEFAULT 0,"
+	" kind TEXT NOT NULL CHECK(kind IN ('test','catch','gold','training')), break_before INTEGER NOT NULL DEFAULT 0,"
 	" retake_of INTEGER, PRIMARY KEY(participant, idx));"
 	"CREATE TABLE IF NOT EXISTS answers(participant INTEGER NOT NULL, idx INTEGER NOT NULL,"
 	" answer INTEGER NOT NULL CHECK(answer BETWEEN -2 AND 2), rt_ms INTEGER, at TEXT NOT NULL,"

@@ -80,7 +80,8 @@ typedef struct cond {
 	double T;        /* NAN: none */
 	uint32_t period; /* 0: none */
 	char ref_clip[512], test_clip[512];
-	int is_catch;
+	int is_catch;    /* role: 0 test, 1 catch (reference against itself), 2 gold (a copy of a test condition) */
+	char id[64];     /* the pairs.json condition id ("tfr-T64") */
 	char ref_method[32]; /* the reference's method name (pairs.json reference.method), for added catch trials */
 	double clip_ms;      /* a clip's duration from pairs.json frames and fps (the server's playback check) */
 } cond;
@@ -148,6 +149,7 @@ static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs
 		snprintf(x->method, sizeof x->method, "%s", c->method);
 		x->T = c->T;
 		x->period = c->period;
+		snprintf(x->id, sizeof x->id, "%s", c->id);
 		x->clip_ms = set.fps > 0 ? (double)(set.last_frame - set.first_frame + 1) * 1000.0 / set.fps : NAN;
 		snprintf(x->ref_clip, sizeof x->ref_clip, "%s%s%s", rel, rel[0] ? "/" : "", set.ref_clip);
 		snprintf(x->test_clip, sizeof x->test_clip, "%s%s%s", rel, rel[0] ? "/" : "", c->clip);
@@ -157,6 +159,47 @@ static int read_pairs(const sty *s, const char *file, const char *rel, cond **cs
 		snprintf(x->ref_method, sizeof x->ref_method, "%s", ref ? ref : "");
 	}
 	pairs_free(&set);
+	return TL_OK;
+}
+
+/* Gold trials (P.910-crowd's gold questions, README "Telemetry and screening"): per set (one reference clip) a copy of
+ * one test condition with role 2 — the one whose pairs.json id is `variant`, else the one with the largest T, else the
+ * largest period: the strongest degradation the set has, whose known answer is "reference much better". */
+static int add_gold(cond **cs, size_t *nc, const char *variant, char *err, size_t err_size)
+{
+	size_t n0 = *nc, added = 0;
+	for (size_t i = 0; i < n0; i++) {
+		size_t first = i, best = SIZE_MAX;
+		for (size_t j = 0; j < i && first == i; j++)
+			first = strcmp((*cs)[j].ref_clip, (*cs)[i].ref_clip) ? i : j;
+		if (first != i)
+			continue; /* this set was looked at already */
+		for (size_t j = i; j < n0; j++) {
+			const cond *c = &(*cs)[j], *b = best == SIZE_MAX ? NULL : &(*cs)[best];
+			if (c->is_catch || strcmp(c->ref_clip, (*cs)[i].ref_clip))
+				continue;
+			if (variant ? !strcmp(c->id, variant)
+				    : (isfinite(c->T) && (!b || !isfinite(b->T) || c->T > b->T)) ||
+					      (!isfinite(c->T) && c->period && (!b || (!isfinite(b->T) && c->period > b->period))))
+				best = j;
+		}
+		if (best == SIZE_MAX) {
+			if (variant)
+				return tl_error(err, err_size, TL_ERR_INPUT, "--gold-variant %s: the set of %s / %s has no condition "
+						"with that id (pairs.json conditions[].id)", variant, (*cs)[i].scene, (*cs)[i].camera);
+			continue;
+		}
+		cond *ncs = realloc(*cs, (*nc + 1) * sizeof *ncs);
+		if (!ncs)
+			return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+		*cs = ncs;
+		ncs[*nc] = ncs[best];
+		ncs[(*nc)++].is_catch = 2;
+		added++;
+	}
+	if (!added)
+		return tl_error(err, err_size, TL_ERR_INPUT, "--gold: no set has a variant with a T or a period to be the gold "
+				"condition; name one with --gold-variant ID (a pairs.json condition id)");
 	return TL_OK;
 }
 
@@ -178,6 +221,8 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 	if (d->adaptive != (d->trials > 0))
 		return tl_error(err, err_size, TL_ERR_ARG, d->adaptive ? "--adaptive needs --trials N (test trials per participant)"
 									: "--trials N goes with --adaptive (a full design rates every condition)");
+	if (d->gold_variant && !d->gold_trials)
+		return tl_error(err, err_size, TL_ERR_ARG, "--gold-variant goes with --gold K (gold trials per participant)");
 	if (d->prior) { /* the model is read before anything is written: one line for a file that cannot be a prior */
 		double th, sd;
 		if (!d->adaptive)
@@ -273,6 +318,9 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		snprintf(err, err_size, "no reference clips for catch trials");
 		goto done;
 	}
+	if (d->gold_trials && (rc = add_gold(&cs, &nc, d->gold_variant, err, err_size)))
+		goto done;
+	rc = TL_ERR_ARG;
 	char *msg = NULL;
 	if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, &msg) != SQLITE_OK) {
 		sqlite3_free(msg);
@@ -338,7 +386,7 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		}
 	}
 	sty_plan_params pp = {.seed = d->seed, .training = d->training, .catch_trials = d->catch_trials,
-			      .break_every = d->break_every, .adaptive = d->adaptive, .trials = d->trials,
+			      .gold_trials = d->gold_trials, .break_every = d->break_every, .adaptive = d->adaptive, .trials = d->trials,
 			      .groups = groups, .ngroups = ngroups};
 	uint32_t breaks = 0;
 	ok = ok && is_catch && !sty_plan_participants(s, is_catch, nc, &pp, 0, d->participants, &out->trials_per_participant,

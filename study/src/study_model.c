@@ -529,6 +529,24 @@ static int predict_rows(const char *sweep, const char *metric, double m_jnd, dou
 	return TL_OK;
 }
 
+const sty_model_pred *sty_model_pred_find(const sty_model_pred *p, size_t n, const char *method, long period,
+					  const char *scene, const char *camera)
+{
+	for (size_t i = 0; i < n; i++)
+		if (!strcmp(p[i].method, method) && p[i].period == period && !strcmp(p[i].scene, scene) &&
+		    !strcmp(p[i].camera, camera))
+			return &p[i];
+	return NULL;
+}
+
+void sty_model_pred_cells(FILE *f, const sty_model_pred *p)
+{
+	char b[64];
+	double q[3] = {p ? p->t_jnd : NAN, p ? p->t_jnd_lo : NAN, p ? p->t_jnd_hi : NAN};
+	for (int k = 0; k < 3; k++)
+		fprintf(f, ",%s", sty_num_cell(q[k], "%.4f", b, sizeof b));
+}
+
 /* Writes the predictions file (atomically) and appends them to `preds` (MODEL.json's "predictions"). */
 static int write_predictions(const char *csv, const sty_model_pred *q, size_t n, json_t *preds, char *err,
 			     size_t err_size)

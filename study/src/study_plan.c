@@ -26,23 +26,24 @@ static unsigned order_bit(uint64_t seed, uint64_t pair, uint64_t k)
 int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan_params *pp, uint32_t first,
 			  uint32_t count, uint32_t *per_out, uint32_t *breaks_out, char *err, size_t err_size)
 {
-	size_t ntest = 0, ncatch = 0;
+	size_t ntest = 0, ncatch = 0, ngold = 0;
 	for (size_t i = 0; i < nc; i++)
-		is_catch[i] ? ncatch++ : ntest++;
+		is_catch[i] == 2 ? ngold++ : is_catch[i] ? ncatch++ : ntest++;
 	sqlite3_stmt *ip = NULL, *it = NULL;
 	sqlite3_prepare_v2(s->db, "INSERT INTO participants(id, code, label) VALUES(?,?,?)", -1, &ip, NULL);
 	sqlite3_prepare_v2(s->db, "INSERT INTO trials(participant, idx, condition, ref_first, kind, break_before)"
 				  " VALUES(?,?,?,?,?,?)", -1, &it, NULL);
-	/* Plan per participant: [training] then shuffled (test conditions + catch trials). */
+	/* Plan per participant: [training] then shuffled (test conditions + catch trials + gold trials). */
 	gsl_rng *rng = gsl_rng_alloc(gsl_rng_mt19937);
-	size_t per = (pp->adaptive ? pp->trials : ntest) + pp->catch_trials;
+	size_t per = (pp->adaptive ? pp->trials : ntest) + pp->catch_trials + pp->gold_trials;
 	size_t *order = calloc(per + pp->training + 1, sizeof *order);
 	int *flip = calloc(nc + 1, sizeof *flip);
-	size_t *tests = calloc(ntest + 1, sizeof *tests), *catches = calloc(ncatch + 1, sizeof *catches);
-	int ok = ip && it && rng && order && flip && tests && catches && (ncatch || !pp->catch_trials) &&
-		 (!pp->adaptive || pp->ngroups);
-	for (size_t i = 0, a = 0, b = 0; ok && i < nc; i++)
-		is_catch[i] ? (catches[b++] = i) : (tests[a++] = i);
+	size_t *tests = calloc(ntest + 1, sizeof *tests), *catches = calloc(ncatch + 1, sizeof *catches),
+	       *golds = calloc(ngold + 1, sizeof *golds);
+	int ok = ip && it && rng && order && flip && tests && catches && golds && (ncatch || !pp->catch_trials) &&
+		 (ngold || !pp->gold_trials) && (!pp->adaptive || pp->ngroups);
+	for (size_t i = 0, a = 0, b = 0, g = 0; ok && i < nc; i++)
+		is_catch[i] == 2 ? (golds[g++] = i) : is_catch[i] ? (catches[b++] = i) : (tests[a++] = i);
 	uint32_t breaks = 0;
 	for (uint32_t pi = first; ok && pi < first + count; pi++) {
 		char code[33], label[32];
@@ -72,11 +73,16 @@ int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan
 		size_t off = ncatch ? gsl_rng_uniform_int(rng, ncatch) : 0; /* which catch pairs: rotates per participant */
 		for (size_t k = 0; k < pp->catch_trials; k++)
 			order[n++] = catches[(k + off) % ncatch];
+		/* gold trials rotate over the sets' gold conditions the same way; drawn only when there are some, so a
+		 * design without them plans exactly as before */
+		size_t goff2 = pp->gold_trials ? gsl_rng_uniform_int(rng, ngold) : 0;
+		for (size_t k = 0; k < pp->gold_trials; k++)
+			order[n++] = golds[(k + goff2) % ngold];
 		gsl_ran_shuffle(rng, order + start, n - start, sizeof *order);
 		for (size_t k = 0; ok && k < n; k++) {
 			size_t c = order[k] & ~ADAPTIVE_SLOT;
 			bool adaptive = order[k] & ADAPTIVE_SLOT;
-			const char *kind = k < start ? "training" : is_catch[c] ? "catch" : "test";
+			const char *kind = k < start ? "training" : is_catch[c] == 2 ? "gold" : is_catch[c] ? "catch" : "test";
 			int brk = pp->break_every && k > 0 && k % pp->break_every == 0;
 			breaks += brk && pi == first;
 			sqlite3_reset(it);
@@ -100,6 +106,7 @@ int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan
 	free(flip);
 	free(tests);
 	free(catches);
+	free(golds);
 	*breaks_out = breaks;
 	return ok ? TL_OK : sty_db_fail(s, err, err_size, "writing the participants' plans");
 }
@@ -114,7 +121,8 @@ static int plan_settings(sty *s, sty_plan_params *pp, uint32_t *existing, char *
 			       "SELECT (SELECT value FROM meta WHERE key = 'seed'), (SELECT count(*) FROM participants),"
 			       " (SELECT coalesce(max(id), 0) FROM participants),"
 			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'training'),"
-			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'catch'),"
+			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'catch' AND retake_of IS NULL),"
+			       " (SELECT count(*) FROM trials WHERE participant = 1 AND kind = 'gold' AND retake_of IS NULL),"
 			       " (SELECT coalesce(min(idx), 0) FROM trials WHERE participant = 1 AND break_before),"
 			       " (SELECT value FROM meta WHERE key = 'design')", -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "reading the design");
@@ -124,7 +132,7 @@ static int plan_settings(sty *s, sty_plan_params *pp, uint32_t *existing, char *
 	} else if (sqlite3_column_type(st, 0) == SQLITE_NULL || !sty_stimuli(s)[0] || sqlite3_column_int(st, 1) == 0) {
 		rc = tl_error(err, err_size, TL_ERR_ARG, "%s has no design to add participants to (an imported study, or "
 			      "no participants): make one with 'taslab study design'", sty_path(s));
-	} else if (sqlite3_column_type(st, 6) == SQLITE_TEXT && !strcmp((const char *)sqlite3_column_text(st, 6), "adaptive")) {
+	} else if (sqlite3_column_type(st, 7) == SQLITE_TEXT && !strcmp((const char *)sqlite3_column_text(st, 7), "adaptive")) {
 		rc = tl_error(err, err_size, TL_ERR_ARG, "%s is an adaptive design: adding participants to one is not supported "
 			      "yet (design it again with the participants you need)", sty_path(s));
 	} else if (sqlite3_column_int64(st, 1) != sqlite3_column_int64(st, 2)) {
@@ -134,7 +142,8 @@ static int plan_settings(sty *s, sty_plan_params *pp, uint32_t *existing, char *
 		*existing = (uint32_t)sqlite3_column_int(st, 1);
 		pp->training = (uint32_t)sqlite3_column_int(st, 3);
 		pp->catch_trials = (uint32_t)sqlite3_column_int(st, 4);
-		pp->break_every = (uint32_t)sqlite3_column_int(st, 5);
+		pp->gold_trials = (uint32_t)sqlite3_column_int(st, 5);
+		pp->break_every = (uint32_t)sqlite3_column_int(st, 6);
 	}
 	sqlite3_finalize(st);
 	return rc;

@@ -11,7 +11,7 @@
 
 typedef struct sty_plan_params {
 	uint64_t seed;
-	uint32_t training, catch_trials, break_every;
+	uint32_t training, catch_trials, gold_trials, break_every;
 	/* adaptive designs (issue 28): `trials` test trials aimed in turn at the groups (each a test condition index
 	 * representing method x period x scene x camera), the T chosen when shown (study_adaptive_db.c) */
 	bool adaptive;
@@ -21,7 +21,7 @@ typedef struct sty_plan_params {
 } sty_plan_params;
 
 /* Inserts participants first+1 .. first+count (labels P001.., random link codes) with their plans over the conditions
- * with ids 1..nc (is_catch[i]: condition i+1 is a reference-vs-reference pair). Participant k's plan is a function of
+ * with ids 1..nc (is_catch[i], condition i+1's role: 0 test, 1 a reference-vs-reference pair, 2 gold). Participant k's plan is a function of
  * the seed, k and the conditions only. The caller holds a transaction. *per = trials per participant, *breaks =
  * breaks in each plan. */
 int sty_plan_participants(sty *s, const int *is_catch, size_t nc, const sty_plan_params *pp, uint32_t first,

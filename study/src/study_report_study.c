@@ -96,24 +96,15 @@ int sty_rpt_model_load(const sty_report_desc *d, sty_rpt_study *t, char *err, si
 				 err_size);
 }
 
-static bool pred_is(const sty_model_pred *p, const sty_threshold_row *h)
-{
-	return !h->pooled && !strcmp(p->method, h->method) && p->period == (long)h->period && !strcmp(p->scene, h->scene) &&
-	       !strcmp(p->camera, h->camera);
-}
-
 const sty_model_pred *sty_rpt_pred_of(const sty_rpt_study *t, const sty_threshold_row *h)
 {
-	for (size_t i = 0; i < t->npred; i++)
-		if (pred_is(&t->pred[i], h))
-			return &t->pred[i];
-	return NULL;
+	return h->pooled ? NULL : sty_model_pred_find(t->pred, t->npred, h->method, h->period, h->scene, h->camera);
 }
 
 bool sty_rpt_pred_rated(const sty_rpt_study *t, const sty_model_pred *p)
 {
 	for (size_t i = 0; i < t->nthr; i++)
-		if (pred_is(p, &t->thr[i]))
+		if (sty_rpt_pred_of(t, &t->thr[i]) == p)
 			return true;
 	return false;
 }
@@ -129,9 +120,7 @@ static void thr_line(FILE *f, const char *method, long period, const char *scene
 	fprintf(f, ",%s,%s,%zu", sty_csv_cell(scene, c[0], sizeof c[0]), sty_csv_cell(camera, c[1], sizeof c[1]), n);
 	for (int k = 0; k < 3; k++)
 		fprintf(f, ",%s", sty_num_cell(m[k], "%.4f", b, sizeof b));
-	double q[3] = {p ? p->t_jnd : NAN, p ? p->t_jnd_lo : NAN, p ? p->t_jnd_hi : NAN};
-	for (int k = 0; k < 3; k++)
-		fprintf(f, ",%s", sty_num_cell(q[k], "%.4f", b, sizeof b));
+	sty_model_pred_cells(f, p);
 	fputc('\n', f);
 }
 

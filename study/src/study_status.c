@@ -17,6 +17,9 @@ typedef struct part {
 	char label[64], last[40];
 	int answered, total, restarts;
 	int flagged; /* 1, 0; -1: unknown (no test trial answered yet, so no tally) */
+	int p910;    /* the P.910-crowd flags (STY_P910_*); -1: unknown, as flagged */
+	int broken;  /* answers of broken playbacks (not counted; each retaken while retakes are left) */
+	char broken_list[256]; /* "trial 7: hidden, trial 12: dropped;long": planned trial (1-based), the server's verdict */
 } part;
 
 typedef struct status {
@@ -49,7 +52,11 @@ static int collect(sty *s, status *x, char *err, size_t err_size)
 	snprintf(sql, sizeof sql,
 		 "SELECT p.label, (SELECT count(*) FROM answers a WHERE a.participant = p.id),"
 		 " (SELECT count(*) FROM trials t WHERE t.participant = p.id),"
-		 " (SELECT max(at) FROM answers a WHERE a.participant = p.id), %s FROM participants p ORDER BY p.id",
+		 " (SELECT max(at) FROM answers a WHERE a.participant = p.id), %s,"
+		 " (SELECT count(*) || '|' || coalesce(group_concat('trial ' || n || ': ' || broken, ', '), '') FROM (SELECT"
+		 "  coalesce(t.retake_of, t.idx) + 1 AS n, a.broken FROM answers a JOIN trials t ON t.participant = a.participant"
+		 "  AND t.idx = a.idx WHERE a.participant = p.id AND a.broken IS NOT NULL ORDER BY a.idx))"
+		 " FROM participants p ORDER BY p.id",
 		 has_table(s, "sessions") ? "(SELECT starts - 1 FROM sessions z WHERE z.participant = p.id)" : "0");
 	if (sqlite3_prepare_v2(s->db, sql, -1, &st, NULL)) {
 		rc = sty_db_fail(s, err, err_size, "status");
@@ -71,6 +78,9 @@ static int collect(sty *s, status *x, char *err, size_t err_size)
 		if (sqlite3_column_type(st, 3) != SQLITE_NULL)
 			snprintf(p->last, sizeof p->last, "%s", (const char *)sqlite3_column_text(st, 3));
 		p->restarts = sqlite3_column_int(st, 4);
+		const char *b = (const char *)sqlite3_column_text(st, 5), *bar = b ? strchr(b, '|') : NULL;
+		p->broken = b ? atoi(b) : 0;
+		snprintf(p->broken_list, sizeof p->broken_list, "%s", bar ? bar + 1 : "");
 	}
 	if (!rc && r != SQLITE_DONE)
 		rc = sty_db_fail(s, err, err_size, "status");
@@ -80,7 +90,7 @@ static int collect(sty *s, status *x, char *err, size_t err_size)
 	/* The tally as `taslab study tally` computes it (flagged observers left out), without the JOD bootstrap. */
 	sty_tally_desc td = {.bootstrap = 1, .seed = 1};
 	for (size_t i = 0; i < x->n; i++)
-		x->p[i].flagged = -1;
+		x->p[i].flagged = x->p[i].p910 = -1;
 	sty_result *screen = NULL;
 	char why[512];
 	if (sty_tally_compute(s, &td, &x->res, x->note, sizeof x->note)) {
@@ -93,7 +103,7 @@ static int collect(sty *s, status *x, char *err, size_t err_size)
 	}
 	const sty_result *sr = x->res ? x->res : screen;
 	for (size_t i = 0; sr && i < sr->observer_count && i < x->n; i++)
-		x->p[i].flagged = sr->observers[i].flagged; /* both in participant id order */
+		x->p[i].flagged = sr->observers[i].flagged, x->p[i].p910 = (int)sr->observers[i].p910; /* both in id order */
 	sty_result_free(&screen);
 out:
 	pthread_mutex_unlock(&s->lock);
@@ -104,6 +114,22 @@ static void release(status *x)
 {
 	free(x->p);
 	sty_result_free(&x->res);
+}
+
+/* The P.910-crowd flags by name, in observers.csv's order (study_result.h). */
+static const struct {
+	unsigned bit;
+	const char *name;
+} P910[] = {{STY_P910_CATCH, "catch"}, {STY_P910_GOLD, "gold"}, {STY_P910_VARIANCE, "variance"}};
+
+static void p910_text(int flags, char *buf, size_t size)
+{
+	snprintf(buf, size, "%s", flags < 0 ? "-" : "");
+	for (size_t k = 0, any = 0; flags > 0 && k < sizeof P910 / sizeof *P910; k++)
+		if ((unsigned)flags & P910[k].bit) {
+			size_t len = strlen(buf);
+			snprintf(buf + len, size - len, "%s%s", any++ ? ";" : "", P910[k].name);
+		}
 }
 
 static json_t *num(double v) { return isfinite(v) ? json_real(v) : json_null(); }
@@ -122,11 +148,16 @@ int sty_status_json(sty *s, char **json, char *err, size_t err_size)
 	for (size_t i = 0; i < x.n; i++) {
 		const part *p = &x.p[i];
 		answers += p->answered, trials += p->total, completed += p->total && p->answered == p->total;
-		json_array_append_new(ps, json_pack("{s:s, s:i, s:i, s:b, s:o, s:i, s:o}", "label", p->label, "answered",
-						    p->answered, "total", p->total, "done", p->total && p->answered == p->total,
-						    "last_activity", p->last[0] ? json_string(p->last) : json_null(),
-						    "restarts", p->restarts, "flagged",
-						    p->flagged < 0 ? json_null() : json_boolean(p->flagged)));
+		json_t *p910 = p->p910 < 0 ? json_null() : json_array();
+		for (size_t k = 0; p->p910 > 0 && k < sizeof P910 / sizeof *P910; k++)
+			if ((unsigned)p->p910 & P910[k].bit)
+				json_array_append_new(p910, json_string(P910[k].name));
+		json_array_append_new(ps, json_pack("{s:s, s:i, s:i, s:b, s:o, s:i, s:o, s:i, s:s, s:o}", "label", p->label,
+						    "answered", p->answered, "total", p->total, "done",
+						    p->total && p->answered == p->total, "last_activity",
+						    p->last[0] ? json_string(p->last) : json_null(), "restarts", p->restarts,
+						    "flagged", p->flagged < 0 ? json_null() : json_boolean(p->flagged), "broken",
+						    p->broken, "broken_trials", p->broken_list, "p910", p910));
 	}
 	for (size_t i = 0; x.res && i < x.res->row_count; i++) {
 		const sty_row *w = &x.res->rows[i];
@@ -163,14 +194,17 @@ int sty_status_print(sty *s, FILE *f, char *err, size_t err_size)
 		answers += x.p[i].answered, trials += x.p[i].total, completed += x.p[i].total && x.p[i].answered == x.p[i].total;
 	fprintf(f, "study %s: %zu participants, %ld completed, %ld of %ld trials answered\n\n", sty_path(s), x.n, completed,
 		answers, trials);
-	fprintf(f, "%-12s %10s  %-4s  %-24s  %8s  %s\n", "participant", "answered", "done", "last activity (UTC)",
-		"restarts", "flagged");
+	fprintf(f, "%-12s %10s  %-4s  %-24s  %8s  %-7s  %-20s  %s\n", "participant", "answered", "done", "last activity (UTC)",
+		"restarts", "flagged", "p910", "broken playbacks (trial verdict)");
 	for (size_t i = 0; i < x.n; i++) {
 		const part *p = &x.p[i];
 		char frac[32];
 		snprintf(frac, sizeof frac, "%d/%d", p->answered, p->total);
-		fprintf(f, "%-12s %10s  %-4s  %-24s  %8d  %s\n", p->label, frac, p->total && p->answered == p->total ? "yes" : "no",
-			p->last[0] ? p->last : "-", p->restarts, p->flagged < 0 ? "-" : p->flagged ? "yes" : "no");
+		char flags[64];
+		p910_text(p->p910, flags, sizeof flags);
+		fprintf(f, "%-12s %10s  %-4s  %-24s  %8d  %-7s  %-20s  %s\n", p->label, frac,
+			p->total && p->answered == p->total ? "yes" : "no", p->last[0] ? p->last : "-", p->restarts,
+			p->flagged < 0 ? "-" : p->flagged ? "yes" : "no", flags[0] ? flags : "none", p->broken_list[0] ? p->broken_list : "-");
 	}
 	fprintf(f, "\n");
 	if (!x.res) {

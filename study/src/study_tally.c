@@ -212,20 +212,27 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 	memset(d, 0, sizeof *d);
 	sqlite3_stmt *st;
 	/* Screening from catch trials (answers of broken playbacks left out: study_telemetry.h), and the P.910-crowd
-	 * screening (ITU-T P.808 / P.910 crowdsourcing, as the P.808 toolkit applies them to CCR): a hidden-reference
-	 * (catch) answer outside -1..1 fails the gold question; the test answers' sample variance below 0.1 is
-	 * straightlining. The test answers are the raw ones the participant chose (A much better .. B much better). */
+	 * screening (study_result.h, as the P.910-crowd toolkit applies it): a hidden-reference (catch) answer outside
+	 * -1..1; a gold answer (reference-relative) more than one step from "reference much better"; the test answers'
+	 * sample variance below 0.1 is straightlining. The test answers are the raw ones the participant chose (A much
+	 * better .. B much better). */
 	if (sqlite3_prepare_v2(s->db,
 			       "SELECT p.id, p.label, count(a.answer), avg(abs(a.answer)), sum(abs(a.answer) = 2),"
 			       " (SELECT count(*) FROM answers b WHERE b.participant = p.id AND b.broken IS NOT NULL),"
 			       " (SELECT count(*) || ',' || coalesce(sum(b.answer), 0) || ',' || coalesce(sum(b.answer * b.answer), 0)"
 			       "  FROM answers b JOIN trials u ON u.participant = b.participant AND u.idx = b.idx"
 			       "  WHERE b.participant = p.id AND u.kind = 'test' AND b.broken IS NULL)"
+			       " , (SELECT count(*) || ',' || coalesce(sum(abs(CASE WHEN u.ref_first THEN -b.answer"
+			       "  ELSE b.answer END - ?1) > ?2), 0)"
+			       "  FROM answers b JOIN trials u ON u.participant = b.participant AND u.idx = b.idx"
+			       "  WHERE b.participant = p.id AND u.kind = 'gold' AND b.broken IS NULL)"
 			       " FROM participants p LEFT JOIN trials t ON t.participant = p.id AND t.kind = 'catch'"
 			       " LEFT JOIN answers a ON a.participant = t.participant AND a.idx = t.idx AND a.broken IS NULL"
 			       " GROUP BY p.id ORDER BY p.id",
 			       -1, &st, NULL))
 		return sty_db_fail(s, err, err_size, "tally");
+	sqlite3_bind_int(st, 1, STY_P910_GOLD_ANSWER);
+	sqlite3_bind_int(st, 2, STY_P910_GOLD_TOLERANCE);
 	while (sqlite3_step(st) == SQLITE_ROW) {
 		int64_t pid = sqlite3_column_int64(st, 0);
 		int n = sqlite3_column_int(st, 2), strong = sqlite3_column_int(st, 4);
@@ -249,7 +256,9 @@ static int load(sty *s, const sty_tally_desc *td, data *d, sty_result *res, char
 		ob->flagged = flag;
 		ob->broken = sqlite3_column_int(st, 5);
 		ob->rating_variance = tn >= 2 ? ((double)sxx - (double)sx * (double)sx / (double)tn) / (double)(tn - 1) : NAN;
-		ob->p910 = (strong > 0 ? STY_P910_GOLD : 0u) |
+		if (sscanf((const char *)sqlite3_column_text(st, 7), "%d,%d", &ob->gold_n, &ob->gold_wrong) != 2)
+			ob->gold_n = ob->gold_wrong = 0;
+		ob->p910 = (strong > 0 ? STY_P910_CATCH : 0u) | (ob->gold_wrong > 0 ? STY_P910_GOLD : 0u) |
 			   (tn >= 2 && ob->rating_variance < STY_P910_MIN_VARIANCE ? STY_P910_VARIANCE : 0u);
 		if ((flag || (td->p910 && ob->p910)) && !td->keep_flagged) {
 			int64_t *nf = realloc(d->flagged, (d->nflagged + 1) * sizeof *nf);

@@ -73,7 +73,8 @@ static json_t *period_json(const sty_variant *v) { return v->period ? json_integ
 
 static void write_observers(FILE *f, const sty_result *r)
 {
-	fprintf(f, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910\n");
+	fprintf(f, "participant,catch_n,catch_mean_abs_answer,catch_much_better,flagged,broken,rating_variance,p910,gold_n,"
+		   "gold_wrong\n");
 	for (size_t i = 0; i < r->observer_count; i++) {
 		const sty_observer *o = &r->observers[i];
 		char label[160];
@@ -82,10 +83,15 @@ static void write_observers(FILE *f, const sty_result *r)
 			fprintf(f, "%.4f", o->catch_mean_abs);
 		fprintf(f, ",%d,%d,%d,", o->catch_much_better, o->flagged, o->broken);
 		csv_num(f, o->rating_variance, "%.4f");
-		/* the P.910-crowd flags, ';'-joined: gold (a catch answer outside -1..1), variance (straightlining) */
-		fprintf(f, ",%s%s%s\n", o->p910 & STY_P910_GOLD ? "gold" : "",
-			(o->p910 & STY_P910_GOLD) && (o->p910 & STY_P910_VARIANCE) ? ";" : "",
-			o->p910 & STY_P910_VARIANCE ? "variance" : "");
+		/* the P.910-crowd flags, ';'-joined (study_result.h): catch (a catch answer outside -1..1), gold (a gold
+		 * answer more than one step from "reference much better"), variance (straightlining) */
+		static const struct { unsigned bit; const char *name; } flags[] = {
+			{STY_P910_CATCH, "catch"}, {STY_P910_GOLD, "gold"}, {STY_P910_VARIANCE, "variance"}};
+		fputc(',', f);
+		for (size_t k = 0, any = 0; k < sizeof flags / sizeof *flags; k++)
+			if (o->p910 & flags[k].bit)
+				fprintf(f, "%s%s", any++ ? ";" : "", flags[k].name);
+		fprintf(f, ",%d,%d\n", o->gold_n, o->gold_wrong);
 	}
 }
 
@@ -171,7 +177,14 @@ static void variant_name(const sty_variant *v, char *b, size_t n)
 
 /* tables.md (issue 27.11): every table of the tally — conditions, ANOVA with the reason where there is none, post
  * hoc tests, observer screening and JOD — in the same units and conventions as the CSV files. */
-static void write_tables(FILE *f, const sty_result *r)
+/* The model's predictions (tally --model), or none. */
+typedef struct preds {
+	const char *model;
+	sty_model_pred *p;
+	size_t n;
+} preds;
+
+static void write_tables(FILE *f, const sty_result *r, const preds *pr)
 {
 	char a[64], b[64], c[64], d[64], e[64], g[64], h[64], sc[160], ca[160];
 	fprintf(f, "# Study results\n\n## Conditions\n\n| method | T | period | scene | camera | n | Q [95%% CI] | p_ref [95%% CI] | JND |\n"
@@ -248,15 +261,18 @@ static void write_tables(FILE *f, const sty_result *r)
 	fprintf(f, "\nFlagged: more than half of the catch answers (reference against itself) \"much better\". %zu of %zu "
 		   "flagged; %zu left out of the statistics%s.\n",
 		flagged, r->observer_count, r->left_out, flagged && !r->left_out ? " (--keep-flagged)" : "");
-	size_t gold = 0, variance = 0, broken = 0;
+	size_t catches = 0, gold = 0, gold_n = 0, variance = 0, broken = 0;
 	for (size_t i = 0; i < r->observer_count; i++) {
+		catches += (r->observers[i].p910 & STY_P910_CATCH) != 0;
 		gold += (r->observers[i].p910 & STY_P910_GOLD) != 0;
+		gold_n += (size_t)r->observers[i].gold_n;
 		variance += (r->observers[i].p910 & STY_P910_VARIANCE) != 0;
 		broken += (size_t)r->observers[i].broken;
 	}
-	fprintf(f, "P.910-crowd screening (observers.csv p910): %zu failed a gold question (a catch answer \"much better\"), "
-		   "%zu answered without variance (< 0.1); left out only with --p910. Answers of broken playbacks, not "
-		   "counted: %zu.\n", gold, variance, broken);
+	fprintf(f, "P.910-crowd screening (observers.csv p910): %zu answered a catch trial \"much better\" (catch), %zu "
+		   "failed a gold trial (gold: %zu gold answers in all; one more than a step from \"reference much better\" "
+		   "fails), %zu answered without variance (< 0.1); left out only with --p910. Answers of broken playbacks, not "
+		   "counted: %zu.\n", catches, gold, gold_n, variance, broken);
 
 	fprintf(f, "\n## JOD (Thurstone Case V, reference at 0)\n\n| method | T | period | scene | camera | JOD [95%% CI] | "
 		   "participants |\n|---|---|---|---|---|---|---|\n");
@@ -274,16 +290,27 @@ static void write_tables(FILE *f, const sty_result *r)
 
 	/* issue 28: the measured thresholds (thresholds.csv) beside the JOD */
 	fprintf(f, "\n## Thresholds (T at 1 JND)\n\n| method | period | scene | camera | trials | t_jnd [95%% CI] | levels | "
-		   "participants |\n|---|---|---|---|---|---|---|---|\n");
+		   "participants |%s\n|---|---|---|---|---|---|---|---|%s\n", pr->model ? " predicted t_jnd [95%] |" : "",
+		pr->model ? "---|" : "");
 	for (size_t i = 0; i < r->threshold_count; i++) {
 		const sty_threshold_row *t = &r->thresholds[i];
 		char P[16] = "";
 		if (t->period)
 			snprintf(P, sizeof P, "%u", t->period);
-		fprintf(f, "| %s | %s | %s | %s | %zu | %s [%s, %s] | %zu | %zu |\n", t->method, P,
+		fprintf(f, "| %s | %s | %s | %s | %zu | %s [%s, %s] | %zu | %zu |", t->method, P,
 			md_text(t->scene, sc, sizeof sc), md_text(t->camera, ca, sizeof ca), t->f.n,
 			md_num(t->f.t_jnd, "%.2f", a, sizeof a), md_num(t->f.t_jnd_lo, "%.2f", b, sizeof b),
 			md_num(t->f.t_jnd_hi, "%.2f", c, sizeof c), t->f.levels, t->f.participants);
+		if (pr->model) { /* beside the measured one, as `report --model` shows it (pooled rows: none) */
+			const sty_model_pred *q = t->pooled ? NULL : sty_model_pred_find(pr->p, pr->n, t->method, t->period,
+											  t->scene, t->camera);
+			if (q)
+				fprintf(f, " %s [%s, %s] |", md_num(q->t_jnd, "%.2f", a, sizeof a),
+					md_num(q->t_jnd_lo, "%.2f", b, sizeof b), md_num(q->t_jnd_hi, "%.2f", c, sizeof c));
+			else
+				fprintf(f, " – |");
+		}
+		fputc('\n', f);
 	}
 	if (!r->threshold_count)
 		fprintf(f, "\nNo method was rated at two or more levels of T: no threshold.\n");
@@ -291,6 +318,10 @@ static void write_tables(FILE *f, const sty_result *r)
 		fprintf(f, "\nt_jnd: the T at which the fitted p_ref of the median observer reaches 0.75 (psychometric function in "
 			   "log2 T with lapse and observer variability, README \"Thresholds\"); inf: not reached up to the largest "
 			   "rated T; 95%% profile-likelihood interval.\n");
+	if (r->threshold_count && pr->model)
+		fprintf(f, "Predicted t_jnd: the model %s (README \"Metric → JND model\") for this series of the sweep's clips; "
+			   "its 95%% interval from the model's leave-one-scene-out error; – for pooled rows and series it "
+			   "does not predict.\n", pr->model);
 }
 
 /* anova.csv: per variant its effects, or one row without an effect whose note says why there is none (issue 27.10);
@@ -443,7 +474,8 @@ static int prepare(sty *s, const sty_tally_desc *d, bool *made_dir, char *err, s
 /* The files appear together or not at all: every one is written to its temporary file, and they are renamed into
  * place only when all are complete (a full disk: the folder keeps what it had; a folder made for this tally is
  * removed again). */
-static int write_files(const sty_result *r, const sty_tally_desc *d, bool made_dir, char *err, size_t err_size)
+static int write_files(const sty_result *r, const sty_tally_desc *d, const preds *pr, bool made_dir, char *err,
+		       size_t err_size)
 {
 	char path[4200];
 	tl_atomic outs[TALLY_SET] = {0};
@@ -458,9 +490,12 @@ static int write_files(const sty_result *r, const sty_tally_desc *d, bool made_d
 		write_anova(outs[F_ANOVA].f, r);
 		write_posthoc(outs[F_POSTHOC].f, r);
 		write_jod(outs[F_JOD].f, r);
-		write_tables(outs[F_TABLES].f, r);
+		write_tables(outs[F_TABLES].f, r, pr);
 		write_fig3(outs[F_FIG3].f, r);
-		sty_write_thresholds(outs[F_THRESHOLDS].f, r);
+		if (pr->model)
+			sty_write_thresholds_predicted(outs[F_THRESHOLDS].f, r, pr->p, pr->n);
+		else
+			sty_write_thresholds(outs[F_THRESHOLDS].f, r);
 		json_t *jc = conditions_json(r), *ja = anova_json(r);
 		if (tl_json_dump(outs[F_CONDITIONS_JSON].f, jc) || tl_json_dump(outs[F_ANOVA_JSON].f, ja))
 			rc = tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot write the JSON tables", d->out);
@@ -483,27 +518,42 @@ int sty_tally_write(sty *s, const sty_result *r, const sty_tally_desc *d, char *
 {
 	bool made_dir = false;
 	int rc = prepare(s, d, &made_dir, err, err_size);
-	return rc ? rc : write_files(r, d, made_dir, err, err_size);
+	preds none = {0};
+	return rc ? rc : write_files(r, d, &none, made_dir, err, err_size);
 }
 
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size)
 {
 	bool made_dir = false;
 	sty_result *r = NULL;
+	preds pr = {.model = d->model};
+	/* A model (issue 28, `tally --model`): its predictions for the sweep's series, by the code of `report --model`;
+	 * a file that is not a model is refused before anything is written. */
+	if (d->model && !d->sweep)
+		return tl_error(err, err_size, TL_ERR_ARG, "--model needs --sweep SWEEP (the sweep whose clips were rated: the "
+				"model predicts from its summary.csv)");
+	if (d->sweep && !d->model)
+		return tl_error(err, err_size, TL_ERR_ARG, "--sweep goes with --model MODEL.json");
+	int rc = d->model ? sty_model_predict(d->model, d->sweep, NULL, 0, &pr.p, &pr.n, err, err_size) : TL_OK;
 	/* The outputs are checked and the folder made before the statistics, as they always were: a bad --out is
 	 * reported before an empty study. */
-	int rc = prepare(s, d, &made_dir, err, err_size);
-	if (rc)
+	if (!rc)
+		rc = prepare(s, d, &made_dir, err, err_size);
+	if (rc) {
+		free(pr.p);
 		return rc;
+	}
 	if ((rc = sty_tally_compute(s, d, &r, err, err_size))) {
 		if (made_dir)
 			rmdir(d->out);
+		free(pr.p);
 		return rc;
 	}
-	rc = write_files(r, d, made_dir, err, err_size);
+	rc = write_files(r, d, &pr, made_dir, err, err_size);
 	if (!rc)
 		sty_tally_notes(r, stderr);
 	sty_result_free(&r);
+	free(pr.p);
 	return rc;
 }
 

@@ -89,10 +89,10 @@ static void num(FILE *f, double v)
 	fprintf(f, ",%s", sty_num_cell(v, "%.6f", b, sizeof b));
 }
 
-void sty_write_thresholds(FILE *f, const sty_result *r)
+static void write_rows(FILE *f, const sty_result *r, const sty_model_pred *pred, size_t npred, bool predicted)
 {
 	fprintf(f, "method,period,scene,camera,n,t_jnd,t_jnd_lo,t_jnd_hi,log2_t_jnd,slope,lapse,observer_sd,levels,"
-		   "participants\n");
+		   "participants%s\n", predicted ? ",predicted_t_jnd,predicted_t_jnd_lo,predicted_t_jnd_hi" : "");
 	for (size_t i = 0; i < r->threshold_count; i++) {
 		const sty_threshold_row *w = &r->thresholds[i];
 		char cm[80], csc[160], cca[160], ps[16] = "";
@@ -102,6 +102,17 @@ void sty_write_thresholds(FILE *f, const sty_result *r)
 			sty_csv_cell(w->camera, cca, sizeof cca), w->f.n);
 		num(f, w->f.t_jnd), num(f, w->f.t_jnd_lo), num(f, w->f.t_jnd_hi), num(f, w->f.theta);
 		num(f, w->f.slope), num(f, w->f.lapse), num(f, w->f.observer_sd);
-		fprintf(f, ",%zu,%zu\n", w->f.levels, w->f.participants);
+		fprintf(f, ",%zu,%zu", w->f.levels, w->f.participants);
+		if (predicted) /* as `report --model` meets them: pooled rows have none */
+			sty_model_pred_cells(f, w->pooled ? NULL : sty_model_pred_find(pred, npred, w->method, w->period, w->scene,
+										     w->camera));
+		fputc('\n', f);
 	}
+}
+
+void sty_write_thresholds(FILE *f, const sty_result *r) { write_rows(f, r, NULL, 0, false); }
+
+void sty_write_thresholds_predicted(FILE *f, const sty_result *r, const sty_model_pred *pred, size_t npred)
+{
+	write_rows(f, r, pred, npred, true);
 }

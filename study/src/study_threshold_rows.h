@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "taslab/study_model.h"
 #include "taslab/study_result.h"
 
 typedef struct sty_trating {
@@ -24,5 +25,8 @@ int sty_thresholds_compute(sty_trating *t, size_t n, sty_result *r, char *err, s
 /* thresholds.csv: method,period,scene,camera,n,t_jnd,t_jnd_lo,t_jnd_hi,log2_t_jnd,slope,lapse,observer_sd,levels,
  * participants (inf and 0 for open ends, as every CSV of the tally writes infinity). */
 void sty_write_thresholds(FILE *f, const sty_result *r);
+/* The same with a model's predictions (`tally --model`, npred may be 0): predicted_t_jnd,predicted_t_jnd_lo,
+ * predicted_t_jnd_hi after the columns above (empty for pooled rows and series without a prediction). */
+void sty_write_thresholds_predicted(FILE *f, const sty_result *r, const sty_model_pred *pred, size_t npred);
 
 #endif

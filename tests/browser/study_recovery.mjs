@@ -8,7 +8,9 @@
 //      server holds is one the page was told was saved (27.4);
 //   4. both clips of every trial the same byte length, and no trial kind but training in the trial JSON (27.6);
 //   5. a second `study serve` on the same study refused in one line (27.5); the log lines of answers, restarts and
-//      completions, and the live status page with the admin token (27.8, screenshot WORK/status.png).
+//      completions, and the live status page with the admin token (27.8, screenshot WORK/status.png): its P.910-crowd
+//      flags and broken playbacks per participant (issue 28) as the tally and the export say (one playback hidden for
+//      certain); a gold trial in each plan, blinded like the others.
 //   node study_recovery.mjs TASLAB_BINARY STUDY.db WORK_DIR
 import { chromium } from 'playwright-core';
 import { spawn, spawnSync } from 'node:child_process';
@@ -48,6 +50,12 @@ const statusText = page => page.evaluate(() => {
   const s = document.getElementById('status');
   return getComputedStyle(s).display === 'none' ? '' : s.textContent;
 });
+// Answers the server holds for a participant, counted or not (the admin status; the token is set once it started).
+let token = null;
+async function stored(label) {
+  const r = await fetch(`${base}/admin/status`, { headers: { authorization: 'Bearer ' + token } });
+  return (await r.json()).participants.find(p => p.label === label).answered;
+}
 async function answered(code) { return (await (await fetch(`${base}/api/${code}/trial`)).json()).answered; }
 // Answers the trial on the ask panel by key and waits for what comes next.
 async function answerNow(page, key) {
@@ -61,7 +69,7 @@ let browser;
 const trials = [];   // every trial JSON the pages received
 try {
   await startServer();
-  const token = (serverLog.match(/admin token ([0-9a-f]{32})/) || [])[1];
+  token = (serverLog.match(/admin token ([0-9a-f]{32})/) || [])[1];
   if (!token) throw new Error('no admin token in: ' + serverLog);
   const links = spawnSync(taslab, ['study', 'links', '--db', db], { encoding: 'utf8' }).stdout.trim().split('\n');
   const codes = links.map(l => l.replace(/.*\/p\//, ''));
@@ -104,8 +112,8 @@ try {
       if (!sawBreakDown) {
         // 1. The server is down when Continue is pressed: the page must not offer the answer panel.
         sawBreakDown = true;
+        const before = await stored('P001');   // every stored answer, broken playbacks' too (progress skips those)
         await killServer();
-        const before = await answered(codes[0]).catch(() => -1);
         await page.click('#resume');
         await sleep(2500);
         if (await panel(page, 'ask')) fail('after a break with the server down, the answer panel is shown before the clips played');
@@ -114,7 +122,8 @@ try {
         if (!/Connection lost/.test(msg)) fail(`no visible retry message while the server is down (status '${msg}')`);
         await startServer();
         await waitPanel(page, ['ask']);
-        if ((await answered(codes[0])) !== acknowledged) fail(`keys pressed before the clips played stored an answer (before ${before})`);
+        const after = await stored('P001');
+        if (after !== before) fail(`keys pressed before the clips played stored an answer (${before} -> ${after} stored)`);
         if (await statusText(page)) fail('the retry message stays after the server came back');
       } else {
         await page.click('#resume');
@@ -194,6 +203,14 @@ try {
   for (const re of [/P001 answered trial \d+ \(\d+\/\d+\)/, /P001 completed the session/, /P002 restarted/,
                     /P002: an answer to trial \d+ from a superseded session refused/])
     if (!re.test(serverLog)) fail(`no log line ${re}:\n${serverLog}`);
+  // a broken playback, for certain: participant 2's current trial answered with a playback hidden while the pair
+  // played (what the page sends when the tab was switched away): stored, not counted, retaken (issue 28)
+  const cur2 = await (await fetch(`${base}/api/${codes[1]}/trial`)).json();
+  const hiddenBody = JSON.stringify({ trial: cur2.index, answer: 0, rt_ms: 900, telemetry: { play_ms: [150, 150],
+    dropped: 0, frames: 24, hidden: 1, hidden_ms: 400, hidden_play: 1, fullscreen: 0 } });
+  const hr = await fetch(`${base}/api/${codes[1]}/answer`, { method: 'POST', body: hiddenBody,
+    headers: { 'content-type': 'application/json' } });
+  if (hr.status !== 200) fail(`an answer with a hidden playback: HTTP ${hr.status} ${await hr.text()}`);
   const st = await browser.newPage();
   await st.goto(`${base}/status#${token}`);
   // conditions: rows, or the note why there are none yet (all test answers from observers the screening flags)
@@ -210,6 +227,24 @@ try {
   const obsLines = require_file(`${work}/tally/observers.csv`).trim().split('\n'), fcol = obsLines[0].split(',').indexOf('flagged');
   const flaggedP1 = obsLines.some(l => l.startsWith('P001,') && l.split(',')[fcol] === '1');
   if (obs.status !== 0 || rows[0][5] !== (flaggedP1 ? 'yes' : 'no')) fail(`status page flags P001 '${rows[0][5]}', the tally: ${flaggedP1}`);
+  // the P.910-crowd flags and the broken playbacks (issue 28): each participant's cells are the tally's observers.csv
+  // (p910, broken) and the export's broken answers (planned trial, verdict), so the page never disagrees with them
+  const head = obsLines[0].split(','), pcol = head.indexOf('p910'), bcol = head.indexOf('broken');
+  const exp = spawnSync(taslab, ['study', 'export', '--db', db, '--out', `${work}/export.csv`], { encoding: 'utf8' });
+  const ex = require_file(`${work}/export.csv`).trim().split('\n'), eh = ex[0].split(',');
+  const [ep, et, eb, er] = ['participant', 'trial', 'broken', 'retake_of'].map(c => eh.indexOf(c));
+  for (const [i, label] of ['P001', 'P002'].entries()) {
+    const o = obsLines.find(l => l.startsWith(label + ',')).split(',');
+    const wantFlags = o[pcol] ? o[pcol].split(';').join(', ') : 'none';
+    const brokenRows = ex.slice(1).map(l => l.split(',')).filter(c => c[ep] === label && c[eb]);
+    const wantBroken = brokenRows.length ? `${brokenRows.length} (${brokenRows.map(c =>
+      `trial ${Number(c[er] !== '' ? c[er] : c[et]) + 1}: ${c[eb]}`).join(', ')})` : 'none';
+    if (exp.status !== 0 || rows[i][6] !== wantFlags || rows[i][7] !== wantBroken || Number(o[bcol]) !== brokenRows.length)
+      fail(`status page, ${label}: P.910 '${rows[i][6]}', broken '${rows[i][7]}'; the tally and export: '${wantFlags}', ` +
+           `'${wantBroken}' (observers.csv broken ${o[bcol]})`);
+  }
+  if (!rows[1][7].includes(`trial ${cur2.index + 1}: hidden`)) fail(`status page, P002: the hidden playback is not listed: '${rows[1][7]}'`);
+  console.log(`status page: P.910 flags '${rows[0][6]}', '${rows[1][6]}'; broken playbacks '${rows[0][7]}', '${rows[1][7]}'`);
   const anon = await fetch(`${base}/admin/status`);
   if (anon.status !== 401) fail(`/admin/status without the token: ${anon.status}`);
   const bare = await (await fetch(`${base}/status`)).text();

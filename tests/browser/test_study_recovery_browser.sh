@@ -5,7 +5,7 @@
 # recovery by itself, the message gone afterwards), one link in two browser contexts (the window taken over is told
 # and stores nothing), both clips of every trial at one byte length and no trial kind but training in the trial JSON,
 # the server's log lines, a second server on the same study refused, and the live status page (screenshot
-# status.png in WORK_DIR).
+# status.png in WORK_DIR) with each participant's P.910-crowd flags and broken playbacks (issue 28).
 # Usage: test_study_recovery_browser.sh TASLAB_BINARY WORK_DIR
 source "$(dirname "$0")/common.sh"
 mkdir -p "$work/stimuli"
@@ -26,7 +26,7 @@ for set in calm-still:calm:still:stationary calm-walk:calm:walk:moving; do
 JSON
 done
 cmp -s "$work/ref.webm" "$work/test.webm" && { echo "the reference and test clips must differ in size"; exit 1; }
-"$taslab" study design --db "$work/study.db" --stimuli "$work/stimuli" --participants 2 --seed 5 --catch 1 --training 1 \
+"$taslab" study design --db "$work/study.db" --stimuli "$work/stimuli" --participants 2 --seed 5 --catch 1 --gold 1 --training 1 \
   --break-every 2 >/dev/null
 node "$here/study_recovery.mjs" "$taslab" "$work/study.db" "$work"
 echo "1 passed, 0 failed"

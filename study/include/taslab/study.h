@@ -88,6 +88,9 @@ typedef struct sty_design_desc {
 	uint64_t seed;
 	uint32_t training;        /* training trials at the start of each session (not analysed) */
 	uint32_t catch_trials;    /* reference-vs-reference trials mixed in (observer screening) */
+	uint32_t gold_trials;     /* gold trials mixed in (P.910-crowd screening): the reference against a variant whose
+				   * answer is known, "reference much better" (each set's largest T or period, or gold_variant) */
+	const char *gold_variant; /* the gold condition's pairs.json id in every set (e.g. "tfr-T64"); NULL: the largest */
 	uint32_t break_every;     /* a break before every N-th trial (0: none) */
 	double answer_s;          /* assumed answer time per trial for the session-length estimate (default 4) */
 	double gap_s;             /* grey gap between the clips (default 0.5) */
@@ -117,7 +120,7 @@ int sty_participant_codes(sty *s, char ***codes, size_t *n, char *err, size_t er
 typedef struct sty_trial {
 	uint32_t index, total, answered;
 	char clip_a[48], clip_b[48];   /* opaque clip names ("<32 hex digits>.webm"), served as /clips/<name> */
-	char kind[16];                 /* test, catch, training */
+	char kind[16];                 /* test, catch, gold, training */
 	bool break_before;
 	bool stereo;                   /* the study's clips show both eyes side by side (pairs.json "display": "stereo") */
 	bool done;                     /* all trials answered (the other fields are unset) */
@@ -182,6 +185,9 @@ typedef struct sty_tally_desc {
 	uint32_t bootstrap;       /* bootstrap resamples for JOD intervals (default 1000) */
 	uint64_t seed;            /* bootstrap seed */
 	bool no_plot;             /* skip the Fig. 3 plot (gnuplot; tests and fuzzing) */
+	const char *model;        /* issue 28: a saved MODEL.json (study_model.h) whose predicted t_jnd for `sweep`'s series
+				   * thresholds.csv and tables.md show beside the measured ones (as `report --model`) */
+	const char *sweep;        /* with model: the sweep whose clips were rated (its summary.csv) */
 } sty_tally_desc;
 
 int sty_tally(sty *s, const sty_tally_desc *d, char *err, size_t err_size);

@@ -19,6 +19,7 @@
 #define TASLAB_STUDY_MODEL_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -67,6 +68,14 @@ int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size
  * NULL) receives the model's metric. *out is malloc'ed. TL_ERR_ARG (one line) for a file that is not a model. */
 int sty_model_predict(const char *model_json, const char *sweep, char *metric, size_t metric_size, sty_model_pred **out,
 		      size_t *n, char *err, size_t err_size);
+
+/* The prediction in p[0..n) for a series (method, period 0: none, scene, camera), or NULL: how a measured threshold
+ * meets its prediction (`report --model`, `tally --model`). */
+const sty_model_pred *sty_model_pred_find(const sty_model_pred *p, size_t n, const char *method, long period,
+					  const char *scene, const char *camera);
+/* The three cells ",t_jnd,t_jnd_lo,t_jnd_hi" of a prediction (p NULL: empty) as the predictions file writes them
+ * (%.4f; inf and 0 for open ends): the predicted columns of `report --model`'s and `tally --model`'s thresholds.csv. */
+void sty_model_pred_cells(FILE *f, const sty_model_pred *p);
 
 /* Weighted isotonic (non-decreasing) regression of y[0..n) in the given order (pool adjacent violators): fit[i] is
  * the weighted mean of i's pooled block. Weights > 0. */

@@ -79,15 +79,23 @@ typedef struct sty_observer {
 	bool flagged;                /* more than half of them |a| = 2 */
 	int broken;                  /* answers stored from broken playbacks (not counted; README "Telemetry") */
 	double rating_variance;      /* sample variance of the counted test answers (NAN: fewer than two) */
-	unsigned p910;               /* P.910-crowd screening flags: STY_P910_GOLD | STY_P910_VARIANCE (0: passed) */
+	int gold_n;                  /* gold trials answered (counted answers: broken playbacks left out) */
+	int gold_wrong;              /* of them, answers more than STY_P910_GOLD_TOLERANCE from the known answer */
+	unsigned p910;               /* P.910-crowd screening flags: STY_P910_CATCH | _GOLD | _VARIANCE (0: passed) */
 } sty_observer;
 
-/* P.910-crowd screening (ITU-T P.808 crowdsourcing rules as the P.808 toolkit applies them to CCR; README
- * "Telemetry and screening"): GOLD, a hidden-reference (catch) answer outside -1..1; VARIANCE, the test answers'
- * sample variance below STY_P910_MIN_VARIANCE (the same answer throughout). */
-#define STY_P910_GOLD 1u
+/* P.910-crowd screening (README "Telemetry and screening"; the P.910-crowd toolkit's result parser, github.com/
+ * microsoft/P.910 src/assets_master_script/result_parser_template.cfg): CATCH, a hidden-reference (catch) answer
+ * outside -1..1 (the known answer 0 missed by more than one step); GOLD, a gold trial's reference-relative answer
+ * more than STY_P910_GOLD_TOLERANCE from the known STY_P910_GOLD_ANSWER (the toolkit's [gold_question] variance: 1;
+ * a session is used only when its gold questions are answered correctly, [accept_and_use] gold_standard_bigger_equal);
+ * VARIANCE, the test answers' sample variance below STY_P910_MIN_VARIANCE (the same answer throughout). */
+#define STY_P910_CATCH 1u
 #define STY_P910_VARIANCE 2u
+#define STY_P910_GOLD 4u
 #define STY_P910_MIN_VARIANCE 0.1
+#define STY_P910_GOLD_ANSWER 2    /* reference much better */
+#define STY_P910_GOLD_TOLERANCE 1
 
 /* The JND threshold of a method (x period) in one scene and camera path, or pooled over them (issue 28; thresholds.csv):
  * the psychometric fit of study_threshold.h over the rated levels of T (at least two). */
