@@ -8,8 +8,7 @@
  *    identical images give 0, a changed pixel is found at its place, 1x1 and odd sizes, bad input;
  *  - the metric registry: --metrics selection keeps the column layout, unknown metrics and options are refused;
  *  - bad input: sizes, frame counts, unreadable files, NaN in EXR; run folders checked against their manifest
- *    (stale, missing and resized frames, --no-exr, no manifest; test_diff_runs_checked);
- *  - the report's plot preamble: the canvas grows with the key, line types 1..32 distinct (test_plot_preamble). */
+ *    (stale, missing and resized frames, --no-exr, no manifest; test_diff_runs_checked). */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -980,34 +979,6 @@ static void test_runs_summary(void **state)
 	assert_non_null(strstr(err, "manifest.json"));
 }
 
-/* A sweep of every method lists twenty-odd lines in a plot's key: the canvas must grow by a key row per three entries
- * (the plot area keeps its height) and the first 32 lines must differ in colour or in dash and point type. */
-static void test_plot_preamble(void **state)
-{
-	(void)state;
-	char *buf = NULL;
-	size_t len = 0;
-	FILE *f = open_memstream(&buf, &len);
-	assert_non_null(f);
-	mtr_plot_svg_preamble(f, 22);
-	fclose(f);
-	assert_non_null(strstr(buf, "set terminal svg size 460,370 ")); /* 250 + 15 x 8 rows of three */
-	char seen[32][48];
-	for (int k = 1; k <= 32; k++) {
-		char key[32];
-		snprintf(key, sizeof key, "set linetype %d lc rgb '", k);
-		const char *at = strstr(buf, key);
-		assert_non_null(at);
-		at += strlen(key);
-		const char *nl = strchr(at, '\n');
-		assert_non_null(nl);
-		snprintf(seen[k - 1], sizeof seen[k - 1], "%.*s", (int)(nl - at), at); /* colour, dash, point */
-		for (int j = 0; j < k - 1; j++)
-			assert_string_not_equal(seen[j], seen[k - 1]);
-	}
-	free(buf);
-}
-
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -1019,7 +990,6 @@ int main(void)
 		cmocka_unit_test(test_flip_identical_and_pixel), cmocka_unit_test(test_flip_sizes_and_errors),
 		cmocka_unit_test(test_registry),         cmocka_unit_test(test_percentile_paths),
 		cmocka_unit_test(test_ssim_frame),       cmocka_unit_test(test_diff_runs_checked),
-		cmocka_unit_test(test_plot_preamble),
 	};
 	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -1,5 +1,6 @@
 /* test_study_tables.c — issue 27.10 and 27.11: one convention for undefined values in every tally output, the reason
- * for a missing ANOVA, the tables of tables.md, and Q intervals that stay on the rating scale.
+ * for a missing ANOVA, the tables of tables.md, Q intervals that stay on the rating scale, and the report plots' key
+ * (a canvas that grows with it, 32 distinct line types: test_plot_preamble).
  *
  * References:
  *  - Q intervals: R 4.x, t.test(x)$conf.int cut to [-2, 2] (the values are in the test; tolerance 1e-6, as
@@ -15,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "taslab/metrics.h"
 #include "test_study_util.h"
 
 static char out[65536];
@@ -227,12 +229,41 @@ static void test_tables_vs_r(void **state)
 	no_nan_text(res);
 }
 
+/* A sweep of every method lists twenty-odd lines in a plot's key: the canvas must grow by a key row per three entries
+ * (the plot area keeps its height) and the first 32 lines must differ in colour or in dash and point type. */
+static void test_plot_preamble(void **state)
+{
+	(void)state;
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&buf, &len);
+	assert_non_null(f);
+	mtr_plot_svg_preamble(f, 22);
+	fclose(f);
+	assert_non_null(strstr(buf, "set terminal svg size 460,370 ")); /* 250 + 15 x 8 rows of three */
+	char seen[32][48];
+	for (int k = 1; k <= 32; k++) {
+		char key[32];
+		snprintf(key, sizeof key, "set linetype %d lc rgb '", k);
+		const char *at = strstr(buf, key);
+		assert_non_null(at);
+		at += strlen(key);
+		const char *nl = strchr(at, '\n');
+		assert_non_null(nl);
+		snprintf(seen[k - 1], sizeof seen[k - 1], "%.*s", (int)(nl - at), at); /* colour, dash, point */
+		for (int j = 0; j < k - 1; j++)
+			assert_string_not_equal(seen[j], seen[k - 1]);
+	}
+	free(buf);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_one_scene),
 		cmocka_unit_test(test_undefined_and_infinite),
 		cmocka_unit_test(test_tables_vs_r),
+		cmocka_unit_test(test_plot_preamble),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
