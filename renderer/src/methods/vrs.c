@@ -287,6 +287,7 @@ int vbuf_debug_ids(render *r, uint32_t *ids, char *err, size_t err_size)
 			 .summary = SUMMARY,                                                                        \
 			 .available = true,                                                                         \
 			 .family = "rate",                                                                          \
+			 .tile_rates = true,                                                                        \
 			 .baseline = "vref",                                                                        \
 			 .options = TABLE,                                                                          \
 			 .option_count = sizeof TABLE / sizeof TABLE[0],                                            \
