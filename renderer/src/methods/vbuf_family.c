@@ -7,7 +7,7 @@
 
 const char *const vbuf_rate_passes[10] = {"shadow", "ids",   "rate",    "select",  "shade",
 					  "resolve", "truth", "blend", "display", "readback"};
-const char *const vbuf_vrs_passes[11] = {"shadow", "ids", "rate", "select", "shade", "history", "resolve", "truth",
+const char *const vbuf_vrs_passes[11] = {"shadow", "ids", "rate", "select", "shade", "resolve", "history", "truth",
 					 "blend", "display", "readback"};
 const char *const vbuf_ads_passes[8] = {"shadow", "ids", "shade", "resolve", "truth", "blend", "display", "readback"};
 
@@ -69,12 +69,6 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 		vbuf_record_select(r, p, cmd);
 		render_ts(r, cmd);
 		vbuf_record_shade(r, p, cmd, 0);
-		if (s->v.rate_after) { /* its own interval ("history"; vbuf_vrs_passes) */
-			render_ts(r, cmd);
-			if (!s->v.force)
-				s->v.rate_after(r, p, s->v.user, cmd, frame);
-			vbuf_barrier(cmd);
-		}
 	} else {
 		/* level 0, then per step s = s0 .. 2 its diamond and square sub-steps, each a select and a shade */
 		float S = s->v.force ? -1.0f : s->v.S;
@@ -88,6 +82,13 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	}
 	render_ts(r, cmd);
 	vbuf_record_resolve(r, p, cmd);
+	if (!s->v.ads && s->v.rate_after) { /* its own interval ("history"; vbuf_vrs_passes): reads the resolved frame */
+		vbuf_barrier(cmd);
+		render_ts(r, cmd);
+		if (!s->v.force)
+			s->v.rate_after(r, p, s->v.user, cmd, frame);
+		vbuf_barrier(cmd);
+	}
 	render_ts(r, cmd);
 	vbuf_record_truth(r, p, cmd); /* its own interval, left out of the frame time (render.c) */
 	render_ts(r, cmd);

@@ -26,7 +26,7 @@ typedef struct vbuf_variant {
 	/* before recording frame `frame` (host state; a jump in frames starts over) */
 	void (*rate_prepare)(render *r, vbuf_pass *p, void *user, uint32_t frame);
 	void (*rate_record)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
-	/* after the shade pass: what the next frame's rate pass needs of this one */
+	/* after the resolve (the HDR target GENERAL, before BLEND): what the next frame's rate pass needs of this one */
 	void (*rate_after)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
 	void (*rate_finish)(render *r, vbuf_pass *p, void *user);
 	void *user;
