@@ -51,7 +51,7 @@ static void write_run(const char *dir, uint32_t first, uint32_t n, bool png, boo
 				  .new_units = 1, .fs_invocations = -1, .cs_invocations = -1, .gpu_ms_total = 1.5,
 				  .pass_count = 1, .pass_names = {"shade"}, .gpu_ms = {1.25}, .extra_count = 1,
 				  .extra_names = {"cpu_ms_alloc"}, .extra = {NAN}};
-		frame_image img = {W, H, hdr, disp, with_decisions ? decisions : NULL};
+		frame_image img = {W, H, hdr, disp, with_decisions ? decisions : NULL, NULL, 0, 0};
 		for (int i = 0; i < W * H; i++)
 			decisions[i] = (uint8_t)((i + f) % FRAME_DECISION_COUNT);
 		memset(disp, (int)(f * 10), sizeof disp);

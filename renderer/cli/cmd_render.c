@@ -85,6 +85,10 @@ static const cli_opt render_options[] = {
 	{.name = "decisions", .arg = NULL,
 	 .help = "also write RUN/decisions/NNNNNN.png, the reuse decision of every pixel (reuse methods)",
 	 .type = CLI_FLAG, .offset = offsetof(render_opts, decisions)},
+	{.name = "rate-images", .arg = NULL,
+	 .help = "also write RUN/rates/NNNNNN.png, the shading rate of every 16x16 tile, one pixel per tile (VRS "
+		 "methods, vref)",
+	 .type = CLI_FLAG, .offset = offsetof(render_opts, rate_images)},
 	{.name = "trivial-shading", .arg = NULL,
 	 .help = "benchmark only: replace shading with base colour output",
 	 .type = CLI_FLAG, .offset = offsetof(render_opts, trivial_shading)},
@@ -117,6 +121,13 @@ static int render_validate(void *opts, cli_ctx *ctx)
 		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
 			      "--decisions: method %s makes no reuse decisions (use rrc, tarc or their variants)",
 			      o->config.method->name);
+	if (!rc && o->rate_images && !o->config.method->tile_rates)
+		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+			      "--rate-images: method %s chooses no tile rates (the VRS methods and vref do)",
+			      o->config.method->name);
+	if (!rc && o->stereo && o->rate_images)
+		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG,
+			      "--rate-images with --stereo: rate images are written for mono runs only");
 	if (!rc && o->ipd >= 0.0 && !o->stereo)
 		rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--ipd needs --stereo");
 	if (!rc && o->stereo && o->decisions)
@@ -206,6 +217,7 @@ static int render_main(void *opts, cli_ctx *ctx)
 		.write_png = !o->no_png,
 		.trivial_shading = o->trivial_shading,
 		.write_decisions = o->decisions,
+		.write_rates = o->rate_images,
 		.views = o->stereo ? 2 : 1,
 		.ipd = o->stereo ? (float)o->ipd : 0.0f,
 		.out = out,

@@ -21,7 +21,7 @@ int cli_method_config(const char *method, const cli_method_args *args, method_co
 
 typedef struct render_opts {
 	const char *method, *out;
-	bool no_exr, no_png, trivial_shading, quiet, decisions;
+	bool no_exr, no_png, trivial_shading, quiet, decisions, rate_images;
 	cli_method_args margs;
 	method_config config; /* from --method and the method options (validate) */
 	bool stereo;          /* --stereo: both eyes (STEREO.md) */

@@ -86,6 +86,10 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 				(double)desc->ipd, (double)RENDER_IPD_MAX);
 	if (desc->views > 1 && desc->eye_shift != 0.0f)
 		return tl_error(err, err_size, TL_ERR_ARG, "an eye shift is for mono renders; stereo places both eyes itself");
+	if (desc->rate_images && !m->tile_rates)
+		return tl_error(err, err_size, TL_ERR_ARG, "rate images: method %s chooses no tile rates", m->info.name);
+	if (desc->views > 1 && desc->rate_images)
+		return tl_error(err, err_size, TL_ERR_ARG, "--rate-images with --stereo: rate images are written for mono runs only");
 	if (desc->views > 1 && desc->decisions)
 		return tl_error(err, err_size, TL_ERR_ARG, "--decisions with --stereo: decision maps are written for mono runs only");
 	if (!(fabsf(desc->eye_shift) <= RENDER_IPD_MAX))
@@ -357,6 +361,10 @@ int render_view_image(render *r, uint32_t v, frame_image *img)
 	img->hdr_rgba_half = r->hdr_packed;
 	img->display_rgba = r->display_packed;
 	img->decisions = r->desc.decisions && r->view_count < 2 ? r->method->decisions(r) : NULL;
+	img->tile_rates = NULL;
+	img->tiles_x = img->tiles_y = 0;
+	if (r->desc.rate_images && r->view_count < 2)
+		img->tile_rates = r->method->tile_rates(r, &img->tiles_x, &img->tiles_y);
 	render_use_view(r, 0);
 	return TL_OK;
 }

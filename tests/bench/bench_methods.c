@@ -8,16 +8,21 @@
  * sa_e16, sa_e32, sa_e64: the fraction of pixels whose max-RGB difference to sa's frame exceeds T (TAS-METHODS A5:
  * at matched budgets tasa should exceed less often than sau against sa).
  *
+ * FLIP (--flip before SCENE): every row also has flip=F, the mean LDR-FLIP error (taslab's metrics module,
+ * metrics_flip.h, the `flip` metric of `taslab metrics diff` at its default 67.02 pixels per degree) of the display frame
+ * against the first variant's; computed between renders, outside the GPU timings.
+ *
  * OPTION "stereo" renders that variant's both eyes (WxH per eye; the counts and times are totals over both eyes,
  * the quality columns the left eye's), "ipd=M" its eye distance (default 0.063).
  *
- *   bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
+ *   bench_methods [--flip] SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
  * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
  *        force=tarc@8,force-reshade */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "taslab/metrics_flip.h"
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
@@ -73,10 +78,21 @@ static int parse_variant(const char *arg, bench_variant *v)
 	return 0;
 }
 
+/* Display RGBA8 to the packed 0..255 RGB floats FLIP reads. */
+static void to_rgb(const uint8_t *rgba, size_t px, float *rgb)
+{
+	for (size_t k = 0; k < px; k++)
+		for (int c = 0; c < 3; c++)
+			rgb[3 * k + c] = rgba[4 * k + c];
+}
+
 int main(int argc, char **argv)
 {
+	bool flip = argc > 1 && !strcmp(argv[1], "--flip");
+	if (flip)
+		argc--, argv++;
 	if (argc < 7) {
-		fprintf(stderr, "usage: bench_methods SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPT[=V]]...\n");
+		fprintf(stderr, "usage: bench_methods [--flip] SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPT[=V]]...\n");
 		return 2;
 	}
 	char err[1024];
@@ -129,6 +145,20 @@ int main(int argc, char **argv)
 	}
 	int rc = 0;
 	size_t px = (size_t)w * h;
+	mtr_flip *fl = NULL;
+	float *flip_ref = NULL, *flip_test = NULL;
+	if (flip) {
+		if (mtr_flip_create(MTR_FLIP_PPD_DEFAULT, &fl, err, sizeof err)) {
+			fprintf(stderr, "bench_methods: flip: %s\n", err);
+			return 1;
+		}
+		flip_ref = malloc(px * 3 * sizeof(float));
+		flip_test = malloc(px * 3 * sizeof(float));
+		if (!flip_ref || !flip_test) {
+			fprintf(stderr, "bench_methods: out of memory\n");
+			return 1;
+		}
+	}
 	uint8_t *first_disp = malloc(px * 4), *sa_disp = NULL;
 	int sa_index = -1;
 	for (int i = 0; i < nv; i++)
@@ -154,8 +184,11 @@ int main(int argc, char **argv)
 			}
 			size_t hist[256] = {0};
 			double sum = 0;
-			if (i == 0)
+			if (i == 0) {
 				memcpy(first_disp, img.display_rgba, px * 4);
+				if (fl)
+					to_rgb(first_disp, px, flip_ref);
+			}
 			if (i == sa_index && sa_disp)
 				memcpy(sa_disp, img.display_rgba, px * 4);
 			for (size_t k = 0; k < px; k++) {
@@ -176,6 +209,16 @@ int main(int argc, char **argv)
 				(long long)st.visible_samples, (long long)st.shaded_samples, (long long)st.reused_samples,
 				(long long)st.new_units, (long long)st.late_samples, st.gpu_ms_total,
 				(long long)st.allocated_samples, sum / (double)px, p99, (double)e8 / (double)px);
+			if (fl) {
+				double fm = 0;
+				to_rgb(img.display_rgba, px, flip_test);
+				if (mtr_flip_compute(fl, w, h, flip_ref, flip_test, NULL, 2, &fm, err, sizeof err)) {
+					fprintf(stderr, "bench_methods: flip: %s\n", err);
+					rc = 1;
+					break;
+				}
+				fprintf(out, ",flip=%.6f", fm);
+			}
 			if (sa_disp) {
 				static const int T[5] = {4, 8, 16, 32, 64};
 				size_t over[5] = {0};
@@ -205,6 +248,9 @@ int main(int argc, char **argv)
 	fclose(out);
 	free(first_disp);
 	free(sa_disp);
+	free(flip_ref);
+	free(flip_test);
+	mtr_flip_destroy(&fl);
 	for (int i = 0; i < nv; i++)
 		render_destroy(&v[i].r);
 	vkdev_destroy(&dev);

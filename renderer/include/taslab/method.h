@@ -59,6 +59,7 @@ typedef struct method_info {
 	size_t option_count;
 	size_t options_size;          /* sizeof the method's options struct (<= METHOD_OPTIONS_MAX_B) */
 	bool decisions;               /* makes per-sample reuse decisions it can report (render --decisions) */
+	bool tile_rates;              /* chooses a shading rate per 16x16 tile it can report (render --rate-images) */
 	/* The method's family, by what it reuses (DESIGN section 4, BASELINES.md): "reference" (shades everything),
 	 * "forward" (tfr: per-pixel reuse by re-evaluating old shading), "reprojection" (pixel caches: rrc, tarc and
 	 * the reprojection alternatives of BASELINES.md), "atlas" (atlas blocks: sa, sau, tasa), "rate" (variable rate

@@ -42,6 +42,7 @@ typedef struct render_desc {
 	const method_config *method; /* the method and its options (copied); NULL: ref */
 	bool trivial_shading;   /* benchmark only: swap the shading for base colour output */
 	bool decisions;         /* fill frame_image.decisions (methods with reuse decisions only) */
+	bool rate_images;       /* fill frame_image.tile_rates (methods with tile rates only: method_info.tile_rates) */
 	const struct colour *colour; /* display transform (borrowed); NULL: the built-in ACES default */
 	/* Stereo (STEREO.md): views 2 renders a left (0) and a right (1) eye, each width x height, the eyes ipd metres
 	 * apart along the camera's right axis (parallel axes); 0 or 1: mono. eye_shift (mono only): the camera moved
@@ -88,6 +89,7 @@ typedef struct render_run_desc {
 	float fps;
 	bool write_exr, write_png, trivial_shading;
 	bool write_decisions;   /* RUN/decisions/ (render_desc.decisions) */
+	bool write_rates;       /* RUN/rates/ (render_desc.rate_images) */
 	uint32_t views;         /* 2: stereo (render_desc.views), frames/L, frames/R and sbs/ */
 	float ipd;
 	const char *out;

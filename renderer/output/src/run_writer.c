@@ -53,8 +53,8 @@ static int clear_run(const char *dir, char *err, size_t err_size)
 	}
 	tl_fs_clean_temps(dir);
 	int rc = TL_OK;
-	const char *subdirs[5] = {"frames", "decisions", "frames/L", "frames/R", "sbs"};
-	for (int i = 0; i < 5 && !rc; i++) {
+	const char *subdirs[6] = {"frames", "decisions", "rates", "frames/L", "frames/R", "sbs"};
+	for (int i = 0; i < 6 && !rc; i++) {
 		snprintf(p, sizeof p, "%s/%s", dir, subdirs[i]);
 		tl_fs_clean_temps(p);
 		DIR *d = opendir(p);
@@ -84,6 +84,38 @@ int run_decision_code(const uint8_t rgb[3])
 		if (!memcmp(rgb, decision_rgb[c], 3))
 			return c;
 	return -1; /* local sentinel: no decision colour (a code, not an error) */
+}
+
+/* Rate image colours (run.h), by frame_rate: red 4x4, orange 4x2, yellow 2x4, green 2x2, light blue 2x1, blue 1x2,
+ * black 1x1 (coarser = warmer; full rate dark, so a frame of 1x1 tiles reads as "nothing saved"). */
+static const uint8_t rate_rgb[FRAME_RATE_COUNT][3] = {
+	{255, 0, 0}, {255, 150, 0}, {255, 255, 0}, {0, 200, 0}, {0, 160, 255}, {0, 0, 255}, {0, 0, 0},
+};
+
+int run_rate_code(const uint8_t rgb[3])
+{
+	for (int c = 0; c < FRAME_RATE_COUNT; c++)
+		if (!memcmp(rgb, rate_rgb[c], 3))
+			return c;
+	return -1; /* local sentinel: no rate colour (a code, not an error) */
+}
+
+static int write_rates(const char *path, const frame_image *img, char *err, size_t err_size)
+{
+	size_t n = (size_t)img->tiles_x * img->tiles_y;
+	uint8_t *rgb = malloc(n * 3);
+	if (!rgb)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	for (size_t i = 0; i < n; i++) {
+		if (img->tile_rates[i] >= FRAME_RATE_COUNT) {
+			free(rgb);
+			return tl_error(err, err_size, TL_ERR_INTERNAL, "%s: tile %zu has a rate outside the palette", path, i);
+		}
+		memcpy(rgb + i * 3, rate_rgb[img->tile_rates[i]], 3);
+	}
+	int rc = imageio_write_png_rgb8_packed(path, img->tiles_x, img->tiles_y, rgb, err, err_size);
+	free(rgb);
+	return rc;
 }
 
 static int write_decisions(const char *path, const frame_image *img, char *err, size_t err_size)
@@ -156,6 +188,11 @@ int run_writer_create(const char *dir, const run_info *info, run_writer **out, c
 		return rc;
 	if (info->write_decisions) {
 		snprintf(frames, sizeof frames, "%s/decisions", dir);
+		if ((rc = tl_mkdirs(frames, err, err_size)))
+			return rc;
+	}
+	if (info->write_rates) {
+		snprintf(frames, sizeof frames, "%s/rates", dir);
 		if ((rc = tl_mkdirs(frames, err, err_size)))
 			return rc;
 	}
@@ -274,6 +311,14 @@ int run_writer_frame(run_writer *w, const frame_image *img, const frame_stats *s
 		if ((rc = write_decisions(path, img, err, err_size)))
 			return rc;
 	}
+	if (w->info.write_rates) {
+		uint32_t tx = (w->info.width + 15) / 16, ty = (w->info.height + 15) / 16;
+		if (!img->tile_rates || img->tiles_x != tx || img->tiles_y != ty)
+			return tl_error(err, err_size, TL_ERR_INTERNAL, "frame %u: no %ux%u tile-rate image", st->frame, tx, ty);
+		snprintf(path, sizeof path, "%s/rates/%06u.png", w->dir, st->frame);
+		if ((rc = write_rates(path, img, err, err_size)))
+			return rc;
+	}
 	return write_stats_row(w, st, err, err_size);
 }
 
@@ -372,13 +417,13 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 	char created[32];
 	tl_clock_utc(created, sizeof created);
 	const run_info *in = &w->info;
-	json_t *m = json_pack("{s:s, s:{s:s, s:s?, s:s?, s:s?}, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:s}, "
+	json_t *m = json_pack("{s:s, s:{s:s, s:s?, s:s?, s:s?}, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:b, s:s}, "
 			      "s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
 			      "taslab_version", TASLAB_VERSION_STRING, "versions", "taslab", TASLAB_VERSION_STRING,
 			      "opencolorio", in->ocio_version, "vulkan_api", in->vulkan_api, "vulkan_driver", in->driver,
 			      "created_utc", created, "inputs", w->inputs,
 			      "device", "name", in->device, "driver", in->driver, "validation", in->validation, "outputs",
-			      "exr", in->write_exr, "png", in->write_png, "decisions", in->write_decisions, "display_transform",
+			      "exr", in->write_exr, "png", in->write_png, "decisions", in->write_decisions, "rates", in->write_rates, "display_transform",
 			      in->display_transform ? in->display_transform : "", "totals", "frames", (json_int_t)w->frames,
 			      "visible_samples", (json_int_t)w->visible_total, "shaded_samples", (json_int_t)w->shaded_total,
 			      "fs_invocations", (json_int_t)w->fs_total, "gpu_ms_median", median, "wall_s", wall_s,

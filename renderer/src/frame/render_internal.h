@@ -44,6 +44,9 @@ typedef struct render_method {
 	void (*collect)(render *r, frame_stats *st);
 	/* With render_desc.decisions (method_info.decisions): one frame_decision per pixel of the last frame. */
 	const uint8_t *(*decisions)(render *r);
+	/* With render_desc.rate_images (method_info.tile_rates): one frame_rate per 16x16 tile of the last frame, as the
+	 * frame's passes read them (tiles_x x tiles_y). */
+	const uint8_t *(*tile_rates)(render *r, uint32_t *tiles_x, uint32_t *tiles_y);
 	void (*finish)(render *r);
 	/* Values the method derived from its options and the frame size at init (the atlas size, the density used when
 	 * the option says "default"), for the manifest's inputs.method_derived; returns the count (<= max). NULL: none. */

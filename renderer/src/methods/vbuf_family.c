@@ -7,13 +7,14 @@
 
 const char *const vbuf_rate_passes[10] = {"shadow", "ids",   "rate",    "select",  "shade",
 					  "resolve", "truth", "blend", "display", "readback"};
-const char *const vbuf_vrs_passes[11] = {"shadow", "ids", "rate", "select", "shade", "history", "resolve", "truth",
+const char *const vbuf_vrs_passes[11] = {"shadow", "ids", "rate", "select", "shade", "resolve", "history", "truth",
 					 "blend", "display", "readback"};
 const char *const vbuf_ads_passes[8] = {"shadow", "ids", "shade", "resolve", "truth", "blend", "display", "readback"};
 
 typedef struct vbuf_state {
 	vbuf_variant v;
 	vbuf_pass p;
+	uint8_t *tile_rates; /* render --rate-images: the last frame's rates as frame_rate codes */
 } vbuf_state;
 
 static vbuf_state *state_of(render *r) { return r->method_state; }
@@ -68,12 +69,6 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 		vbuf_record_select(r, p, cmd);
 		render_ts(r, cmd);
 		vbuf_record_shade(r, p, cmd, 0);
-		if (s->v.rate_after) { /* its own interval ("history"; vbuf_vrs_passes) */
-			render_ts(r, cmd);
-			if (!s->v.force)
-				s->v.rate_after(r, p, s->v.user, cmd, frame);
-			vbuf_barrier(cmd);
-		}
 	} else {
 		/* level 0, then per step s = s0 .. 2 its diamond and square sub-steps, each a select and a shade */
 		float S = s->v.force ? -1.0f : s->v.S;
@@ -87,6 +82,13 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	}
 	render_ts(r, cmd);
 	vbuf_record_resolve(r, p, cmd);
+	if (!s->v.ads && s->v.rate_after) { /* its own interval ("history"; vbuf_vrs_passes): reads the resolved frame */
+		vbuf_barrier(cmd);
+		render_ts(r, cmd);
+		if (!s->v.force)
+			s->v.rate_after(r, p, s->v.user, cmd, frame);
+		vbuf_barrier(cmd);
+	}
 	render_ts(r, cmd);
 	vbuf_record_truth(r, p, cmd); /* its own interval, left out of the frame time (render.c) */
 	render_ts(r, cmd);
@@ -130,11 +132,42 @@ void vbuf_family_collect(render *r, frame_stats *st)
 	put_extra(st, "listed_samples", (double)c[VBUF_C_LISTED]);
 }
 
+/* The frame_rate of a rate code of the path (w | h << 8); FRAME_RATE_COUNT for a code outside the palette. */
+static uint8_t frame_rate_of(uint32_t code)
+{
+	static const uint32_t codes[FRAME_RATE_COUNT] = {
+		[FRAME_RATE_4X4] = VBUF_RATE(4, 4), [FRAME_RATE_4X2] = VBUF_RATE(4, 2), [FRAME_RATE_2X4] = VBUF_RATE(2, 4),
+		[FRAME_RATE_2X2] = VBUF_RATE(2, 2), [FRAME_RATE_2X1] = VBUF_RATE(2, 1), [FRAME_RATE_1X2] = VBUF_RATE(1, 2),
+		[FRAME_RATE_1X1] = VBUF_RATE(1, 1)};
+	uint8_t i = 0;
+	while (i < FRAME_RATE_COUNT && codes[i] != code)
+		i++;
+	return i;
+}
+
+/* The rates the select of the last frame read, straight from the GPU's rate buffer (host visible), one frame_rate per
+ * tile; NULL for ads (no tile rates) or when out of memory. */
+const uint8_t *vbuf_family_tile_rates(render *r, uint32_t *tiles_x, uint32_t *tiles_y)
+{
+	vbuf_state *s = state_of(r);
+	uint32_t n = s->p.tiles_x * s->p.tiles_y;
+	*tiles_x = s->p.tiles_x, *tiles_y = s->p.tiles_y;
+	if (s->v.ads || !s->p.rates.mapped)
+		return NULL;
+	if (!s->tile_rates && !(s->tile_rates = malloc(n)))
+		return NULL;
+	const uint32_t *rates = s->p.rates.mapped;
+	for (uint32_t t = 0; t < n; t++)
+		s->tile_rates[t] = frame_rate_of(rates[t]); /* outside the palette: FRAME_RATE_COUNT (no colour) */
+	return s->tile_rates;
+}
+
 void vbuf_family_finish(render *r)
 {
 	vbuf_state *s = state_of(r);
 	if (!s)
 		return;
+	free(s->tile_rates);
 	if (s->v.rate_finish)
 		s->v.rate_finish(r, &s->p, s->v.user);
 	vbuf_finish(r, &s->p);

@@ -26,7 +26,7 @@ typedef struct vbuf_variant {
 	/* before recording frame `frame` (host state; a jump in frames starts over) */
 	void (*rate_prepare)(render *r, vbuf_pass *p, void *user, uint32_t frame);
 	void (*rate_record)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
-	/* after the shade pass: what the next frame's rate pass needs of this one */
+	/* after the resolve (the HDR target GENERAL, before BLEND): what the next frame's rate pass needs of this one */
 	void (*rate_after)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
 	void (*rate_finish)(render *r, vbuf_pass *p, void *user);
 	void *user;
@@ -37,6 +37,8 @@ int vbuf_family_prepare(render *r, uint32_t frame, char *err, size_t err_size);
 void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame);
 void vbuf_family_collect(render *r, frame_stats *st);
 void vbuf_family_finish(render *r);
+/* render --rate-images: the last frame's tile rates (frame_rate codes) from the path's rate buffer. */
+const uint8_t *vbuf_family_tile_rates(render *r, uint32_t *tiles_x, uint32_t *tiles_y);
 /* The path of a render of one of these methods (tests, method_debug.h). */
 vbuf_pass *vbuf_family_pass(render *r);
 void *vbuf_family_user(render *r);
@@ -55,6 +57,6 @@ extern const char *const vbuf_vrs_passes[11]; /* methods with rate_after */
 
 #define VBUF_FRAME_OPS                                                                                             \
 	.prepare = vbuf_family_prepare, .record = vbuf_family_record, .collect = vbuf_family_collect,                \
-	.finish = vbuf_family_finish
+	.finish = vbuf_family_finish, .tile_rates = vbuf_family_tile_rates
 
 #endif

@@ -22,6 +22,7 @@ const render_method render_method_vref = {
 		 .summary = "compacted sample path, every covered pixel shaded at 1x1 (the baseline of the VRS methods and ads)",
 		 .available = true,
 		 .family = "rate",
+		 .tile_rates = true,
 		 .options = vref_option_table,
 		 .option_count = sizeof vref_option_table / sizeof vref_option_table[0],
 		 .options_size = sizeof(vref_options)},

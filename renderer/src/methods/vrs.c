@@ -4,7 +4,7 @@
  * density, Alg. 4.4), `mas` (motion-adaptive, Alg. 4.7), `fovea` (foveated, fixed gaze), `taas` (TAA-error-adaptive,
  * Alg. 4.10). One rate per 16x16 tile, chosen on frame t-1's outputs and stabilised over time (shaders/vbuf/rate.comp.in);
  * frame 0 (and a jump in frames) starts at index 10 (1x1). Passes added to the path: rate + finalize before the
- * select, history after the shade. */
+ * select, history (and casedge's tile-centre positions) after the resolve. */
 #include "vbuf_family.h"
 
 #include <math.h>
@@ -27,7 +27,7 @@ typedef struct vrs_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set;
 	VkPipelineLayout layout;
-	VkPipeline rate, finalize, history;
+	VkPipeline rate, finalize, history, centres; /* centres: casedge's tile-centre positions */
 	int64_t last_frame;
 	uint32_t run;       /* frames since the (re)start */
 	uint32_t cur;       /* the current half of S this frame */
@@ -90,10 +90,12 @@ static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *ou
 	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
 }
 
-static int make_compute(render *r, vrs_state *s, const char *path, VkPipeline *out, char *err, size_t err_size)
+static int make_compute(render *r, vrs_state *s, const char *path, const char *extra, VkPipeline *out, char *err,
+			size_t err_size)
 {
-	char defs[96];
-	snprintf(defs, sizeof defs, "#define %s 1\n%s", kind_define[s->kind], s->rates_all ? "#define VRS_RATES_ALL 1\n" : "");
+	char defs[128];
+	snprintf(defs, sizeof defs, "#define %s 1\n%s%s", kind_define[s->kind], s->rates_all ? "#define VRS_RATES_ALL 1\n" : "",
+		 extra);
 	return render_compute_defs(r, path, defs, s->layout, out, err, err_size);
 }
 
@@ -136,9 +138,11 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 					  .pSetLayouts = sets, .pushConstantRangeCount = 1, .pPushConstantRanges = &pcr};
 	if ((res = vkCreatePipelineLayout(d, &pli, NULL, &s->layout)))
 		return render_vk_error(err, err_size, "vrs: pipeline layout", res);
-	if ((rc = make_compute(r, s, "vbuf/rate.comp.in", &s->rate, err, err_size)) ||
-	    (rc = make_compute(r, s, "vbuf/finalize.comp.in", &s->finalize, err, err_size)) ||
-	    (rc = make_compute(r, s, "vbuf/history.comp.in", &s->history, err, err_size)))
+	if ((rc = make_compute(r, s, "vbuf/rate.comp.in", "", &s->rate, err, err_size)) ||
+	    (rc = make_compute(r, s, "vbuf/finalize.comp.in", "", &s->finalize, err, err_size)) ||
+	    (rc = make_compute(r, s, "vbuf/history.comp.in", "", &s->history, err, err_size)) ||
+	    (s->kind == VRS_CASEDGE &&
+	     (rc = make_compute(r, s, "vbuf/history.comp.in", "#define CENTRES 1\n", &s->centres, err, err_size))))
 		return rc;
 	VkCommandBuffer cmd;
 	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
@@ -219,6 +223,10 @@ static void vrs_rate_after(render *r, vbuf_pass *p, void *user, VkCommandBuffer 
 	uint32_t aux[4] = {s->cur, 0, 0, 0};
 	bind(r, p, s, cmd, s->history, aux);
 	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	if (s->centres) { /* writes other images than the per-pixel pass: no barrier between them */
+		bind(r, p, s, cmd, s->centres, aux);
+		vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 63) / 64, 1, 1);
+	}
 }
 
 static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)
@@ -226,8 +234,8 @@ static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)
 	vrs_state *s = user;
 	(void)p;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[3] = {s->rate, s->finalize, s->history};
-	for (int i = 0; i < 3; i++)
+	VkPipeline pp[4] = {s->rate, s->finalize, s->history, s->centres};
+	for (int i = 0; i < 4; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
@@ -287,6 +295,7 @@ int vbuf_debug_ids(render *r, uint32_t *ids, char *err, size_t err_size)
 			 .summary = SUMMARY,                                                                        \
 			 .available = true,                                                                         \
 			 .family = "rate",                                                                          \
+			 .tile_rates = true,                                                                        \
 			 .baseline = "vref",                                                                        \
 			 .options = TABLE,                                                                          \
 			 .option_count = sizeof TABLE / sizeof TABLE[0],                                            \

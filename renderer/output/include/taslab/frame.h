@@ -45,12 +45,28 @@ typedef enum frame_decision {
 	FRAME_DECISION_COUNT
 } frame_decision;
 
+/* The shading rate of a 16x16 tile of a VRS method (`render --rate-images`, RUN/rates/NNNNNN.png), w x h pixels per
+ * shading, in ascending shading density (BASELINES.md A7's palette; the default palette uses 4x4, 2x2 and 1x1). */
+typedef enum frame_rate {
+	FRAME_RATE_4X4 = 0,
+	FRAME_RATE_4X2 = 1,
+	FRAME_RATE_2X4 = 2,
+	FRAME_RATE_2X2 = 3,
+	FRAME_RATE_2X1 = 4,
+	FRAME_RATE_1X2 = 5,
+	FRAME_RATE_1X1 = 6,
+	FRAME_RATE_COUNT
+} frame_rate;
+
 /* A frame's pixels. Pointers are borrowed (the renderer's: valid until its next frame). */
 typedef struct frame_image {
 	uint32_t width, height;
 	const uint16_t *hdr_rgba_half; /* scene-linear radiance * exposure, alpha = coverage; tightly packed */
 	const uint8_t *display_rgba;   /* display-referred 8-bit, tightly packed */
 	const uint8_t *decisions;      /* one frame_decision per pixel; NULL unless requested and supported */
+	const uint8_t *tile_rates;     /* one frame_rate per 16x16 tile, tiles_x x tiles_y, row-major; NULL unless
+					  requested (render_desc.rate_images) */
+	uint32_t tiles_x, tiles_y;
 } frame_image;
 
 #ifdef __cplusplus

@@ -6,6 +6,10 @@
  *                           colours: none black, reused (96,96,96), new (0,220,255), second frame
  *                           (40,90,255), predicted (255,48,0), scheduled (255,210,0), late (255,0,255:
  *                           reused but more than T from the truth; with --truth)
+ *   RUN/rates/NNNNNN.png    `render --rate-images` (VRS methods, vref): the shading rate of each 16x16 tile
+ *                           (frame_rate, frame.h), one pixel per tile (ceil(W/16) x ceil(H/16)) as colours:
+ *                           1x1 black, 1x2 (0,0,255), 2x1 (0,160,255), 2x2 (0,200,0), 2x4 (255,255,0),
+ *                           4x2 (255,150,0), 4x4 (255,0,0)
  *   RUN/stats.csv           one row per frame (frame.h)
  *   stereo (STEREO.md): RUN/frames/L/ and RUN/frames/R/ instead of RUN/frames/ (the same names inside), and
  *   RUN/sbs/NNNNNN.png, the display frames side by side (2W x H, left | right); manifest inputs.stereo, inputs.ipd
@@ -82,6 +86,7 @@ typedef struct run_info {
 	bool validation;
 	bool write_exr, write_png;
 	bool write_decisions; /* RUN/decisions/NNNNNN.png from frame_image.decisions */
+	bool write_rates;     /* RUN/rates/NNNNNN.png from frame_image.tile_rates */
 	const char *command_line;
 	const char *display_transform; /* colour_name() of the view transform used for the PNGs */
 	/* Content hashes of the inputs (scene_digest: the scene file and its assets; colour_digest: the config and its
@@ -104,6 +109,8 @@ int run_writer_frame_views(run_writer *w, const frame_image *imgs, uint32_t view
 const char *run_view_dir(uint32_t views, uint32_t v);
 /* The frame_decision a decision-map colour stands for; -1 for any other colour. */
 int run_decision_code(const uint8_t rgb[3]);
+/* The frame_rate a rate-image colour stands for; -1 for any other colour. */
+int run_rate_code(const uint8_t rgb[3]);
 /* Closes stats.csv and writes manifest.json (atomically) with totals. */
 int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size);
 /* Frees the writer; an unfinished run leaves no manifest.json. */
