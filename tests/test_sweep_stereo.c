@@ -115,6 +115,31 @@ static void test_sweep_stereo(void **state)
 		if (!strstr(sec, row))
 			fail_msg("the report's Stereo section has no row %s", row);
 	}
+	/* the speedup plot (gnuplot, like the report's other plots): on the page in the Stereo section, its data the CSV's
+	 * speedups mono and stereo per run, its SVG drawn with both series */
+	if (system("command -v gnuplot >/dev/null") == 0) {
+		const char *img = strstr(sec, "<img src=\"plots/stereo--speedup.svg\"");
+		assert_non_null(img);
+		assert_true(img < strstr(sec, "</section>"));
+		snprintf(p, sizeof p, "%s/report/data/stereo--speedup.csv", st);
+		char *data = tu_read_file(p, NULL);
+		assert_non_null(data);
+		for (int k = 0; k < 2; k++) {
+			const char *v = k ? "sa" : "ref";
+			char row[256];
+			snprintf(row, sizeof row, " %s\",%.4f,%.4f\n", v, csv_value(csv, v, 4), csv_value(csv, v, 5));
+			if (!strstr(data, row))
+				fail_msg("stereo--speedup.csv has no row ending %s:\n%s", row, data);
+		}
+		free(data);
+		snprintf(p, sizeof p, "%s/report/plots/stereo--speedup.svg", st);
+		char *svg = tu_read_file(p, NULL);
+		assert_non_null(svg);
+		assert_non_null(strstr(svg, "<svg"));
+		assert_non_null(strstr(svg, ">mono<"));
+		assert_non_null(strstr(svg, ">stereo<"));
+		free(svg);
+	}
 	free(csv);
 	free(page);
 	/* the report's thumbnails of a stereo run are its side-by-side frames */

@@ -101,6 +101,10 @@ static const cli_opt render_options[] = {
 	{.name = "ipd", .arg = "M",
 	 .help = "with --stereo: distance between the eyes in metres (default 0.063)",
 	 .type = CLI_DOUBLE, .offset = offsetof(render_opts, ipd), .lo = 0.0, .hi = RENDER_IPD_MAX},
+	{.name = "multiview", .arg = "auto|on|off",
+	 .help = "with --stereo: both eyes' visibility pass (sa, sau, tasa) in one VK_KHR_multiview render pass (on) or "
+		 "one pass per eye (off); same output; default auto (the measured choice, README \"Multiview\")",
+	 .type = CLI_STRING, .offset = offsetof(render_opts, multiview)},
 	{0},
 };
 
@@ -135,6 +139,19 @@ static int render_validate(void *opts, cli_ctx *ctx)
 			      "--decisions with --stereo: decision maps are written for mono runs only");
 	if (o->stereo && o->ipd < 0.0)
 		o->ipd = RENDER_STEREO_IPD_DEFAULT;
+	if (!rc && o->multiview) {
+		static const char *const names[] = {[RENDER_MULTIVIEW_AUTO] = "auto", [RENDER_MULTIVIEW_ON] = "on",
+						    [RENDER_MULTIVIEW_OFF] = "off"};
+		int k = 0;
+		while (k < 3 && strcmp(o->multiview, names[k]))
+			k++;
+		if (k == 3)
+			rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--multiview '%s': auto, on or off", o->multiview);
+		else if (!o->stereo)
+			rc = tl_error(ctx->err, sizeof ctx->err, TL_ERR_ARG, "--multiview needs --stereo");
+		else
+			o->mv = k;
+	}
 	return rc;
 }
 
@@ -220,6 +237,7 @@ static int render_main(void *opts, cli_ctx *ctx)
 		.write_rates = o->rate_images,
 		.views = o->stereo ? 2 : 1,
 		.ipd = o->stereo ? (float)o->ipd : 0.0f,
+		.multiview = (render_multiview)o->mv,
 		.out = out,
 		.command_line = ctx->command_line,
 		.progress = o->quiet ? NULL : progress,

@@ -26,6 +26,8 @@ typedef struct render_opts {
 	method_config config; /* from --method and the method options (validate) */
 	bool stereo;          /* --stereo: both eyes (STEREO.md) */
 	double ipd;           /* --ipd M (metres); negative until given */
+	const char *multiview; /* --multiview auto|on|off (NULL until given) */
+	int mv;                /* from it: render_multiview (validate) */
 } render_opts;
 
 typedef struct pair_opts {

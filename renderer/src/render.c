@@ -92,6 +92,14 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 		return tl_error(err, err_size, TL_ERR_ARG, "--rate-images with --stereo: rate images are written for mono runs only");
 	if (desc->views > 1 && desc->decisions)
 		return tl_error(err, err_size, TL_ERR_ARG, "--decisions with --stereo: decision maps are written for mono runs only");
+	if (desc->multiview != RENDER_MULTIVIEW_AUTO && desc->views < 2)
+		return tl_error(err, err_size, TL_ERR_ARG, "--multiview: for stereo renders (--stereo) only");
+	if (desc->multiview > RENDER_MULTIVIEW_OFF)
+		return tl_error(err, err_size, TL_ERR_ARG, "multiview mode %d: auto, on or off", (int)desc->multiview);
+	if (desc->multiview == RENDER_MULTIVIEW_ON && !dev->has_multiview)
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
+				"--multiview on: device '%s' has no multiview feature with 2 views (VK_KHR_multiview); use off",
+				dev->props.deviceName);
 	if (!(fabsf(desc->eye_shift) <= RENDER_IPD_MAX))
 		return tl_error(err, err_size, TL_ERR_ARG, "eye shift %g m out of range (|shift| <= %g)", (double)desc->eye_shift,
 				(double)RENDER_IPD_MAX);
@@ -109,6 +117,9 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 		r->desc.fps = r->scene->fps;
 	r->state_ring = m->state_ring ? m->state_ring : 1;
 	r->view_count = desc->views > 1 ? desc->views : 1;
+	/* AUTO: the measured choice (README "Multiview") */
+	r->multiview = r->view_count > 1 && dev->has_multiview &&
+		       (desc->multiview == RENDER_MULTIVIEW_ON || (desc->multiview == RENDER_MULTIVIEW_AUTO && RENDER_MULTIVIEW_AUTO_ON));
 	r->slot_time = malloc(r->state_ring * sizeof *r->slot_time);
 	if (!r->slot_time) {
 		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");

@@ -34,6 +34,7 @@ int render_run(const render_run_desc *d, char *err, size_t err_size)
 		.colour = d->colour,
 		.views = d->views,
 		.ipd = d->ipd,
+		.multiview = d->multiview,
 	};
 	if ((rc = render_create(d->dev, &rd, &r, err, err_size)))
 		goto done;

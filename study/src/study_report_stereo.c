@@ -3,12 +3,15 @@
  * the blocks both eyes see once). `taslab report STEREO_SWEEP --mono MONO_SWEEP` matches each stereo run with the
  * mono run of the same scene, camera path, variant, frames and size (per eye) and writes SWEEP/stereo_vs_mono.csv
  * and a section of the page: speedup vs ref in mono and in stereo and their ratio, shaded samples per frame in mono
- * and in stereo (both eyes) and their ratio. */
+ * and in stereo (both eyes) and their ratio; and the plot of the speedups, mono beside stereo per run
+ * (report/data/stereo--speedup.csv and .gp, report/plots/stereo--speedup.svg; gnuplot, as the report's other plots). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "study_report_internal.h"
+#include "taslab/metrics.h"
 #include "taslab/tl_fs.h"
 
 /* The mono row of stereo row r (same scene name, camera name, variant token, frames, size), or NULL. */
@@ -35,6 +38,52 @@ static void num(FILE *f, double v, const char *fmt, const char *none)
 		fprintf(f, fmt, v);
 	else
 		fputs(none, f);
+}
+
+/* The speedup plot: one cluster per stereo run with a complete mono run (scene / path variant), bars mono and stereo,
+ * the dashed line at 1 (ref). Optional like every plot of the report: no gnuplot, no plot (the table stays). */
+static void speedup_plot(const sty_report_desc *d)
+{
+	char data[TL_PATH_MAX + 64], gp[TL_PATH_MAX + 64], svg[TL_PATH_MAX + 64], err[512];
+	snprintf(data, sizeof data, "%s/report/data/stereo--speedup.csv", d->dir);
+	snprintf(gp, sizeof gp, "%s/report/data/stereo--speedup.gp", d->dir);
+	snprintf(svg, sizeof svg, "%s/report/plots/stereo--speedup.svg", d->dir);
+	remove(svg); /* a plot from an earlier report is not this one's */
+	tl_atomic a;
+	if (tl_atomic_open(&a, data, err, sizeof err))
+		return;
+	size_t n = 0;
+	double top = 1.0;
+	fprintf(a.f, "# run,speedup_mono,speedup_stereo\n");
+	for (size_t i = 0; i < d->count; i++) {
+		const mtr_sweep_row *r = &d->rows[i], *m = mono_of(d, r);
+		if (!r->status.run || !m || !m->status.run)
+			continue;
+		double sm = mtr_sweep_value(m, "speedup_vs_ref"), ss = mtr_sweep_value(r, "speedup_vs_ref");
+		if (!isfinite(sm) || !isfinite(ss))
+			continue;
+		const sweep_scene *sc = &d->spec->scenes[r->run.scene];
+		/* labels: gnuplot strings in double quotes (names are [A-Za-z0-9_@/.-], sweep_keys) */
+		fprintf(a.f, "\"%s/%s %s\",%.4f,%.4f\n", sc->name, sc->cameras[r->run.camera].name,
+			d->spec->variants[r->run.variant].variant, sm, ss);
+		top = fmax(top, fmax(sm, ss));
+		n++;
+	}
+	if (tl_atomic_commit(&a, err, sizeof err) || !n)
+		return;
+	mtr_plot plot;
+	FILE *f = mtr_plot_begin(&plot, gp, err, sizeof err);
+	if (!f)
+		return;
+	fprintf(f, "set terminal svg size %zu,320 dynamic font 'sans,10' background rgb 'white'\nset datafile separator ','\n"
+		   "set output '%s'\nset title 'speedup vs ref: mono beside stereo (ref stereo for stereo)'\n"
+		   "set grid ytics\nset key outside right noenhanced\nset termoption noenhanced\nset style data histogram\n"
+		   "set style histogram cluster gap 1\nset style fill solid 0.85 border -1\nset boxwidth 0.9\n"
+		   "set xtics rotate by -30 scale 0\nset yrange [0:%.3f]\nset ylabel 'speedup (ref ms / run ms)'\n"
+		   "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lc rgb '#555555'\n"
+		   "plot '%s' using 2:xtic(1) title 'mono' lc rgb '#4477aa', '' using 3 title 'stereo' lc rgb '#ee6677'\n",
+		n * 60 + 260 > 1200 ? (size_t)1200 : n * 60 + 260, svg, top * 1.15, data);
+	mtr_plot_end(&plot, err, sizeof err);
 }
 
 int sty_rpt_stereo_csv(const sty_report_desc *d, char *err, size_t err_size)
@@ -65,7 +114,10 @@ int sty_rpt_stereo_csv(const sty_report_desc *d, char *err, size_t err_size)
 		num(a.f, ps, "%.1f", ""), fputc(',', a.f), num(a.f, ratio(ps, pm), "%.4f", ""), fputc(',', a.f);
 		num(a.f, gm, "%.4f", ""), fputc(',', a.f), num(a.f, gs, "%.4f", ""), fputc('\n', a.f);
 	}
-	return tl_atomic_commit(&a, err, err_size);
+	if ((rc = tl_atomic_commit(&a, err, err_size)))
+		return rc;
+	speedup_plot(d);
+	return TL_OK;
 }
 
 void sty_rpt_page_stereo(FILE *f, const sty_report_desc *d)
@@ -87,7 +139,15 @@ void sty_rpt_page_stereo(FILE *f, const sty_report_desc *d)
 		fputs(*c == '<' ? "&lt;" : *c == '>' ? "&gt;" : *c == '&' ? "&amp;" : (char[2]){*c, 0}, f);
 	fprintf(f, "</code>). Speedup = ref's median GPU frame time / the run's, ref of the same sweep (stereo: ref "
 		   "stereo). Paper (sec. 7.3, Fig. 12a): TASA 2–5× over Forward+ in stereo, 1.1–3× in mono. Also in "
-		   "<a href=\"../stereo_vs_mono.csv\">stereo_vs_mono.csv</a>.</p>\n<div class=\"scroll\"><table><tr>"
+		   "<a href=\"../stereo_vs_mono.csv\">stereo_vs_mono.csv</a>.</p>\n");
+	char svg[TL_PATH_MAX + 64];
+	snprintf(svg, sizeof svg, "%s/report/plots/stereo--speedup.svg", d->dir);
+	if (access(svg, R_OK) == 0)
+		fprintf(f, "<div class=\"plots\"><figure><img src=\"plots/stereo--speedup.svg\" alt=\"speedup vs ref, mono "
+			   "beside stereo\"><figcaption>speedup vs ref per run, mono beside stereo (data: <a "
+			   "href=\"data/stereo--speedup.csv\">stereo--speedup.csv</a>); the dashed line is ref"
+			   "</figcaption></figure></div>\n");
+	fprintf(f, "<div class=\"scroll\"><table><tr>"
 		   "<th class=\"l\">scene</th><th class=\"l\">camera</th><th class=\"l\">variant</th><th>speedup mono</th>"
 		   "<th>speedup stereo</th><th>stereo / mono</th><th>shaded / frame mono</th><th>shaded / frame stereo</th>"
 		   "<th>stereo / mono</th></tr>\n");

@@ -13,7 +13,8 @@
  * against the first variant's; computed between renders, outside the GPU timings.
  *
  * OPTION "stereo" renders that variant's both eyes (WxH per eye; the counts and times are totals over both eyes,
- * the quality columns the left eye's), "ipd=M" its eye distance (default 0.063).
+ * the quality columns the left eye's), "ipd=M" its eye distance (default 0.063), "multiview=on|off" how its
+ * eyes' visibility pass is recorded (render_desc.multiview; default auto).
  *
  *   bench_methods [--flip] SCENE.json CAMERA WxH FIRST:END OUT.csv LABEL=VARIANT[,OPTION[=VALUE]]...
  * e.g. bench_methods scenes/calm.json fan_shadow 960x540 0:120 out.csv ref=ref tarc8=tarc@8 \
@@ -35,6 +36,7 @@ typedef struct bench_variant {
 	render *r;
 	uint32_t views; /* 2: ",stereo" (both eyes, the size per eye; STEREO.md) */
 	float ipd;      /* ",ipd=M" with stereo (default RENDER_STEREO_IPD_DEFAULT) */
+	render_multiview multiview; /* ",multiview=on|off" with stereo */
 } bench_variant;
 
 static int parse_variant(const char *arg, bench_variant *v)
@@ -59,9 +61,12 @@ static int parse_variant(const char *arg, bench_variant *v)
 		char *ov = strchr(tok, '=');
 		if (ov)
 			*ov++ = 0;
-		if (!strcmp(tok, "stereo") || !strcmp(tok, "ipd")) { /* render options, not the method's */
+		if (!strcmp(tok, "stereo") || !strcmp(tok, "ipd") || !strcmp(tok, "multiview")) { /* render options */
 			if (!strcmp(tok, "stereo"))
 				v->views = 2;
+			else if (!strcmp(tok, "multiview"))
+				v->multiview = ov && !strcmp(ov, "on") ? RENDER_MULTIVIEW_ON
+					       : ov && !strcmp(ov, "off") ? RENDER_MULTIVIEW_OFF : (render_multiview)99;
 			else
 				v->ipd = ov ? strtof(ov, NULL) : -1.0f;
 			continue;
@@ -132,7 +137,7 @@ int main(int argc, char **argv)
 	}
 	for (int i = 0; i < nv; i++) {
 		render_desc rd = {.scene = s, .camera = cam, .width = w, .height = h, .method = &v[i].mc, .views = v[i].views,
-				  .ipd = v[i].views > 1 ? v[i].ipd : 0.0f};
+				  .ipd = v[i].views > 1 ? v[i].ipd : 0.0f, .multiview = v[i].multiview};
 		if (render_create(dev, &rd, &v[i].r, err, sizeof err)) {
 			fprintf(stderr, "bench_methods: %s: %s\n", v[i].label, err);
 			return 1;

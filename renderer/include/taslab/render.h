@@ -34,6 +34,12 @@ extern "C" {
 
 typedef struct render render;
 
+/* How a stereo render records the raster pass both eyes of the atlas methods have (the visibility pass; STEREO.md
+ * "Vulkan multiview"): ON one render pass with viewMask 0b11 into 2-layer attachments (VK_KHR_multiview, Vulkan 1.1's
+ * optional multiview feature), OFF one pass per eye; AUTO the measured choice (README "Multiview"). The output is the
+ * same either way. */
+typedef enum render_multiview { RENDER_MULTIVIEW_AUTO = 0, RENDER_MULTIVIEW_ON, RENDER_MULTIVIEW_OFF } render_multiview;
+
 typedef struct render_desc {
 	const struct scene *scene;
 	int camera;             /* index into scene->cameras */
@@ -49,6 +55,7 @@ typedef struct render_desc {
 	 * that far along its right axis (-ipd/2: the left eye of a stereo run, for comparisons). */
 	uint32_t views;
 	float ipd, eye_shift;
+	render_multiview multiview; /* stereo only (mono: AUTO) */
 } render_desc;
 
 /* The largest --ipd accepted, in metres (a human IPD is 0.054-0.074; larger values are hyperstereo, up to 1 m). */
@@ -92,6 +99,7 @@ typedef struct render_run_desc {
 	bool write_rates;       /* RUN/rates/ (render_desc.rate_images) */
 	uint32_t views;         /* 2: stereo (render_desc.views), frames/L, frames/R and sbs/ */
 	float ipd;
+	render_multiview multiview; /* render_desc.multiview */
 	const char *out;
 	const char *command_line;
 	void (*progress)(void *user, uint32_t done, uint32_t total);

@@ -45,6 +45,7 @@ typedef struct vkdev {
 	uint32_t timestamp_valid_bits; /* of the queue family: 36 on some GPUs, 64 on lavapipe (vkdev_elapsed_ms) */
 	uint32_t subgroup_size;        /* 8 on lavapipe, 32 on NVIDIA, 32 or 64 on AMD: shaders must not assume one */
 	bool has_buffer_device_address; /* bufferDeviceAddress enabled (LUTs of a view transform) */
+	bool has_multiview;             /* the multiview feature enabled, maxMultiviewViewCount >= 2 (stereo raster passes) */
 	bool validation;
 	bool has_debug_utils;
 	uint32_t validation_messages; /* counted by the debug messenger */

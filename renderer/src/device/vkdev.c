@@ -304,8 +304,16 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 	VkPhysicalDeviceVulkan13Features have13 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
 	VkPhysicalDeviceVulkan12Features have12 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES,
 						   .pNext = &have13};
-	VkPhysicalDeviceFeatures2 have2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &have12};
+	VkPhysicalDeviceVulkan11Features have11 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES,
+						   .pNext = &have12};
+	VkPhysicalDeviceFeatures2 have2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &have11};
 	vkGetPhysicalDeviceFeatures2(d->physical, &have2);
+	/* VK_KHR_multiview (core in 1.1; the feature is optional there): both eyes of a stereo raster pass in one
+	 * render pass (STEREO.md "Vulkan multiview"), used only where the device has it with at least 2 views */
+	VkPhysicalDeviceVulkan11Properties p11 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
+	VkPhysicalDeviceProperties2 props2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &p11};
+	vkGetPhysicalDeviceProperties2(d->physical, &props2);
+	d->has_multiview = have11.multiview && p11.maxMultiviewViewCount >= 2;
 	if (!have13.dynamicRendering || !have13.synchronization2 || !have13.maintenance4) {
 		snprintf(err, err_size, "device '%s' lacks dynamicRendering/synchronization2/maintenance4", d->props.deviceName);
 		r = VK_ERROR_FEATURE_NOT_PRESENT;
@@ -326,9 +334,14 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 		.bufferDeviceAddress = have12.bufferDeviceAddress,
 	};
 	d->has_buffer_device_address = have12.bufferDeviceAddress;
+	VkPhysicalDeviceVulkan11Features f11 = {
+		.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES,
+		.pNext = &f12,
+		.multiview = d->has_multiview,
+	};
 	VkPhysicalDeviceFeatures2 f2 = {
 		.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
-		.pNext = &f12,
+		.pNext = &f11,
 		.features = {
 			.pipelineStatisticsQuery = d->has_pipeline_stats,
 			.samplerAnisotropy = have.samplerAnisotropy,

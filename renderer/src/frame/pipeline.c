@@ -132,6 +132,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
+		.viewMask = pd->view_mask,
 		.colorAttachmentCount = pd->color ? 1u : 0u,
 		.pColorAttachmentFormats = &cfmt,
 		.depthAttachmentFormat = pd->depth_format ? pd->depth_format : RENDER_DEPTH_FORMAT,

@@ -98,6 +98,8 @@ typedef struct render_pipeline {
  * (r->hdr, r->states, ...), so passes and per-eye methods run unchanged; render_use_view swaps them. The shadow pool,
  * the scene's geometry, materials and textures, the pipelines and the command buffer are shared. */
 #define RENDER_MAX_VIEWS 2
+/* What --multiview auto chooses (README "Multiview": measured at 960x540 per eye) */
+#define RENDER_MULTIVIEW_AUTO_ON 0
 typedef struct render_view_ctx {
 	vkdev_buffer states, objects, shade_count;
 	vkdev_image depth, hdr, display;
@@ -119,6 +121,7 @@ struct render {
 
 	/* views (STEREO.md): 1 mono, 2 stereo (0 left, 1 right); views[v] holds view v's fields while it is inactive */
 	uint32_t view_count, view;
+	bool multiview;           /* stereo: raster passes of both eyes in one viewMask 0b11 pass (render_desc.multiview) */
 	render_view_ctx views[RENDER_MAX_VIEWS];
 	double *slot_time;        /* stereo: per state slot, the time last evaluated into every view (NAN: none) */
 	int64_t view_shaded[RENDER_MAX_VIEWS]; /* shared_views methods: each eye's shaded samples of the frame (-1: n/a) */
@@ -238,6 +241,7 @@ typedef struct render_pipe_desc {
 	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
 	VkFormat color_format; /* 0: the HDR target's RGBA16F */
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
+	uint32_t view_mask;    /* multiview (render.multiview): the render pass's viewMask; 0: one view */
 	VkDescriptorSetLayout method_set; /* optional set 1 */
 } render_pipe_desc;
 

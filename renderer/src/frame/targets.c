@@ -136,7 +136,9 @@ int render_targets_view_create(render *r, char *err, size_t err_size)
 {
 	int rc = 0;
 	uint32_t w = r->desc.width, h = r->desc.height;
-	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, RENDER_DEPTH_FORMAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+	/* multiview: the eye's layer of the visibility pass's depth is copied in (passes/ids.c ids_multiview_record) */
+	VkImageUsageFlags du = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | (r->multiview ? VK_IMAGE_USAGE_TRANSFER_DST_BIT : 0);
+	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, RENDER_DEPTH_FORMAT, du,
 				    VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, false, "depth", &r->depth));
 	CHECK_VK(vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R16G16B16A16_SFLOAT,
 				    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |

@@ -56,6 +56,7 @@ typedef struct atlas_state {
 	float rho;
 	vkdev_buffer buf[B_COUNT];
 	ids_pass ids[RENDER_MAX_VIEWS]; /* the visibility pass and its image, per eye (stereo: STEREO.md) */
+	ids_multiview mv;          /* render.multiview: both eyes' visibility in one pass (ids[v] views of its layers) */
 	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
 	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
@@ -312,9 +313,12 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 	if (!rc)
 		rc = make_buffers(r, s, err, err_size);
 	/* per eye (stereo): the visibility pass's image and the set binding it and the eye's HDR target */
+	if (!rc && r->multiview)
+		rc = ids_multiview_init(r, &s->mv, s->ids, err, err_size);
 	for (uint32_t v = 0; !rc && v < r->view_count; v++) {
 		render_use_view(r, v);
-		rc = ids_pass_init(r, &s->ids[v], err, err_size);
+		if (!r->multiview)
+			rc = ids_pass_init(r, &s->ids[v], err, err_size);
 		if (!rc)
 			rc = make_set(r, s, v, err, err_size);
 	}
@@ -466,10 +470,13 @@ void atlas_record_pre(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	/* stereo: each eye's visibility pass; the visible sets and the 2x2 filter's F of both eyes go into the shared
 	 * buffers (visible: bit v per eye; F: atomicMax over both eyes' windows) */
-	for (uint32_t v = 0; v < r->view_count; v++) {
+	for (uint32_t v = 0; v < r->view_count && !r->multiview; v++) {
 		render_use_view(r, v);
 		ids_pass_record(r, &s->ids[v], cmd, 0);
 	}
+	render_use_view(r, 0);
+	if (r->multiview) /* both eyes in one viewMask 0b11 pass (README "Multiview") */
+		ids_multiview_record(r, &s->mv, cmd, 0);
 	render_ts(r, cmd);
 	for (uint32_t v = 0; v < r->view_count; v++) {
 		render_use_view(r, v);
@@ -729,6 +736,7 @@ void atlas_finish(render *r)
 		vkdev_buffer_destroy(r->dev, &s->buf[i]);
 	for (uint32_t v = 0; v < RENDER_MAX_VIEWS; v++)
 		ids_pass_finish(r, &s->ids[v]);
+	ids_multiview_finish(r, &s->mv);
 	vkdev_image_destroy(r->dev, &s->atlas);
 	vkdev_image_destroy(r->dev, &s->scratch);
 	vkdev_image_destroy(r->dev, &s->shown);
@@ -747,6 +755,8 @@ int atlas_debug_ids(render *r, uint32_t *ids, bool upload, char *err, size_t err
 {
 	return ids_pass_copy(r, &state_of(r)->ids[r->view], ids, upload, err, err_size);
 }
+
+bool atlas_debug_multiview(render *r) { return state_of(r)->mv.ids.image != VK_NULL_HANDLE; }
 
 int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, char *err, size_t err_size)
 {

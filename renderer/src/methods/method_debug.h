@@ -21,6 +21,8 @@ int atlas_debug_visible(render *r, const float *G, uint32_t *visible, float *F, 
  * seen by eye v) and F[] (the max over both eyes' 2x2 windows). */
 int atlas_debug_ids_view(render *r, uint32_t view, uint32_t *ids, bool upload, char *err, size_t err_size);
 const uint32_t *atlas_debug_blocks(render *r, uint32_t *patch_count);
+/* Stereo: true when the eyes' visibility pass is recorded as one multiview render pass (render_desc.multiview). */
+bool atlas_debug_multiview(render *r);
 /* The facing the CPU decided for a global patch this frame (triangle A's winding seen from the eye, the rule that
  * replaces gl_FrontFacing; 1 front, 0 back), -1 when the patch has no block. */
 int atlas_debug_facing(render *r, uint32_t pid);

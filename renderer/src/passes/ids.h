@@ -22,7 +22,18 @@ typedef struct ids_pass {
 	render_pipeline pipe;             /* opaque objects: no discard, so the depth test runs before the fragment
 					   * shader (llvmpipe tests depth after any shader that can discard) */
 	render_pipeline pipe_mask;        /* glTF MASK objects: alpha-tested */
+	uint32_t layer;                   /* multiview: the eye's layer of ids_multiview.ids (image is a view of it) */
+	bool layer_view;                  /* image is that layer's view (ids_multiview owns the image), no pipelines */
 } ids_pass;
+
+/* Stereo with render.multiview (STEREO.md "Vulkan multiview", VK_KHR_multiview): both eyes' visibility in one render
+ * pass with viewMask 0b11 into 2-layer attachments; view v (gl_ViewIndex) takes eye v's view_proj. */
+typedef struct ids_multiview {
+	vkdev_image ids, depth;           /* 2 layers each, 2D_ARRAY views (the attachments) */
+	VkDescriptorSetLayout set_layout;
+	VkDescriptorSet set;              /* vertices, indices and the right eye's state ring (common/ids.vert.in) */
+	render_pipeline pipe, pipe_mask;  /* as ids_pass's, with viewMask 0b11 */
+} ids_multiview;
 
 int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size);
 void ids_pass_finish(render *r, ids_pass *p);
@@ -32,6 +43,16 @@ void ids_pass_finish(render *r, ids_pass *p);
  * wins, as in ref's EQUAL shading pass). Ends with the image in GENERAL layout, its writes visible to compute
  * shader reads; the caller orders earlier reads of the image (previous frame) by the pass's own barrier. */
 void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot);
+
+/* Multiview: creates the 2-layer images, the set and the pipelines, and makes eyes[v] (uninitialised) the view of
+ * layer v (bound like an ids_pass's image; ids_pass_finish frees only the view, ids_multiview_finish the rest). Needs
+ * the device's multiview feature and 2 views. */
+int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], char *err, size_t err_size);
+void ids_multiview_finish(render *r, ids_multiview *m);
+/* Records both eyes' pass for state slot `slot` (view 0 active): what ids_pass_record does for each eye, in one render
+ * pass; with BLEND objects in the scene each eye's layer of the depth is then copied into the eye's depth target
+ * (the compositing reads it there, as after ids_pass_record). */
+void ids_multiview_record(render *r, const ids_multiview *m, VkCommandBuffer cmd, uint32_t slot);
 
 /* Diagnostics for the tests (methods/method_debug.h): copies the image out to `ids` (width x height x 4 words), or
  * with `upload` from `ids` into the image; waits for the copy. */
