@@ -30,7 +30,7 @@ typedef struct vreuse_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push, amss, jshade, stu_grad, stu;
+	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu;
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
 	bool key;          /* warp: this frame is shaded in full */
@@ -223,7 +223,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	if ((rc = make_compute(r, s, "vreuse/decide.comp.in", &s->decide, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
-	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
+	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)) ||
+	    (rc = make_compute_x(r, s, "vreuse/push.comp.in", "#define FILL_ARGS 1\n", &s->fill_args, err, err_size)))
 		return rc;
 	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
@@ -323,28 +324,22 @@ static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 	vbuf_barrier(cmd);
 }
 
-/* Pull-push ([S] sec. 3.3): the valid pixels averaged up a pyramid (weights clamped to 1), then pushed down into the
- * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). decide wrote level 0. */
+/* Pull-push ([S] sec. 3.3) into warp's holes, on the GPU's count of them: decide appended the holes to the list and
+ * pulled levels 1-3; one dispatch writes the indirect arguments, the pull above level 3 runs as one workgroup (none
+ * when the frame has no hole) and the push runs over the hole list only (pull.comp.in, push.comp.in): no full-size
+ * pass, and nothing launched on a frame without holes. */
 static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
-	for (uint32_t l = 1; l < s->levels; l++) {
-		uint32_t aux[4] = {l, 0, 0, 0};
-		bind(r, s, cmd, s->pull, aux);
-		uint32_t w = r->desc.width, h = r->desc.height;
-		for (uint32_t k = 0; k < l; k++)
-			w = (w + 1) / 2, h = (h + 1) / 2;
-		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-		vbuf_barrier(cmd);
-	}
-	for (uint32_t l = s->levels - 1; l-- > 0;) {
-		uint32_t aux[4] = {l, 0, 0, 0};
-		bind(r, s, cmd, s->push, aux);
-		uint32_t w = r->desc.width, h = r->desc.height;
-		for (uint32_t k = 0; k < l; k++)
-			w = (w + 1) / 2, h = (h + 1) / 2;
-		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-		vbuf_barrier(cmd);
-	}
+	uint32_t aux[4] = {0, 0, 0, 0};
+	bind(r, s, cmd, s->fill_args, aux);
+	vkCmdDispatch(cmd, 1, 1, 1);
+	vbuf_barrier(cmd);
+	bind(r, s, cmd, s->pull, aux);
+	vkCmdDispatchIndirect(cmd, s->p.counters.buffer, 11 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
+	bind(r, s, cmd, s->push, aux);
+	vkCmdDispatchIndirect(cmd, s->p.counters.buffer, 13 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
 }
 
 static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
@@ -532,8 +527,8 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[8] = {s->decide, s->resolve, s->pull, s->push, s->amss, s->jshade, s->stu_grad, s->stu};
-	for (int i = 0; i < 8; i++)
+	VkPipeline pp[9] = {s->decide, s->resolve, s->pull, s->push, s->fill_args, s->amss, s->jshade, s->stu_grad, s->stu};
+	for (int i = 0; i < 9; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
