@@ -325,7 +325,7 @@ static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 }
 
 /* Pull-push ([S] sec. 3.3) into warp's holes, on the GPU's count of them: decide appended the holes to the list and
- * pulled levels 1-3; one dispatch writes the indirect arguments, the pull above level 3 runs as one workgroup (none
+ * pulled levels 1 and 2; one dispatch writes the indirect arguments, the pull from level 3 up runs as one workgroup (none
  * when the frame has no hole) and the push runs over the hole list only (pull.comp.in, push.comp.in): no full-size
  * pass, and nothing launched on a frame without holes. */
 static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
@@ -411,8 +411,11 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	if (s->key) { /* the cache := the keyframe (the record from the vis pass) */
 		record_resolve(r, s, cmd);
 	} else {
-		clear_to_sky(r, cmd);
-		record_decide(r, s, cmd, frame, FLAG_HAVE_CACHE);
+		clear_to_sky(r, cmd); /* decide: one invocation per 4x4 pixels (decide.comp.in) */
+		uint32_t aux[4] = {1, FLAG_HAVE_CACHE, frame, s->v.period};
+		bind(r, s, cmd, s->decide, aux);
+		vkCmdDispatch(cmd, (r->desc.width + 31) / 32, (r->desc.height + 31) / 32, 1);
+		vbuf_barrier(cmd);
 	}
 	render_ts(r, cmd);
 	if (!s->key) {
