@@ -307,7 +307,10 @@ static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint3
 {
 	uint32_t aux[4] = {1, flags, frame, s->v.period | s->v.group << 8};
 	bind(r, s, cmd, s->decide, aux);
-	dispatch_pixels(r, cmd);
+	if (s->v.mode == VREUSE_AMSS)
+		dispatch_pixels(r, cmd);
+	else /* rrc variants, stu: one invocation per 4x4 pixels (decide.comp.in) */
+		vkCmdDispatch(cmd, (r->desc.width + 31) / 32, (r->desc.height + 31) / 32, 1);
 	vbuf_barrier(cmd);
 	vbuf_bind(r, &s->p, cmd, s->p.args, 0, NULL);
 	vkCmdDispatch(cmd, 1, 1, 1);
