@@ -303,8 +303,23 @@ static void clear_to_sky(render *r, VkCommandBuffer cmd)
 }
 
 /* The per-pixel pass over the ids: reprojection, decision, appends, the record of this frame (decide.comp.in). */
+static void clear_image(VkCommandBuffer cmd, const vkdev_image *im)
+{
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	vkCmdClearColorImage(cmd, im->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	vbuf_barrier(cmd);
+}
+
+static bool is_rrc(const vreuse_state *s)
+{
+	return s->v.mode == VREUSE_RRC_RANDOM || s->v.mode == VREUSE_RRC_INTERLEAVED;
+}
+
 static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame, uint32_t flags)
 {
+	if (is_rrc(s)) /* decide writes the shaded pixels' flags only */
+		clear_image(cmd, &s->flag);
 	uint32_t aux[4] = {1, flags, frame, s->v.period | s->v.group << 8};
 	bind(r, s, cmd, s->decide, aux);
 	if (s->v.mode == VREUSE_AMSS)
@@ -322,6 +337,8 @@ static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint3
 static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
 	uint32_t aux[4] = {0, 0, 0, 0};
+	if (is_rrc(s)) /* resolve writes the covered pixels' texels only (the background: object 0) */
+		clear_image(cmd, &s->cache_rec);
 	bind(r, s, cmd, s->resolve, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
