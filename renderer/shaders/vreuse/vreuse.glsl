@@ -12,7 +12,10 @@ layout(set = 2, binding = 0, rgba16f) uniform image2D cache_col;
 layout(set = 2, binding = 1, rgba32ui) uniform uimage2D cache_rec;
 layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record
 layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded this frame, 2 a hole (warp)
-layout(std430, set = 2, binding = 4) buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
+#ifndef VREUSE_PYR_QUALIFIER
+#define VREUSE_PYR_QUALIFIER
+#endif
+layout(std430, set = 2, binding = 4) VREUSE_PYR_QUALIFIER buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
@@ -105,6 +108,28 @@ uint vreuse_level_base(uint l)
 		base += uint(s.x * s.y);
 	}
 	return base;
+}
+// The number of levels (down to 1x1).
+uint vreuse_levels()
+{
+	ivec2 s = imageSize(flags);
+	uint n = 1u;
+	while (any(greaterThan(s, ivec2(1)))) {
+		s = (s + 1) / 2;
+		n++;
+	}
+	return n;
+}
+// A node of the pull ([S] sec. 3.3): the weight-averaged children a, b, c, d ((0,0), (1,0), (0,1), (1,1); an absent
+// child is vec4(0) and adds zero), weight min(1, sum). Weights are 0 or 1 at every level (level 0 holds 0 or 1).
+vec4 vreuse_pull4(vec4 a, vec4 b, vec4 c, vec4 d)
+{
+	vec4 sum = vec4(0.0);
+	sum += vec4(a.rgb * a.a, a.a);
+	sum += vec4(b.rgb * b.a, b.a);
+	sum += vec4(c.rgb * c.a, c.a);
+	sum += vec4(d.rgb * d.a, d.a);
+	return sum.a > 0.0 ? vec4(sum.rgb / sum.a, min(1.0, sum.a)) : vec4(0.0);
 }
 
 #endif

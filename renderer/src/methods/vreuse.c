@@ -30,7 +30,7 @@ typedef struct vreuse_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push, amss, jshade, stu_grad, stu;
+	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu;
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
 	bool key;          /* warp: this frame is shaded in full */
@@ -223,7 +223,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	if ((rc = make_compute(r, s, "vreuse/decide.comp.in", &s->decide, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
-	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)))
+	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)) ||
+	    (rc = make_compute_x(r, s, "vreuse/push.comp.in", "#define FILL_ARGS 1\n", &s->fill_args, err, err_size)))
 		return rc;
 	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
@@ -302,11 +303,29 @@ static void clear_to_sky(render *r, VkCommandBuffer cmd)
 }
 
 /* The per-pixel pass over the ids: reprojection, decision, appends, the record of this frame (decide.comp.in). */
+static void clear_image(VkCommandBuffer cmd, const vkdev_image *im)
+{
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	vkCmdClearColorImage(cmd, im->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	vbuf_barrier(cmd);
+}
+
+static bool is_rrc(const vreuse_state *s)
+{
+	return s->v.mode == VREUSE_RRC_RANDOM || s->v.mode == VREUSE_RRC_INTERLEAVED;
+}
+
 static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame, uint32_t flags)
 {
+	if (is_rrc(s)) /* decide writes the shaded pixels' flags only */
+		clear_image(cmd, &s->flag);
 	uint32_t aux[4] = {1, flags, frame, s->v.period | s->v.group << 8};
 	bind(r, s, cmd, s->decide, aux);
-	dispatch_pixels(r, cmd);
+	if (s->v.mode == VREUSE_AMSS)
+		dispatch_pixels(r, cmd);
+	else /* rrc variants, stu: one invocation per 4x4 pixels (decide.comp.in) */
+		vkCmdDispatch(cmd, (r->desc.width + 31) / 32, (r->desc.height + 31) / 32, 1);
 	vbuf_barrier(cmd);
 	vbuf_bind(r, &s->p, cmd, s->p.args, 0, NULL);
 	vkCmdDispatch(cmd, 1, 1, 1);
@@ -318,33 +337,29 @@ static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint3
 static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
 	uint32_t aux[4] = {0, 0, 0, 0};
+	if (is_rrc(s)) /* resolve writes the covered pixels' texels only (the background: object 0) */
+		clear_image(cmd, &s->cache_rec);
 	bind(r, s, cmd, s->resolve, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
 }
 
-/* Pull-push ([S] sec. 3.3): the valid pixels averaged up a pyramid (weights clamped to 1), then pushed down into the
- * pixels of lower weight; the holes of level 0 take the result (pull.comp.in, push.comp.in). decide wrote level 0. */
+/* Pull-push ([S] sec. 3.3) into warp's holes, on the GPU's count of them: decide appended the holes to the list and
+ * pulled levels 1 and 2; one dispatch writes the indirect arguments, the pull from level 3 up runs as one workgroup (none
+ * when the frame has no hole) and the push runs over the hole list only (pull.comp.in, push.comp.in): no full-size
+ * pass, and nothing launched on a frame without holes. */
 static void record_fill(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
-	for (uint32_t l = 1; l < s->levels; l++) {
-		uint32_t aux[4] = {l, 0, 0, 0};
-		bind(r, s, cmd, s->pull, aux);
-		uint32_t w = r->desc.width, h = r->desc.height;
-		for (uint32_t k = 0; k < l; k++)
-			w = (w + 1) / 2, h = (h + 1) / 2;
-		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-		vbuf_barrier(cmd);
-	}
-	for (uint32_t l = s->levels - 1; l-- > 0;) {
-		uint32_t aux[4] = {l, 0, 0, 0};
-		bind(r, s, cmd, s->push, aux);
-		uint32_t w = r->desc.width, h = r->desc.height;
-		for (uint32_t k = 0; k < l; k++)
-			w = (w + 1) / 2, h = (h + 1) / 2;
-		vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-		vbuf_barrier(cmd);
-	}
+	uint32_t aux[4] = {0, 0, 0, 0};
+	bind(r, s, cmd, s->fill_args, aux);
+	vkCmdDispatch(cmd, 1, 1, 1);
+	vbuf_barrier(cmd);
+	bind(r, s, cmd, s->pull, aux);
+	vkCmdDispatchIndirect(cmd, s->p.counters.buffer, 11 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
+	bind(r, s, cmd, s->push, aux);
+	vkCmdDispatchIndirect(cmd, s->p.counters.buffer, 13 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
 }
 
 static void hdr_to_attachment(render *r, VkCommandBuffer cmd)
@@ -416,8 +431,11 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	if (s->key) { /* the cache := the keyframe (the record from the vis pass) */
 		record_resolve(r, s, cmd);
 	} else {
-		clear_to_sky(r, cmd);
-		record_decide(r, s, cmd, frame, FLAG_HAVE_CACHE);
+		clear_to_sky(r, cmd); /* decide: one invocation per 4x4 pixels (decide.comp.in) */
+		uint32_t aux[4] = {1, FLAG_HAVE_CACHE, frame, s->v.period};
+		bind(r, s, cmd, s->decide, aux);
+		vkCmdDispatch(cmd, (r->desc.width + 31) / 32, (r->desc.height + 31) / 32, 1);
+		vbuf_barrier(cmd);
 	}
 	render_ts(r, cmd);
 	if (!s->key) {
@@ -532,8 +550,8 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[8] = {s->decide, s->resolve, s->pull, s->push, s->amss, s->jshade, s->stu_grad, s->stu};
-	for (int i = 0; i < 8; i++)
+	VkPipeline pp[9] = {s->decide, s->resolve, s->pull, s->push, s->fill_args, s->amss, s->jshade, s->stu_grad, s->stu};
+	for (int i = 0; i < 9; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
