@@ -2,11 +2,10 @@
 // (renderer/src/methods/reproj_cache.c; ../shared/TAS-METHODS.md sections 1-3). Needs tas/tas.glsl before it.
 //
 // Per-pixel cache, double-buffered ("input buffers are reprojected, altered values stored in the output
-// buffers", paper sec. 6.1), two texels per pixel: colour = the value shown for the opaque surface (three half
-// floats, exactly what the HDR target shows) and, for tarc (KEEP_DISP), its display code values disp, as the last
-// shading computed them, so that reshading takes one display transform per sample instead of two (as tasa keeps
-// them in its `shown` image), in one RGBA32UI texel (cache_pack); state = (object + 1, view distance bits,
-// age | flags, gradient bits).
+// buffers", paper sec. 6.1): colour = the value shown for the opaque surface (half float, what the HDR target
+// stores), state = (object + 1, view distance bits, age | flags, gradient bits), and for tarc (KEEP_DISP) disp =
+// the display code values of the colour, disp(h(s)) as the last shading computed them, so that reshading takes
+// one display transform per sample instead of two (as tasa keeps them in its `shown` image).
 // Variants (compiled in with #define, never branched on at run time): TARC (else rrc), ORACLE (tarc's ideal
 // variant), NEAREST (nearest-pixel lookup, else bilinear with per-tap validity).
 #ifndef TASLAB_REPROJ_GLSL
@@ -16,9 +15,9 @@
 #define KEEP_DISP 1 // the oracle compares exact display values of C' (its bound), rrc compares none
 #endif
 
-layout(set = 1, binding = 0, rgba32ui) uniform readonly uimage2D prev_colour; // cache_pack
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
 layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
-layout(set = 1, binding = 2, rgba32ui) uniform uimage2D next_colour;
+layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
 layout(set = 1, binding = 4, rgba32f) uniform image2DArray grad_img;          // G: g of steady pixels (tarc)
 layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
@@ -30,22 +29,8 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint forced;  // tarc: reshaded because new or in their second frame (not by the gradient)
 	uint pad0, pad1, pad2;
 } counters;
-// The reproject and shading passes round their value to half float here (store, load back): the HDR target's
-// rounding, which packHalf2x16 does not reproduce on lavapipe (1 code value apart; the rounding of a conversion to
-// 16-bit float is the implementation's choice); the cache then packs the exact halves.
-layout(set = 1, binding = 7, rgba16f) uniform image2D round_img;
-
-// The colour texel: x = half r | half g << 16, y = half b | disp.r << 16, z = disp.g | disp.b << 16, w = 0, with
-// disp in 16-bit fixed point over [0, 255] code values (steps of 1/257: d is off by at most 1/257 from the float
-// difference, against thresholds T >= 1). rrc and the oracle store disp = 0. `colour` must be half floats already
-// (read back from round_img) so that packing does not round.
-uvec4 cache_pack(vec3 colour, vec3 disp)
-{
-	uvec3 q = uvec3(round(clamp(disp, 0.0, 255.0) * 257.0));
-	return uvec4(packHalf2x16(colour.rg), packHalf2x16(vec2(colour.b, 0.0)) | (q.r << 16), q.g | (q.b << 16), 0u);
-}
-vec3 cache_colour(uvec4 t) { return vec3(unpackHalf2x16(t.x), unpackHalf2x16(t.y).x); }
-vec3 cache_disp(uvec4 t) { return vec3(float(t.y >> 16), float(t.z & 0xFFFFu), float(t.z >> 16)) / 257.0; }
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D prev_disp; // KEEP_DISP: disp of prev_colour
+layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEEP_DISP: disp of next_colour
 
 // COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
 // subgroup operations in fragment shaders; lavapipe: subgroups of 8) the subgroup's active invocations are counted
@@ -136,9 +121,10 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 	uvec4 rec = imageLoad(prev_state, q);
 	if (!cached_here(rec, object, dist))
 		return false;
-	uvec4 t = imageLoad(prev_colour, q);
-	colour = cache_colour(t);
-	disp = cache_disp(t);
+	colour = imageLoad(prev_colour, q).rgb;
+#ifdef KEEP_DISP
+	disp = imageLoad(prev_disp, q).rgb;
+#endif
 	state = rec;
 	return true;
 #else
@@ -158,9 +144,10 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		uvec4 rec = imageLoad(prev_state, q);
 		if (!cached_here(rec, object, dist))
 			continue;
-		uvec4 t = imageLoad(prev_colour, q);
-		acc += w * cache_colour(t);
-		dacc += w * cache_disp(t);
+		acc += w * imageLoad(prev_colour, q).rgb;
+#ifdef KEEP_DISP
+		dacc += w * imageLoad(prev_disp, q).rgb;
+#endif
 		wsum += w;
 		if (w > wbest) {
 			wbest = w;
