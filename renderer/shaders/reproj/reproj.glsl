@@ -104,9 +104,9 @@ bool cached_here(uvec4 rec, uint object, float dist)
 // invalid taps weighted 0 and the rest renormalised; the discrete state comes from the valid tap with the
 // largest weight (ties: the lowest tap). False: a cache miss.
 // prev_clip and dist: the surface point's clip position and view distance in the previous frame.
-// KEEP_DISP: disp = the cached display values resampled with the same weights (under a static view, where the
-// weights are 0 and 1, exactly disp(C'); under motion the weighted mean of the taps' display values, which differs
-// from disp(C') by the curvature of the display transform across the taps).
+// KEEP_DISP: disp = the cached display values of the tap the discrete state comes from (one tap, not four: on
+// lavapipe every image load costs the same whatever its weight). Under a static view (weights 0 and 1) exactly
+// disp(C'); under motion the display values of the last shading the state travelled with, not of the blend C'.
 bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
 {
 	ivec2 size = imageSize(prev_state);
@@ -134,7 +134,8 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 	x0 += step(1.0, fr); // a fraction rounded up to 1 moves to the next tap with fraction 0
 	fr = fr - step(1.0, fr);
 	float wsum = 0.0, wbest = -1.0;
-	vec3 acc = vec3(0.0), dacc = vec3(0.0);
+	vec3 acc = vec3(0.0);
+	ivec2 qbest = ivec2(0);
 	for (int k = 0; k < 4; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);
 		ivec2 q = ivec2(x0) + o;
@@ -145,19 +146,19 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		if (!cached_here(rec, object, dist))
 			continue;
 		acc += w * imageLoad(prev_colour, q).rgb;
-#ifdef KEEP_DISP
-		dacc += w * imageLoad(prev_disp, q).rgb;
-#endif
 		wsum += w;
 		if (w > wbest) {
 			wbest = w;
 			state = rec;
+			qbest = q;
 		}
 	}
 	if (wsum <= 0.0)
 		return false;
 	colour = wsum == 1.0 ? acc : acc / wsum;
-	disp = wsum == 1.0 ? dacc : dacc / wsum;
+#ifdef KEEP_DISP
+	disp = imageLoad(prev_disp, qbest).rgb;
+#endif
 	return true;
 #endif
 }
