@@ -3,11 +3,17 @@
 //
 // Per-pixel cache, double-buffered ("input buffers are reprojected, altered values stored in the output
 // buffers", paper sec. 6.1): colour = the value shown for the opaque surface (half float, what the HDR target
-// stores), state = (object + 1, view distance bits, age | flags, gradient bits).
+// stores), state = (object + 1, view distance bits, age | flags, gradient bits), and for tarc (KEEP_DISP) disp =
+// the display code values of the colour, disp(h(s)) as the last shading computed them, so that reshading takes
+// one display transform per sample instead of two (as tasa keeps them in its `shown` image).
 // Variants (compiled in with #define, never branched on at run time): TARC (else rrc), ORACLE (tarc's ideal
 // variant), NEAREST (nearest-pixel lookup, else bilinear with per-tap validity).
 #ifndef TASLAB_REPROJ_GLSL
 #define TASLAB_REPROJ_GLSL
+
+#if defined(TARC) && !defined(ORACLE)
+#define KEEP_DISP 1 // the oracle compares exact display values of C' (its bound), rrc compares none
+#endif
 
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
 layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
@@ -23,6 +29,8 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint forced;  // tarc: reshaded because new or in their second frame (not by the gradient)
 	uint pad0, pad1, pad2;
 } counters;
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D prev_disp; // KEEP_DISP: disp of prev_colour
+layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEEP_DISP: disp of next_colour
 
 // COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
 // subgroup operations in fragment shaders; lavapipe: subgroups of 8) the subgroup's active invocations are counted
@@ -96,11 +104,15 @@ bool cached_here(uvec4 rec, uint object, float dist)
 // invalid taps weighted 0 and the rest renormalised; the discrete state comes from the valid tap with the
 // largest weight (ties: the lowest tap). False: a cache miss.
 // prev_clip and dist: the surface point's clip position and view distance in the previous frame.
-bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out uvec4 state)
+// KEEP_DISP: disp = the cached display values of the tap the discrete state comes from (one tap, not four: on
+// lavapipe every image load costs the same whatever its weight). Under a static view (weights 0 and 1) exactly
+// disp(C'); under motion the display values of the last shading the state travelled with, not of the blend C'.
+bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
 {
 	ivec2 size = imageSize(prev_state);
 	vec2 f;
 	colour = vec3(0.0);
+	disp = vec3(0.0);
 	state = uvec4(0u);
 	if (!reproject_f(prev_clip, size, f))
 		return false;
@@ -110,6 +122,9 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 	if (!cached_here(rec, object, dist))
 		return false;
 	colour = imageLoad(prev_colour, q).rgb;
+#ifdef KEEP_DISP
+	disp = imageLoad(prev_disp, q).rgb;
+#endif
 	state = rec;
 	return true;
 #else
@@ -120,6 +135,7 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 	fr = fr - step(1.0, fr);
 	float wsum = 0.0, wbest = -1.0;
 	vec3 acc = vec3(0.0);
+	ivec2 qbest = ivec2(0);
 	for (int k = 0; k < 4; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);
 		ivec2 q = ivec2(x0) + o;
@@ -134,11 +150,15 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		if (w > wbest) {
 			wbest = w;
 			state = rec;
+			qbest = q;
 		}
 	}
 	if (wsum <= 0.0)
 		return false;
 	colour = wsum == 1.0 ? acc : acc / wsum;
+#ifdef KEEP_DISP
+	disp = imageLoad(prev_disp, qbest).rgb;
+#endif
 	return true;
 #endif
 }

@@ -23,7 +23,8 @@
 #include "method_debug.h"
 #include "shaders/reproj/reproject_vert.h"
 
-enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_COUNT };
+/* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP); one texel each for rrc and the oracle */
+enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_DISP0, IMG_DISP1, IMG_COUNT };
 
 typedef struct reproj_state {
 	reproj_variant v;
@@ -100,12 +101,13 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 	VkDevice d = r->dev->device;
 	VkResult res;
 	VkShaderStageFlags st = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	VkDescriptorSetLayoutBinding b[7];
-	for (uint32_t i = 0; i < 6; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, st, NULL};
-	b[6] = (VkDescriptorSetLayoutBinding){6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, st, NULL};
+	/* bindings 0-5 and 7-8 images, 6 the counters (reproj.glsl) */
+	VkDescriptorSetLayoutBinding b[9];
+	for (uint32_t i = 0; i < 9; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+						      1, st, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-					      .bindingCount = 7, .pBindings = b};
+					      .bindingCount = 9, .pBindings = b};
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "reprojection cache: descriptor set layout", res);
 	VkDescriptorSetLayout layouts[2] = {s->set_layout, s->set_layout};
@@ -114,21 +116,24 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 	if ((res = vkAllocateDescriptorSets(d, &ai, s->sets)))
 		return render_vk_error(err, err_size, "reprojection cache: descriptor sets", res);
 	for (int p = 0; p < 2; p++) {
-		const vkdev_image *im[6] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
-					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_G], &s->img[IMG_F]};
-		VkDescriptorImageInfo ii[6];
-		VkWriteDescriptorSet w[7];
-		for (uint32_t i = 0; i < 6; i++) {
+		const vkdev_image *im[8] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
+					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_G], &s->img[IMG_F],
+					    &s->img[IMG_DISP0 + p], &s->img[IMG_DISP0 + 1 - p]};
+		VkDescriptorImageInfo ii[8];
+		VkWriteDescriptorSet w[9];
+		for (uint32_t i = 0; i < 8; i++) {
 			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, im[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
-						      .dstBinding = i, .descriptorCount = 1,
-						      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &ii[i]};
+			w[i + (i >= 6)] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+								 .dstSet = s->sets[p], .dstBinding = i + (i >= 6),
+								 .descriptorCount = 1,
+								 .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+								 .pImageInfo = &ii[i]};
 		}
 		VkDescriptorBufferInfo bi = {s->counters.buffer, 0, VK_WHOLE_SIZE};
 		w[6] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
 					      .dstBinding = 6, .descriptorCount = 1,
 					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi};
-		vkUpdateDescriptorSets(d, 7, w, 0, NULL);
+		vkUpdateDescriptorSets(d, 9, w, 0, NULL);
 	}
 	return TL_OK;
 }
@@ -143,15 +148,16 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 	s->last_frame = -1;
 	uint32_t w = r->desc.width, h = r->desc.height, lw = (w + 7) / 8, lh = (h + 7) / 8;
 	static const char *const names[IMG_COUNT] = {"cache colour 0", "cache colour 1", "cache state 0", "cache state 1",
-						      "tarc G", "tarc L1", "tarc F"};
+						      "tarc G", "tarc L1", "tarc F", "tarc disp 0", "tarc disp 1"};
 	VkResult res;
 	for (int i = 0; i < IMG_COUNT; i++) {
-		int low = i == IMG_L1 || i == IMG_F, arr = i >= IMG_G;
+		int low = i == IMG_L1 || i == IMG_F, arr = i >= IMG_G && i <= IMG_F, disp = i >= IMG_DISP0;
 		VkFormat f = i <= IMG_COLOUR1 ? VK_FORMAT_R16G16B16A16_SFLOAT
 			     : i <= IMG_STATE1 ? VK_FORMAT_R32G32B32A32_UINT
 					       : VK_FORMAT_R32G32B32A32_SFLOAT;
-		/* rrc never reads G or F: one texel each keeps the descriptor set uniform */
-		uint32_t iw = arr && !v->tarc ? 1 : low ? lw : w, ih = arr && !v->tarc ? 1 : low ? lh : h;
+		/* rrc never reads G or F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
+		bool tiny = (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
+		uint32_t iw = tiny ? 1 : low ? lw : w, ih = tiny ? 1 : low ? lh : h;
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
