@@ -95,53 +95,14 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 	return rc;
 }
 
-/* The pass: the image cleared to 0 (background) and the depth target to 1, every opaque and masked object in scene
- * order with depth LESS_OR_EQUAL (as ids_pass_record, so the same surfaces win and BLEND finds the same depth). */
+/* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the
+ * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. */
 static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
 {
-	uint32_t w = r->desc.width, h = r->desc.height;
-	vkdev_barrier_image(cmd, &s->vis, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-	render_depth_discard(r, cmd);
-	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = s->vis.view,
-					.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
-	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
-					.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-					.clearValue = {.depthStencil = {1.0f, 0}}};
-	VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO, .renderArea = {{0, 0}, {w, h}}, .layerCount = 1,
-			      .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da};
-	vkCmdBeginRendering(cmd, &ri);
-	render_set_viewport(cmd, w, h);
-	VkDescriptorSet sets[2] = {r->scene_set, s->p.ids.set};
-	const scene *sc = r->scene;
-	const render_pipeline *bound = NULL;
-	for (size_t i = 0; i < sc->object_count; i++) {
-		const scene_object *o = &sc->objects[i];
-		if (o->mesh < 0 || sc->materials[o->material].alpha_mode == SCENE_ALPHA_BLEND)
-			continue;
-		const render_pipeline *want =
-			sc->materials[o->material].alpha_mode == SCENE_ALPHA_MASK ? &s->vis_pipe_mask : &s->vis_pipe;
-		if (want != bound) {
-			vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->pipeline);
-			vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, want->layout, 0, 2, sets, 0, NULL);
-			bound = want;
-		}
-		gpu_push pc = {0, (uint32_t)i, (uint32_t)sc->object_count, 0,
-			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], key_slot, w | h << 16}};
-		vkCmdPushConstants(cmd, bound->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-				   sizeof pc, &pc);
-		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
-		vkCmdDraw(cmd, sc->meshes[o->mesh].index_count, 1, 0, 0);
-	}
-	vkCmdEndRendering(cmd);
-	vkdev_barrier_image(cmd, &s->vis, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+	const uint32_t aux23[2] = {key_slot, r->desc.width | r->desc.height << 16};
+	ids_begin(r, cmd, &s->vis);
+	ids_draw_objects(r, cmd, s->p.ids.set, &s->vis_pipe, &s->vis_pipe_mask, 0, aux23);
+	ids_end(cmd, &s->vis);
 }
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)

@@ -113,9 +113,8 @@ static void layer_barrier(VkCommandBuffer cmd, VkImage image, uint32_t base, uin
 	vkCmdPipelineBarrier2(cmd, &di);
 }
 
-/* The draws of the pass (inside its render pass): every opaque and masked object in scene order. */
-static void draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const render_pipeline *pipe,
-			 const render_pipeline *pipe_mask, uint32_t slot)
+void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const render_pipeline *pipe,
+		      const render_pipeline *pipe_mask, uint32_t slot, const uint32_t aux23[2])
 {
 	VkDescriptorSet sets[2] = {r->scene_set, set};
 	const scene *sc = r->scene;
@@ -133,7 +132,7 @@ static void draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, co
 		}
 		/* aux: where the object's mesh starts in the scene's index and vertex buffers (common/ids.vert.in) */
 		gpu_push pc = {slot, (uint32_t)i, (uint32_t)sc->object_count, 0,
-			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], 0, 0}};
+			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], aux23[0], aux23[1]}};
 		vkCmdPushConstants(cmd, bound->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
 				   sizeof pc, &pc);
 		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
@@ -141,16 +140,16 @@ static void draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, co
 	}
 }
 
-void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot)
+void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *image)
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
-	/* ids cleared to 0 (background), depth to 1; the previous frame's compute reads of the image come first */
-	vkdev_barrier_image(cmd, &p->image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+	/* cleared to 0 (background), depth to 1; the previous frame's compute reads of the image come first */
+	vkdev_barrier_image(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
 			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
 			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
 			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 	render_depth_discard(r, cmd);
-	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = p->image.view,
+	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = image->view,
 					.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
 					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
 	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
@@ -161,12 +160,23 @@ void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t
 			      .colorAttachmentCount = 1, .pColorAttachments = &ca, .pDepthAttachment = &da};
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, w, h);
-	draw_objects(r, cmd, p->set, &p->pipe, &p->pipe_mask, slot);
+}
+
+void ids_end(VkCommandBuffer cmd, const vkdev_image *image)
+{
 	vkCmdEndRendering(cmd);
-	vkdev_barrier_image(cmd, &p->image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+	vkdev_barrier_image(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
 			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
 			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
 			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+}
+
+void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot)
+{
+	static const uint32_t no_aux[2] = {0, 0};
+	ids_begin(r, cmd, &p->image);
+	ids_draw_objects(r, cmd, p->set, &p->pipe, &p->pipe_mask, slot, no_aux);
+	ids_end(cmd, &p->image);
 }
 
 int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size)
@@ -276,7 +286,8 @@ void ids_multiview_record(render *r, const ids_multiview *m, VkCommandBuffer cmd
 			      .pDepthAttachment = &da};
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, w, h);
-	draw_objects(r, cmd, m->set, &m->pipe, &m->pipe_mask, slot);
+	static const uint32_t no_aux[2] = {0, 0};
+	ids_draw_objects(r, cmd, m->set, &m->pipe, &m->pipe_mask, slot, no_aux);
 	vkCmdEndRendering(cmd);
 	vkdev_barrier_image(cmd, &m->ids, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
 			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
