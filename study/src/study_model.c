@@ -286,7 +286,7 @@ static int fit_model(const cond *c, size_t n, const char *skip, fit *f, char *er
 {
 	memset(f, 0, sizeof *f);
 	cond *s = malloc((n + 1) * sizeof *s);
-	double *y = malloc((n + 1) * sizeof *y), *w = malloc((n + 1) * sizeof *w), *fv = malloc((n + 1) * sizeof *fv);
+	double *y = calloc(n + 1, sizeof *y), *w = calloc(n + 1, sizeof *w), *fv = malloc((n + 1) * sizeof *fv);
 	f->kx = malloc((n + 1) * sizeof *f->kx), f->kd = malloc((n + 1) * sizeof *f->kd);
 	if (!s || !y || !w || !fv || !f->kx || !f->kd) {
 		free(s), free(y), free(w), free(fv), free(f->kx), free(f->kd);

@@ -114,7 +114,8 @@ static void page_table1(FILE *f, const sweep_spec *s, const sty_rpt_group *gi, s
 	fprintf(f, "<section id=\"table1\"><h2>Table 1: shaded samples and their reduction</h2>\n<p class=\"note\">Shaded "
 		   "samples are the methods' own counts (DESIGN section 5), per frame; the reduction is 1 − shaded / "
 		   "baseline's shaded (baseline %s) over the same frames; speedup = ref's median GPU frame time / the run's "
-		   "(cf. paper Table 1, Fig. 12). Also in <a href=\"../table1.md\">table1.md</a> and "
+		   "(a variant with a period N: the median of its N-frame means, the amortised cost of a keyframe every N "
+		   "frames; cf. paper Table 1, Fig. 12). Also in <a href=\"../table1.md\">table1.md</a> and "
 		   "<a href=\"../summary.csv\">summary.csv</a>.</p>\n<div class=\"scroll\"><table><tr><th class=\"l\">scene</th>"
 		   "<th class=\"l\">camera</th><th class=\"l\">variant</th><th>shaded samples / frame</th><th>reduction</th>"
 		   "<th>reuse</th><th>speedup vs ref</th></tr>\n",

@@ -28,7 +28,8 @@ typedef struct mtr_run_summary {
 	double reduction;           /* 1 - shaded / baseline's shaded; NAN without a matching baseline run */
 	char baseline[64];          /* the baseline run's variant ("" without one) */
 	double fs_invocations;      /* sum of the device's fragment-invocation statistic (NAN if none): not shading */
-	double gpu_ms_median;       /* median gpu_ms_total; NAN without timestamps */
+	double gpu_ms_median;       /* median gpu_ms_total (period N > 1: of the N-frame windows' means, the amortised
+				     * cost of keyframe schemes); NAN without timestamps */
 	double speedup_vs_ref;      /* ref median / this median; NAN without a matching ref run */
 	double reused_samples;      /* sum; NAN when absent */
 	double late_samples;        /* --truth: sum; NAN when absent */
