@@ -61,7 +61,8 @@ static void test_filter_unit(void **state)
 	char err[1024];
 	scene *s = tu_load_scene("atlas_filter"); /* two 4x4-segment planes: 16 patches each */
 	vkdev *dev = tu_lavapipe();
-	/* not multiples of 8: windows straddle the 8x8 workgroups (their shared tile's extra row and column) */
+	/* not multiples of 4 or 8: windows straddle the visible pass's 4x8-pixel blocks (each block's extra row and
+	 * column) and the image's edge cuts the last blocks */
 	enum { W = 21, H = 19 };
 	render *r = tu_render_open(dev, s, 0, "tasa@8", NULL, NULL, W, H, false);
 	frame_image img;
