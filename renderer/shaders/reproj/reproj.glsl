@@ -15,11 +15,8 @@
 #define KEEP_DISP 1 // the oracle compares exact display values of C' (its bound), rrc compares none
 #endif
 
-// The previous cache is read through sampled images (texelFetch, no sampler): on lavapipe a fetch per sample
-// cost less than an imageLoad.
-#extension GL_EXT_samplerless_texture_functions : require
-layout(set = 1, binding = 0) uniform texture2D prev_colour;
-layout(set = 1, binding = 1) uniform utexture2D prev_state;
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
+layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
 layout(set = 1, binding = 4, rgba32f) uniform image2DArray grad_img;          // G: g of steady pixels (tarc)
@@ -32,7 +29,7 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint forced;  // tarc: reshaded because new or in their second frame (not by the gradient)
 	uint pad0, pad1, pad2;
 } counters;
-layout(set = 1, binding = 7) uniform texture2D prev_disp; // KEEP_DISP: disp of prev_colour
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D prev_disp; // KEEP_DISP: disp of prev_colour
 layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEEP_DISP: disp of next_colour
 
 // COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
@@ -112,7 +109,7 @@ bool cached_here(uvec4 rec, uint object, float dist)
 // disp(C'); under motion the display values of the last shading the state travelled with, not of the blend C'.
 bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
 {
-	ivec2 size = textureSize(prev_state, 0);
+	ivec2 size = imageSize(prev_state);
 	vec2 f;
 	colour = vec3(0.0);
 	disp = vec3(0.0);
@@ -121,12 +118,12 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		return false;
 #ifdef NEAREST
 	ivec2 q = ivec2(f);
-	uvec4 rec = texelFetch(prev_state, q, 0);
+	uvec4 rec = imageLoad(prev_state, q);
 	if (!cached_here(rec, object, dist))
 		return false;
-	colour = texelFetch(prev_colour, q, 0).rgb;
+	colour = imageLoad(prev_colour, q).rgb;
 #ifdef KEEP_DISP
-	disp = texelFetch(prev_disp, q, 0).rgb;
+	disp = imageLoad(prev_disp, q).rgb;
 #endif
 	state = rec;
 	return true;
@@ -145,10 +142,10 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
 		if (w <= 0.0 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
 			continue;
-		uvec4 rec = texelFetch(prev_state, q, 0);
+		uvec4 rec = imageLoad(prev_state, q);
 		if (!cached_here(rec, object, dist))
 			continue;
-		acc += w * texelFetch(prev_colour, q, 0).rgb;
+		acc += w * imageLoad(prev_colour, q).rgb;
 		wsum += w;
 		if (w > wbest) {
 			wbest = w;
@@ -160,7 +157,7 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 		return false;
 	colour = wsum == 1.0 ? acc : acc / wsum;
 #ifdef KEEP_DISP
-	disp = texelFetch(prev_disp, qbest, 0).rgb;
+	disp = imageLoad(prev_disp, qbest).rgb;
 #endif
 	return true;
 #endif

@@ -31,14 +31,13 @@ int render_descriptors_create(render *r, char *err, size_t err_size)
 	VkDescriptorSetLayoutCreateInfo dl = {
 		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .bindingCount = 2, .pBindings = db};
 	CHECK_VK(vkCreateDescriptorSetLayout(d, &dl, NULL, &r->display_set_layout));
-	VkDescriptorPoolSize ps[4] = {
+	VkDescriptorPoolSize ps[3] = {
 		{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 128},
 		{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 128},
 		{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 128},
-		{VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, 32}, /* rrc/tarc: the previous cache */
 	};
 	VkDescriptorPoolCreateInfo pi = {
-		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 32, .poolSizeCount = 4, .pPoolSizes = ps};
+		.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 32, .poolSizeCount = 3, .pPoolSizes = ps};
 	CHECK_VK(vkCreateDescriptorPool(d, &pi, NULL, &r->pool));
 	rc = render_descriptors_view_create(r, err, err_size);
 fail:

@@ -116,22 +116,16 @@ static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size
 	return TL_OK;
 }
 
-static VkDescriptorType binding_type(uint32_t binding)
-{
-	return binding == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-	       : binding <= 1 || binding == 7 ? VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE
-					       : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-}
-
 static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 {
 	VkDevice d = r->dev->device;
 	VkResult res;
 	VkShaderStageFlags st = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	/* bindings 0-5 and 7-8 images (0, 1 and 7, the previous cache, sampled), 6 the counters (reproj.glsl) */
+	/* bindings 0-5 and 7-8 images, 6 the counters (reproj.glsl) */
 	VkDescriptorSetLayoutBinding b[9];
 	for (uint32_t i = 0; i < 9; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, binding_type(i), 1, st, NULL};
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+						      1, st, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = 9, .pBindings = b};
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
@@ -152,7 +146,7 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 			w[i + (i >= 6)] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
 								 .dstSet = s->sets[p], .dstBinding = i + (i >= 6),
 								 .descriptorCount = 1,
-								 .descriptorType = binding_type(i + (i >= 6)),
+								 .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 								 .pImageInfo = &ii[i]};
 		}
 		VkDescriptorBufferInfo bi = {s->counters.buffer, 0, VK_WHOLE_SIZE};
@@ -187,8 +181,6 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
 		if (!tiny && !low)
 			use |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT; /* written by the reproject pass */
-		if (i <= IMG_STATE1 || disp)
-			use |= VK_IMAGE_USAGE_SAMPLED_BIT; /* read by the next frame's reproject pass */
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, use, VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
@@ -260,14 +252,13 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	render_pass_depth(r, cmd, slot);
 	render_ts(r, cmd);
-	/* the next cache written where a surface is; the state (0: no surface) and G cleared to 0 by their load op,
-	 * the colour and display values left undefined elsewhere (read only where the state says a surface is) */
+	/* the next cache (state, G) cleared to 0 by the attachments' load op, then written where a surface is */
 	VkImageView views[4];
 	uint32_t nviews = cache_attachments(s, NULL, views);
 	render_pass_scene(r, cmd, slot,
 			  &(render_scene_pass){.pipe = &s->reproject, .set = set, .hdr = RENDER_HDR_CLEAR,
 					       .stencil = RENDER_STENCIL_PASS_CLEAR, .extra_count = nviews,
-					       .extra_views = views, .extra_clear = 2u | 4u});
+					       .extra_views = views});
 	barrier_all(cmd);
 	render_ts(r, cmd);
 	if (s->v.tarc && !s->v.oracle) {

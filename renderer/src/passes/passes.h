@@ -53,9 +53,8 @@ typedef struct render_scene_pass {
 	int blend;             /* then the BLEND objects */
 	int query;             /* inside the pipeline-statistics query (the method's shading passes) */
 	uint32_t extra_count;  /* colour attachments after the HDR target (with hdr; locations 1..n, pipe's
-				  extra_formats), in layout GENERAL (rrc/tarc: the cache the reproject pass writes) */
+				  extra_formats), in layout GENERAL, cleared to 0 (rrc/tarc: the cache the reproject pass writes) */
 	const VkImageView *extra_views;
-	uint32_t extra_clear;  /* bit i: extra attachment i cleared to 0 where nothing is drawn, else left undefined */
 } render_scene_pass;
 void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const render_scene_pass *p);
 

@@ -86,8 +86,7 @@ void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const rend
 		cas[i] = (VkRenderingAttachmentInfo){.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
 						     .imageView = p->extra_views[i - 1],
 						     .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
-						     .loadOp = p->extra_clear >> (i - 1) & 1u ? VK_ATTACHMENT_LOAD_OP_CLEAR
-											       : VK_ATTACHMENT_LOAD_OP_DONT_CARE,
+						     .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
 						     .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
 	VkRenderingInfo ri = {
 		.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
