@@ -24,8 +24,6 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
 
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
 {
-	if (pd->extra_colors >= RENDER_MAX_COLORS || (pd->extra_colors && pd->blend))
-		return VK_ERROR_INITIALIZATION_FAILED;
 	const uint32_t *vs = pd->vs ? pd->vs : pd->fullscreen ? fullscreen_vert : scene_vert, *fs = pd->fs;
 	size_t vs_size = pd->vs ? pd->vs_size : pd->fullscreen ? sizeof fullscreen_vert : sizeof scene_vert;
 	size_t fs_size = pd->fs_size;
@@ -120,17 +118,10 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.alphaBlendOp = VK_BLEND_OP_ADD,
 		.colorWriteMask = 0xF,
 	};
-	uint32_t ncolor = pd->color ? 1u + pd->extra_colors : 0u;
-	VkPipelineColorBlendAttachmentState cbas[RENDER_MAX_COLORS] = {cba};
-	VkFormat cfmts[RENDER_MAX_COLORS] = {pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT};
-	for (uint32_t i = 1; i < ncolor && i < RENDER_MAX_COLORS; i++) {
-		cbas[i] = cba; /* identical (no independentBlend); extras come without blending */
-		cfmts[i] = pd->extra_formats[i - 1];
-	}
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
-		.attachmentCount = ncolor,
-		.pAttachments = cbas,
+		.attachmentCount = pd->color ? 1u : 0u,
+		.pAttachments = &cba,
 	};
 	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
 	VkPipelineDynamicStateCreateInfo dy = {
@@ -138,11 +129,12 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 3u,
 		.pDynamicStates = dyn,
 	};
+	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.viewMask = pd->view_mask,
-		.colorAttachmentCount = ncolor,
-		.pColorAttachmentFormats = cfmts,
+		.colorAttachmentCount = pd->color ? 1u : 0u,
+		.pColorAttachmentFormats = &cfmt,
 		.depthAttachmentFormat = pd->depth_format ? pd->depth_format : RENDER_DEPTH_FORMAT,
 		.stencilAttachmentFormat = pd->stencil ? RENDER_DEPTH_FORMAT : VK_FORMAT_UNDEFINED,
 	};

@@ -229,7 +229,6 @@ enum {
 	RENDER_STENCIL_EQUAL_ZERO, /* passes where the stencil is 0 (the unmarked, reused pixels) */
 };
 
-#define RENDER_MAX_COLORS 5 /* the HDR target and up to four more (render_pipe_desc.extra_colors) */
 typedef struct render_pipe_desc {
 	const uint32_t *vs, *fs; /* vs NULL: common/scene.vert, the one vertex shader of all scene passes */
 	size_t vs_size, fs_size;
@@ -241,8 +240,6 @@ typedef struct render_pipe_desc {
 	int fullscreen;        /* common/fullscreen.vert, no vertex input, no culling state */
 	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
 	VkFormat color_format; /* 0: the HDR target's RGBA16F */
-	uint32_t extra_colors; /* colour attachments after the HDR target (locations 1..n, no blending), with .color */
-	const VkFormat *extra_formats;
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
 	uint32_t view_mask;    /* multiview (render.multiview): the render pass's viewMask; 0: one view */
 	VkDescriptorSetLayout method_set; /* optional set 1 */

@@ -64,22 +64,6 @@ static const char *count_defines(VkPhysicalDevice pd)
 							 : "#define TL_SUBGROUP 1\n";
 }
 
-/* The images the reproject pass writes as colour attachments (reproject.frag.in locations 1..n, n returned): the
- * next colour and state, tarc's G (layer 0 of a one-layer array) and, with KEEP_DISP, the next display values. */
-static uint32_t cache_attachments(const reproj_state *s, VkFormat formats[4], VkImageView views[4])
-{
-	uint32_t next = 1 - s->parity, n = 0;
-	int idx[4] = {IMG_COLOUR0 + (int)next, IMG_STATE0 + (int)next, IMG_G, IMG_DISP0 + (int)next};
-	uint32_t count = !s->v.tarc ? 2 : s->v.oracle ? 3 : 4;
-	for (; n < count; n++) {
-		if (formats)
-			formats[n] = s->img[idx[n]].format;
-		if (views)
-			views[n] = s->img[idx[n]].view;
-	}
-	return n;
-}
-
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
 {
 	char defs[192];
@@ -91,13 +75,9 @@ static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size
 	int rc = render_compile_defs(r, "reproj/reproject.frag.in", defs, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
 	if (rc)
 		return rc;
-	/* the next cache as colour attachments after the HDR target (reproject.frag.in locations 1-4) */
-	VkFormat formats[4];
-	uint32_t n = cache_attachments(s, formats, NULL);
 	render_pipe_desc pd = {.vs = reproject_vert, .vs_size = sizeof reproject_vert, .fs = spv, .fs_size = spv_size,
 			       .attributes = RENDER_ATTR_POSITION, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
-			       .stencil = RENDER_STENCIL_ATTACHED, .method_set = s->set_layout, .extra_colors = n,
-			       .extra_formats = formats};
+			       .stencil = RENDER_STENCIL_ATTACHED, .method_set = s->set_layout};
 	VkResult res = render_make_graphics(r, &pd, &s->reproject);
 	free(spv);
 	if (res)
@@ -179,8 +159,6 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 		bool tiny = (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
 		uint32_t iw = tiny ? 1 : low ? lw : w, ih = tiny ? 1 : low ? lh : h;
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-		if (!tiny && !low)
-			use |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT; /* written by the reproject pass */
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, use, VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
@@ -239,7 +217,12 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	reproj_state *s = state_of(r);
 	uint32_t slot = frame & 1u, next = 1 - s->parity;
 	VkDescriptorSet set = s->sets[s->parity];
+	VkClearColorValue zero = {{0}};
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
 	vkCmdFillBuffer(cmd, s->counters.buffer, 0, VK_WHOLE_SIZE, 0);
+	vkCmdClearColorImage(cmd, s->img[IMG_STATE0 + next].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	if (s->v.tarc)
+		vkCmdClearColorImage(cmd, s->img[IMG_G].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
 	barrier_all(cmd);
 	float T = s->v.threshold;
 	memcpy(&r->push_aux[3], &T, sizeof T);
@@ -252,13 +235,9 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	render_pass_depth(r, cmd, slot);
 	render_ts(r, cmd);
-	/* the next cache (state, G) cleared to 0 by the attachments' load op, then written where a surface is */
-	VkImageView views[4];
-	uint32_t nviews = cache_attachments(s, NULL, views);
 	render_pass_scene(r, cmd, slot,
 			  &(render_scene_pass){.pipe = &s->reproject, .set = set, .hdr = RENDER_HDR_CLEAR,
-					       .stencil = RENDER_STENCIL_PASS_CLEAR, .extra_count = nviews,
-					       .extra_views = views});
+					       .stencil = RENDER_STENCIL_PASS_CLEAR});
 	barrier_all(cmd);
 	render_ts(r, cmd);
 	if (s->v.tarc && !s->v.oracle) {

@@ -52,9 +52,6 @@ typedef struct render_scene_pass {
 	int fullscreen;        /* one full-screen triangle instead of the objects */
 	int blend;             /* then the BLEND objects */
 	int query;             /* inside the pipeline-statistics query (the method's shading passes) */
-	uint32_t extra_count;  /* colour attachments after the HDR target (with hdr; locations 1..n, pipe's
-				  extra_formats), in layout GENERAL, cleared to 0 (rrc/tarc: the cache the reproject pass writes) */
-	const VkImageView *extra_views;
 } render_scene_pass;
 void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const render_scene_pass *p);
 

@@ -80,20 +80,12 @@ void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const rend
 	VkRenderingAttachmentInfo sa = da;
 	sa.loadOp = p->stencil == RENDER_STENCIL_PASS_CLEAR ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
 	sa.clearValue = (VkClearValue){.depthStencil = {1.0f, 0}};
-	VkRenderingAttachmentInfo cas[RENDER_MAX_COLORS] = {ca};
-	uint32_t ncolor = p->hdr ? 1u + p->extra_count : 0u;
-	for (uint32_t i = 1; i < ncolor && i < RENDER_MAX_COLORS; i++)
-		cas[i] = (VkRenderingAttachmentInfo){.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-						     .imageView = p->extra_views[i - 1],
-						     .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
-						     .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-						     .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
 	VkRenderingInfo ri = {
 		.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
 		.renderArea = {{0, 0}, {w, h}},
 		.layerCount = 1,
-		.colorAttachmentCount = ncolor < RENDER_MAX_COLORS ? ncolor : RENDER_MAX_COLORS,
-		.pColorAttachments = cas,
+		.colorAttachmentCount = p->hdr ? 1u : 0u,
+		.pColorAttachments = &ca,
 		.pDepthAttachment = &da,
 		.pStencilAttachment = p->stencil ? &sa : NULL,
 	};
