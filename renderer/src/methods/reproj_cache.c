@@ -44,24 +44,18 @@ typedef struct reproj_state {
 
 static reproj_state *state_of(render *r) { return r->method_state; }
 
-/* Ballot subgroup operations in fragment shaders (lavapipe: yes, subgroups of 8): the counters then take one atomic
- * per subgroup (reproj.glsl COUNT). Without them, or with TASLAB_REPROJ_ATOMICS=1 in the environment (test_reuse
- * compares the two), one atomic per fragment: the same counts, slower. The defines for the shaders, or "". */
+/* The counters' defines for the shaders (reproj.glsl COUNT): one atomic per subgroup where the device allows, as
+ * ref counts its shading (render_count_mode_of; TASLAB_COUNT_ATOMICS=1: one per fragment, test_reuse compares). */
 static const char *count_defines(VkPhysicalDevice pd)
 {
-	const char *force = getenv("TASLAB_REPROJ_ATOMICS");
-	if (force && strcmp(force, "1") == 0)
+	switch (render_count_mode_of(pd)) {
+	case RENDER_COUNT_SUBGROUP_NO_HELPERS:
+		return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";
+	case RENDER_COUNT_SUBGROUP:
+		return "#define TL_SUBGROUP 1\n";
+	default:
 		return "";
-	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES, .pNext = &dp};
-	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-	vkGetPhysicalDeviceProperties2(pd, &p2);
-	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
-	if (!(sp.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) || (sp.supportedOperations & need) != need)
-		return "";
-	/* llvmpipe shades whole 4x4 blocks with the uncovered lanes masked off: no helper invocations to leave out */
-	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n"
-							 : "#define TL_SUBGROUP 1\n";
+	}
 }
 
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
