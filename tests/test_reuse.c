@@ -160,10 +160,11 @@ static void test_moving_camera(void **state)
 	tu_clip rrc = tu_render_clip(dev, s, cam, "rrc/4", NULL, NULL, W, H, N, true);
 	const char *truth[] = {"truth", NULL};
 	tu_clip tarc = tu_render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
-	/* the rerun counts with one atomic per fragment instead of one per subgroup (reproj.glsl COUNT) */
-	assert_int_equal(setenv("TASLAB_REPROJ_ATOMICS", "1", 1), 0);
+	/* the reruns count with one atomic per fragment instead of one per subgroup (reproj.glsl COUNT, ref/count.glsl) */
+	assert_int_equal(setenv("TASLAB_COUNT_ATOMICS", "1", 1), 0);
 	tu_clip tarc2 = tu_render_clip(dev, s, cam, "tarc@8", truth, NULL, W, H, N, true);
-	unsetenv("TASLAB_REPROJ_ATOMICS");
+	tu_clip ref2 = tu_render_clip(dev, s, cam, "ref", NULL, NULL, W, H, N, false);
+	unsetenv("TASLAB_COUNT_ATOMICS");
 	tu_clip oracle = tu_render_clip(dev, s, cam, "tarc-oracle@8", truth, NULL, W, H, N, true);
 	assert_invariants(&rrcn, "rrc/4 nearest");
 	assert_invariants(&rrc, "rrc/4");
@@ -198,6 +199,10 @@ static void test_moving_camera(void **state)
 		assert_int_equal(tarc.st[f].shaded_samples, tarc2.st[f].shaded_samples);
 		assert_int_equal(tarc.st[f].late_samples, tarc2.st[f].late_samples);
 		assert_int_equal(tarc.st[f].reused_samples, tarc2.st[f].reused_samples);
+		assert_memory_equal(ref.hdr[f], ref2.hdr[f], px * 8);
+		assert_int_equal(ref.st[f].shaded_samples, ref2.st[f].shaded_samples);
+		/* ref shades every covered sample: its count, per subgroup or per fragment, is the visible samples */
+		assert_int_equal(ref.st[f].shaded_samples, ref.st[f].visible_samples);
 		assert_int_equal(tarc.st[f].new_units, tarc2.st[f].new_units);
 		assert_true(forced == tu_extra(&tarc2.st[f], "forced_samples"));
 	}
@@ -205,7 +210,7 @@ static void test_moving_camera(void **state)
 	assert_true(reused > 0);  /* and the oracle reuses */
 	print_message("calm/walk %ux%u, %u frames: misses after frame 0 %lld; oracle reused %lld\n", W, H, N,
 		      (long long)misses, (long long)reused);
-	tu_clip *all[] = {&ref, &tfr, &rrcn, &rrc, &tarc, &tarc2, &oracle};
+	tu_clip *all[] = {&ref, &ref2, &tfr, &rrcn, &rrc, &tarc, &tarc2, &oracle};
 	for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
 		tu_clip_free(all[i]);
 	vkdev_destroy(&dev);

@@ -12,6 +12,8 @@
  * metrics_flip.h, the `flip` metric of `taslab metrics diff` at its default 67.02 pixels per degree) of the display frame
  * against the first variant's; computed between renders, outside the GPU timings.
  *
+ * OPTION "count=atomic" makes that variant's shading passes count with one atomic per fragment (TASLAB_COUNT_ATOMICS
+ * while it is created) instead of one per subgroup, to measure the counting beside the default in one process.
  * OPTION "stereo" renders that variant's both eyes (WxH per eye; the counts and times are totals over both eyes,
  * the quality columns the left eye's), "ipd=M" its eye distance (default 0.063), "multiview=on|off" how its
  * eyes' visibility pass is recorded (render_desc.multiview; default auto).
@@ -37,6 +39,7 @@ typedef struct bench_variant {
 	uint32_t views; /* 2: ",stereo" (both eyes, the size per eye; STEREO.md) */
 	float ipd;      /* ",ipd=M" with stereo (default RENDER_STEREO_IPD_DEFAULT) */
 	render_multiview multiview; /* ",multiview=on|off" with stereo */
+	bool count_atomic; /* ",count=atomic": its shading passes count one atomic per fragment (TASLAB_COUNT_ATOMICS) */
 } bench_variant;
 
 static int parse_variant(const char *arg, bench_variant *v)
@@ -61,6 +64,14 @@ static int parse_variant(const char *arg, bench_variant *v)
 		char *ov = strchr(tok, '=');
 		if (ov)
 			*ov++ = 0;
+		if (!strcmp(tok, "count")) { /* a bench option: the counting cost measured beside the default, issue 32.1 */
+			if (!ov || strcmp(ov, "atomic")) {
+				fprintf(stderr, "bench_methods: %s: count takes 'atomic'\n", arg);
+				return 1;
+			}
+			v->count_atomic = true;
+			continue;
+		}
 		if (!strcmp(tok, "stereo") || !strcmp(tok, "ipd") || !strcmp(tok, "multiview")) { /* render options */
 			if (!strcmp(tok, "stereo"))
 				v->views = 2;
@@ -138,7 +149,12 @@ int main(int argc, char **argv)
 	for (int i = 0; i < nv; i++) {
 		render_desc rd = {.scene = s, .camera = cam, .width = w, .height = h, .method = &v[i].mc, .views = v[i].views,
 				  .ipd = v[i].views > 1 ? v[i].ipd : 0.0f, .multiview = v[i].multiview};
-		if (render_create(dev, &rd, &v[i].r, err, sizeof err)) {
+		if (v[i].count_atomic)
+			setenv("TASLAB_COUNT_ATOMICS", "1", 1); /* read when the pipelines are made */
+		int rc = render_create(dev, &rd, &v[i].r, err, sizeof err);
+		if (v[i].count_atomic)
+			unsetenv("TASLAB_COUNT_ATOMICS");
+		if (rc) {
 			fprintf(stderr, "bench_methods: %s: %s\n", v[i].label, err);
 			return 1;
 		}

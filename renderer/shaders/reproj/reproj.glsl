@@ -19,7 +19,8 @@ layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
 layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
-layout(set = 1, binding = 4, rgba32f) uniform image2DArray grad_img;          // G: g of steady pixels (tarc)
+// binding 4: unused (was G, the gradients of steady pixels; tarc's filter now reads them from the state,
+// reproj/max_down_state.comp)
 layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
 layout(std430, set = 1, binding = 6) buffer Counters {
 	uint covered; // opaque/masked samples (the reproject pass runs once per visible sample)
@@ -57,16 +58,7 @@ layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEE
 #define COUNT(field) atomicAdd(counters.field, 1u)
 #endif
 
-// state.z
-const uint AGE_MASK = 0xFFFFu;  // frames since the last shading at the current frame (saturates)
-const uint NEW_BIT = 1u << 29;  // no valid cache entry this frame
-const uint PHASE_BIT = 1u << 30; // shaded once since it became visible: shade again next frame (sec. 6 step 1)
-const uint SHADE_BIT = 1u << 31; // rrc: shade this frame (miss, first frame, or tile refresh)
-// bits 24..26: this frame's decision for `render --decisions` (frame_decision in taslab/frame.h)
-const uint DEC_SHIFT = 24u;
-const uint DEC_REUSED = 1u << DEC_SHIFT, DEC_NEW = 2u << DEC_SHIFT, DEC_SECOND = 3u << DEC_SHIFT;
-const uint DEC_PREDICTED = 4u << DEC_SHIFT, DEC_SCHEDULED = 5u << DEC_SHIFT, DEC_LATE = 6u << DEC_SHIFT;
-const uint DEC_MASK = 7u << DEC_SHIFT;
+#include "reproj/state_bits.glsl" // state.z: age, flags, decision
 
 // Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number; aux[3] T (float bits).
 const uint FLAG_HAVE_PREV = 1u;   // the previous frame was rendered: the cache is valid

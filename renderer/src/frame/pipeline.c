@@ -22,6 +22,22 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
 	*out = (VkSpecializationInfo){RENDER_SPEC_COUNT, data->entries, sizeof data->values, data->values};
 }
 
+render_count_mode render_count_mode_of(VkPhysicalDevice pd)
+{
+	const char *force = getenv("TASLAB_COUNT_ATOMICS");
+	if (force && strcmp(force, "1") == 0)
+		return RENDER_COUNT_ATOMIC;
+	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES, .pNext = &dp};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
+	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+	if (!(sp.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) || (sp.supportedOperations & need) != need)
+		return RENDER_COUNT_ATOMIC;
+	/* llvmpipe shades whole 4x4 blocks with the uncovered lanes masked off: no helper invocations to leave out */
+	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_SUBGROUP;
+}
+
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
 {
 	const uint32_t *vs = pd->vs ? pd->vs : pd->fullscreen ? fullscreen_vert : scene_vert, *fs = pd->fs;

@@ -250,6 +250,12 @@ typedef struct render_pipe_desc {
 #define RENDER_ATTR_ALL 15u
 
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out);
+/* How the shading passes count their own fragments (ref/count.glsl, reproj/reproj.glsl COUNT): one atomic per
+ * subgroup where the device has ballot subgroup operations in fragment shaders (lavapipe: subgroups of 8), with
+ * or without leaving helper invocations out (llvmpipe has none and cannot compile gl_HelperInvocation); one per
+ * fragment otherwise, or with TASLAB_COUNT_ATOMICS=1 in the environment (test_reuse compares the two). */
+typedef enum { RENDER_COUNT_ATOMIC = 0, RENDER_COUNT_SUBGROUP, RENDER_COUNT_SUBGROUP_NO_HELPERS } render_count_mode;
+render_count_mode render_count_mode_of(VkPhysicalDevice pd);
 /* Specialisation constants of every pipeline (entries for constants a shader does not declare are ignored):
  * 0 ALPHA_BLEND (shade.frag), 2 LIGHT_COUNT and 3 + i LIGHT_SHADOW_i (shading.glsl: the light loop unrolled,
  * each light's shadow chunk a constant). */

@@ -2,10 +2,11 @@
  *
  * Frame t, in order (state slots t and t - 1, consecutive frames; a jump or the first frame starts over):
  *   shadow maps, depth pre-pass                     (shared passes)
- *   reproject  scene geometry, depth EQUAL: C' and the provisional state into the next cache, C' to HDR,
- *              G (tarc); clears the stencil. Its vertex shader (reproject.vert) computes the previous clip
+ *   reproject  scene geometry, depth EQUAL: C' and the provisional state into the next cache, C' to HDR;
+ *              clears the stencil. Its vertex shader (reproject.vert) computes the previous clip
  *              position and both view-distance vectors per vertex, so its fragments read no matrix
- *   filter     tarc: G -> 8x8 max -> 9x9 max = F     (passes/tas_filter.c, shared with the TFR analysis)
+ *   filter     tarc: G (the steady samples' gradients, read from the provisional state by
+ *              reproj/max_down_state.comp) -> 8x8 max -> 9x9 max = F (passes/tas_filter.c, as the TFR analysis)
  *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
  *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading, the next cache
  *              (oracle: every sample, no stencil test)
@@ -21,9 +22,11 @@
 #include <string.h>
 
 #include "method_debug.h"
+#include "shaders/reproj/max_down_state_comp.h"
 #include "shaders/reproj/reproject_vert.h"
 
-/* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP); one texel each for rrc and the oracle */
+/* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP); one texel each for rrc and the oracle.
+ * G: one texel (binding 4, unused: tarc's filter reads the gradients from the state, reproj/max_down_state.comp). */
 enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_DISP0, IMG_DISP1, IMG_COUNT };
 
 typedef struct reproj_state {
@@ -36,7 +39,7 @@ typedef struct reproj_state {
 	VkDescriptorSet sets[2]; /* sets[p]: read cache p, write cache 1 - p */
 	render_pipeline reproject, mark, shade, truth;
 	tas_filter filter;
-	VkDescriptorSet filter_set;
+	VkDescriptorSet filter_sets[2]; /* filter_sets[p]: reads cache state p (the one the frame writes) */
 	uint32_t parity;         /* cache `parity` holds the previous frame */
 	int64_t last_frame;      /* -1: none */
 	bool have_prev;
@@ -44,24 +47,18 @@ typedef struct reproj_state {
 
 static reproj_state *state_of(render *r) { return r->method_state; }
 
-/* Ballot subgroup operations in fragment shaders (lavapipe: yes, subgroups of 8): the counters then take one atomic
- * per subgroup (reproj.glsl COUNT). Without them, or with TASLAB_REPROJ_ATOMICS=1 in the environment (test_reuse
- * compares the two), one atomic per fragment: the same counts, slower. The defines for the shaders, or "". */
+/* The counters' defines for the shaders (reproj.glsl COUNT): one atomic per subgroup where the device allows, as
+ * ref counts its shading (render_count_mode_of; TASLAB_COUNT_ATOMICS=1: one per fragment, test_reuse compares). */
 static const char *count_defines(VkPhysicalDevice pd)
 {
-	const char *force = getenv("TASLAB_REPROJ_ATOMICS");
-	if (force && strcmp(force, "1") == 0)
+	switch (render_count_mode_of(pd)) {
+	case RENDER_COUNT_SUBGROUP_NO_HELPERS:
+		return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";
+	case RENDER_COUNT_SUBGROUP:
+		return "#define TL_SUBGROUP 1\n";
+	default:
 		return "";
-	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES, .pNext = &dp};
-	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-	vkGetPhysicalDeviceProperties2(pd, &p2);
-	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
-	if (!(sp.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) || (sp.supportedOperations & need) != need)
-		return "";
-	/* llvmpipe shades whole 4x4 blocks with the uncovered lanes masked off: no helper invocations to leave out */
-	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n"
-							 : "#define TL_SUBGROUP 1\n";
+	}
 }
 
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
@@ -156,7 +153,7 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 			     : i <= IMG_STATE1 ? VK_FORMAT_R32G32B32A32_UINT
 					       : VK_FORMAT_R32G32B32A32_SFLOAT;
 		/* rrc never reads G or F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
-		bool tiny = (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
+		bool tiny = i == IMG_G || (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
 		uint32_t iw = tiny ? 1 : low ? lw : w, ih = tiny ? 1 : low ? lh : h;
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
@@ -176,10 +173,10 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 	}
 	int rc = make_sets(r, s, err, err_size);
 	if (!rc && v->tarc)
-		rc = tas_filter_init(r, &s->filter, err, err_size);
-	if (!rc && v->tarc)
-		rc = tas_filter_bind(r, &s->filter, &s->img[IMG_G], &s->img[IMG_L1], &s->img[IMG_F], &s->filter_set, err,
-				     err_size);
+		rc = tas_filter_init_down(r, &s->filter, max_down_state_comp, sizeof max_down_state_comp, err, err_size);
+	for (int p = 0; p < 2 && !rc && v->tarc; p++)
+		rc = tas_filter_bind(r, &s->filter, &s->img[IMG_STATE0 + p], &s->img[IMG_L1], &s->img[IMG_F],
+				     &s->filter_sets[p], err, err_size);
 	if (!rc)
 		rc = make_pipelines(r, s, err, err_size);
 	if (rc)
@@ -221,8 +218,6 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
 	vkCmdFillBuffer(cmd, s->counters.buffer, 0, VK_WHOLE_SIZE, 0);
 	vkCmdClearColorImage(cmd, s->img[IMG_STATE0 + next].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
-	if (s->v.tarc)
-		vkCmdClearColorImage(cmd, s->img[IMG_G].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
 	barrier_all(cmd);
 	float T = s->v.threshold;
 	memcpy(&r->push_aux[3], &T, sizeof T);
@@ -241,7 +236,7 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	barrier_all(cmd);
 	render_ts(r, cmd);
 	if (s->v.tarc && !s->v.oracle) {
-		tas_filter_record(&s->filter, cmd, s->filter_set, r->desc.width, r->desc.height, 1);
+		tas_filter_record(&s->filter, cmd, s->filter_sets[next], r->desc.width, r->desc.height, 1);
 		barrier_all(cmd);
 	}
 	render_ts(r, cmd);

@@ -76,6 +76,10 @@ typedef struct tas_filter {
 } tas_filter;
 
 int tas_filter_init(render *r, tas_filter *f, char *err, size_t err_size);
+/* The same with another first step `down_spv` (same bindings and push constant; tarc's reads its cache state,
+ * reproj/max_down_state.comp). */
+int tas_filter_init_down(render *r, tas_filter *f, const uint32_t *down_spv, size_t down_size, char *err,
+			 size_t err_size);
 void tas_filter_finish(render *r, tas_filter *f);
 /* A descriptor set binding the filter's input `src` (w x h x layers), the 8x8 level `mid` and the result
  * `dst` (both ceil(w/8) x ceil(h/8) x layers); all RGBA32F in GENERAL layout, storage usage. */

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 
 #include "shaders/ref/shade_frag.h"
+#include "shaders/ref/shade_sg_frag.h"
+#include "shaders/ref/shade_sg_nohelp_frag.h"
 #include "shaders/ref/trivial_frag.h"
 
 void render_pass_shade(render *r, VkCommandBuffer cmd, uint32_t slot)
@@ -118,8 +120,15 @@ void render_pass_scene(render *r, VkCommandBuffer cmd, uint32_t slot, const rend
 /* The reference shading pipelines (opaque/masked and BLEND). */
 static VkResult make_shade_pipelines(render *r)
 {
+	/* the shading counts its own fragments, one atomic per subgroup where the device allows (ref/count.glsl) */
+	render_count_mode cm = render_count_mode_of(r->dev->physical);
 	render_pipe_desc shade = {.attributes = RENDER_ATTR_ALL, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
-				  .fs = shade_frag, .fs_size = sizeof shade_frag};
+				  .fs = cm == RENDER_COUNT_SUBGROUP_NO_HELPERS ? shade_sg_nohelp_frag
+					: cm == RENDER_COUNT_SUBGROUP	     ? shade_sg_frag
+									     : shade_frag,
+				  .fs_size = cm == RENDER_COUNT_SUBGROUP_NO_HELPERS ? sizeof shade_sg_nohelp_frag
+					     : cm == RENDER_COUNT_SUBGROUP	    ? sizeof shade_sg_frag
+										    : sizeof shade_frag};
 	if (r->desc.trivial_shading) {
 		shade.fs = trivial_frag;
 		shade.fs_size = sizeof trivial_frag;

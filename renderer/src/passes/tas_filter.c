@@ -8,6 +8,12 @@
 
 int tas_filter_init(render *r, tas_filter *f, char *err, size_t err_size)
 {
+	return tas_filter_init_down(r, f, max_down_comp, sizeof max_down_comp, err, err_size);
+}
+
+int tas_filter_init_down(render *r, tas_filter *f, const uint32_t *down_spv, size_t down_size, char *err,
+			 size_t err_size)
+{
 	VkDevice d = r->dev->device;
 	VkResult res;
 	VkDescriptorSetLayoutBinding b[3];
@@ -26,7 +32,7 @@ int tas_filter_init(render *r, tas_filter *f, char *err, size_t err_size)
 		.pPushConstantRanges = &pcr,
 	};
 	if ((res = vkCreatePipelineLayout(d, &pl, NULL, &f->layout)) ||
-	    (res = render_make_compute(r, max_down_comp, sizeof max_down_comp, f->layout, &f->down)) ||
+	    (res = render_make_compute(r, down_spv, down_size, f->layout, &f->down)) ||
 	    (res = render_make_compute(r, max_kernel_comp, sizeof max_kernel_comp, f->layout, &f->kernel)))
 		return render_vk_error(err, err_size, "max filter: pipelines", res);
 	return TL_OK;
