@@ -4,6 +4,10 @@
  *      camera height, field of view, uv scale and texture size; td, P' and r by Alg. 4.4's formulas);
  *  V5  taas: flat -> t 0, r 0, every tile 4x4 from frame 1, frames equal vref; checker1 -> t = sqrt(3)/2 (a CPU
  *      replica of the tile mean from the previous frame's display values), r 9, index 10, stays 1x1;
+ *  mas on an accelerating pan: P' = 1 - (v_t + v_{t-1}) / 32 per tile, v_t the camera's shift from frame t-1 to t
+ *      and v_{t-1} the one before, in pixels (CPU from the camera path): the tile motion is the previous frame's,
+ *      read from the motion image the ids pass of frame t-1 wrote (double-buffered: frame t's ids pass writes the
+ *      other one), not frame t's (1 - v_t / 16);
  *  --rates all: mas on the pan at v = 16, 14, 12, 10, 8 px/frame reaches indices 2, 3, 4, 6, 7 = 4x2, 2x4, 2x2, 2x1,
  *      1x2 (README's map); shaded = the CPU count of distinct (coarse pixel, object, triangle); frames equal vref;
  *  --centroid: on the linear ramp with every tile 4x4 (fovea, 0 degrees), every pixel shows the mean of vref over
@@ -175,6 +179,67 @@ static void test_taas(void **state)
 	}
 	render_destroy(&r);
 	tu_clip_free(&v);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* ---- mas on an accelerating pan ---- */
+
+/* Where the floor point P shows at frame f (pixels, as the rate pass maps NDC: (ndc * 0.5 + 0.5) * size). */
+static void pan_screen(const scene *s, int f, tlm_vec3 P, int W, int H, double out[2])
+{
+	scene_camera_state c = scene_camera_eval(s, 0, (float)((double)f / s->fps));
+	tlm_mat4 vp = tlm_mat4_mul(tlm_mat4_perspective(c.fov_deg * TLM_PI / 180.0f, (float)W / (float)H, c.znear, c.zfar),
+				   tlm_mat4_look_at(c.eye, c.target, tlm_v3(0, 1, 0)));
+	tlm_vec4 q = tlm_mat4_mul_v4(vp, (tlm_vec4){P.x, P.y, P.z, 1.0f});
+	out[0] = ((double)q.x / q.w * 0.5 + 0.5) * W;
+	out[1] = ((double)q.y / q.w * 0.5 + 0.5) * H;
+}
+
+static void test_mas_history(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("vbuf_pan_accel");
+	enum { W = 64, H = 64, F = 7 };
+	/* the floor's screen motion is the same at every pixel: d[f] = the shift of a floor point from frame f-1 to f */
+	double d[F][2] = {{0}};
+	for (int f = 1; f < F; f++) {
+		double a[2], b[2];
+		pan_screen(s, f - 1, tlm_v3(1, 0, 0), W, H, a);
+		pan_screen(s, f, tlm_v3(1, 0, 0), W, H, b);
+		d[f][0] = b[0] - a[0], d[f][1] = b[1] - a[1];
+	}
+	render *r = tu_render_open(dev, s, 0, "mas", NULL, NULL, W, H, false);
+	int checked = 0, apart = 0;
+	for (uint32_t f = 0; f < F; f++) {
+		frame_image img;
+		frame_stats st;
+		frame_of(r, f, &img, &st);
+		if (f < 2)
+			continue;
+		/* m_c: the tile's centre pixel (8, 8 in the tile) projected, against the tile centre (8.0, 8.0): its
+		 * pixel centre is half a pixel off in x and y; m_p: the previous frame's motion */
+		double mc = hypot(0.5 + d[f][0], 0.5 + d[f][1]), mp = hypot(d[f - 1][0], d[f - 1][1]);
+		double want = 1.0 - (mc + mp) / 32.0, wrong = 1.0 - (mc + hypot(d[f][0], d[f][1])) / 32.0;
+		uint32_t tx, ty;
+		const float *dbg = vrs_debug_tiles(r, NULL, &tx, &ty);
+		for (uint32_t t = 0; t < tx * ty; t++) {
+			if (dbg[4 * t + 3] < 0.0f)
+				continue; /* the tile centre left the image */
+			if (fabs(dbg[4 * t] - want) > 1e-3)
+				fail_msg("frame %u tile %u: P' %.5f, expected %.5f (this frame's motion would give %.5f)", f, t,
+					 (double)dbg[4 * t], want, wrong);
+			checked++;
+		}
+		apart += fabs(want - wrong) > 0.01;
+		printf("mas history: frame %u, motion %.3f after %.3f px/frame: P' %.4f (this frame's motion: %.4f)\n", f,
+		       hypot(d[f][0], d[f][1]), mp, want, wrong);
+	}
+	assert_true(checked > 0);
+	assert_true(apart >= 2); /* the pan accelerates: the check tells the two frames' motions apart */
+	render_destroy(&r);
 	assert_int_equal(vkdev_validation_messages(dev), 0);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
@@ -385,7 +450,8 @@ static void test_truth(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_castexel), cmocka_unit_test(test_taas),  cmocka_unit_test(test_rates_all),
+		cmocka_unit_test(test_castexel), cmocka_unit_test(test_taas),  cmocka_unit_test(test_mas_history),
+		cmocka_unit_test(test_rates_all),
 		cmocka_unit_test(test_centroid), cmocka_unit_test(test_truth),
 	};
 	if (getenv("TU_FILTER")) /* iterating on one case: TU_FILTER=test_truth build-test/tests/test_vrs_checks */

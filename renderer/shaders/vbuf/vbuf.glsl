@@ -27,21 +27,12 @@ layout(set = 1, binding = 8, rgba16f) uniform image2D hdr;
 
 const uint VBUF_TILE = 16u;
 
-// Barycentrics of the point q (pixels, NDC from `size`) on the plane of the triangle whose clip-space (x, y, w) are
-// va, vb, vc, from the 2-D homogeneous edge functions: lambda_i proportional to dot((x, y, 1), e_i), e_i the cross
-// product of the other two vertices' (x, y, w). Perspective-correct; outside the triangle the plane is extrapolated.
-vec3 vbuf_lambda(vec3 va, vec3 vb, vec3 vc, vec2 q, vec2 size)
-{
-	vec3 P = vec3(q / size * 2.0 - 1.0, 1.0);
-	vec3 f = vec3(dot(P, cross(vb, vc)), dot(P, cross(vc, va)), dot(P, cross(va, vb)));
-	return f / (f.x + f.y + f.z);
-}
+#include "vbuf/plane.glsl"
 
 // Barycentrics w of the sample at q (pixels) of footprint r on the triangle A, B, C of `object` at `slot`, and its
 // texture gradients: the differences of uv between the centres of the coarse pixels of its 2x2 coarse quad, in x
 // and y from the quad's first one (as the rasterizer's quad derivatives at this rate, so vref's texture LOD is
-// ref's). VBUF_ANALYTIC_GRADIENTS (TASLAB_VBUF_GRADIENTS=analytic, a diagnostic): the analytic derivatives at q
-// times the footprint instead.
+// ref's; plane.glsl, also the analytic diagnostic).
 vec3 vbuf_bary(Vertex A, Vertex B, Vertex C, uint slot, uint object, vec2 q, vec2 size, uvec2 r, out vec2 duv_dx,
 	       out vec2 duv_dy)
 {
@@ -49,22 +40,8 @@ vec3 vbuf_bary(Vertex A, Vertex B, Vertex C, uint slot, uint object, vec2 q, vec
 	vec4 ca = m * vec4(A.p, 1.0), cb = m * vec4(B.p, 1.0), cc = m * vec4(C.p, 1.0);
 	vec3 va = vec3(ca.x, ca.y, ca.w), vb = vec3(cb.x, cb.y, cb.w), vc = vec3(cc.x, cc.y, cc.w);
 	vec3 w = vbuf_lambda(va, vb, vc, q, size);
-#ifdef VBUF_ANALYTIC_GRADIENTS
-	vec3 ea = cross(vb, vc), eb = cross(vc, va), ec = cross(va, vb);
-	vec3 P = vec3(q / size * 2.0 - 1.0, 1.0);
-	vec3 f = vec3(dot(P, ea), dot(P, eb), dot(P, ec));
-	float S = f.x + f.y + f.z;
-	vec3 fx = vec3(ea.x, eb.x, ec.x), fy = vec3(ea.y, eb.y, ec.y);
-	vec3 dwx = (fx * S - f * (fx.x + fx.y + fx.z)) / (S * S) * (2.0 / size.x * float(r.x));
-	vec3 dwy = (fy * S - f * (fy.x + fy.y + fy.z)) / (S * S) * (2.0 / size.y * float(r.y));
-#else
-	vec2 rf = vec2(r);
-	vec2 cq = floor(q / rf);                  // the coarse pixel
-	vec2 c0 = (cq - mod(cq, 2.0) + 0.5) * rf; // centre of its quad's first coarse pixel
-	vec3 w0 = vbuf_lambda(va, vb, vc, c0, size);
-	vec3 dwx = vbuf_lambda(va, vb, vc, c0 + vec2(rf.x, 0.0), size) - w0;
-	vec3 dwy = vbuf_lambda(va, vb, vc, c0 + vec2(0.0, rf.y), size) - w0;
-#endif
+	vec3 dwx, dwy;
+	vbuf_plane_diffs(va, vb, vc, q, size, r, dwx, dwy);
 	duv_dx = A.uv * dwx.x + B.uv * dwx.y + C.uv * dwx.z;
 	duv_dy = A.uv * dwy.x + B.uv * dwy.y + C.uv * dwy.z;
 	return w;

@@ -3,7 +3,8 @@
 //
 // Per 16x16 tile a palette index 0..10 (S: two halves of `index`, the current frame's and the previous one's, which
 // swap every frame: Alg. 4.1 reads S as "previous" after clearing it, so S is double-buffered). The history images
-// hold what frame t-1 left for the rate pass of frame t (written by history.comp.in at the end of each frame).
+// hold what frame t-1 left for the rate pass of frame t (written by history.comp.in at the end of each frame; hist_aux
+// by the ids pass of frame t-1, common/ids.frag.in IDS_VRS_AUX; taas's two colour images swap every frame, vrs.c).
 #ifndef TASLAB_VRS_GLSL
 #define TASLAB_VRS_GLSL
 

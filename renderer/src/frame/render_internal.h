@@ -240,6 +240,7 @@ typedef struct render_pipe_desc {
 	int fullscreen;        /* common/fullscreen.vert, no vertex input, no culling state */
 	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
 	VkFormat color_format; /* 0: the HDR target's RGBA16F */
+	VkFormat color2_format; /* with color: a second colour attachment (location 1) of this format; 0: none */
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
 	uint32_t view_mask;    /* multiview (render.multiview): the render pass's viewMask; 0: one view */
 	VkDescriptorSetLayout method_set; /* optional set 1 */

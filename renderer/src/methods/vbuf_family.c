@@ -58,7 +58,10 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_ts(r, cmd);
 	render_pass_shadows(r, cmd, 0);
 	render_ts(r, cmd);
-	ids_pass_record(r, &p->ids, cmd, 0);
+	if (s->v.ids_record && !s->v.force)
+		s->v.ids_record(r, p, s->v.user, cmd, frame);
+	else
+		ids_pass_record(r, &p->ids, cmd, 0);
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	if (!s->v.ads) {

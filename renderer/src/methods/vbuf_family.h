@@ -29,6 +29,8 @@ typedef struct vbuf_variant {
 	/* after the resolve (the HDR target GENERAL, before BLEND): what the next frame's rate pass needs of this one */
 	void (*rate_after)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
 	void (*rate_finish)(render *r, vbuf_pass *p, void *user);
+	/* optional, rate methods: records the frame's ids pass in place of ids_pass_record (not with --force-reshade) */
+	void (*ids_record)(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame);
 	void *user;
 } vbuf_variant;
 

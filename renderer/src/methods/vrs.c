@@ -4,7 +4,11 @@
  * density, Alg. 4.4), `mas` (motion-adaptive, Alg. 4.7), `fovea` (foveated, fixed gaze), `taas` (TAA-error-adaptive,
  * Alg. 4.10). One rate per 16x16 tile, chosen on frame t-1's outputs and stabilised over time (shaders/vbuf/rate.comp.in);
  * frame 0 (and a jump in frames) starts at index 10 (1x1). Passes added to the path: rate + finalize before the
- * select, history (and casedge's tile-centre positions) after the resolve. */
+ * select, history after the resolve (the display colour per pixel for casedge and taas, the tile centres' positions).
+ * castexel, mas and taas draw the ids pass with a second colour attachment (common/ids.frag.in IDS_VRS_AUX): the
+ * per-pixel texel density or screen motion that the next frame's rate pass reads, written where the path already
+ * rasterizes each pixel's triangle instead of by a per-pixel triangle fetch in the history pass; it is
+ * double-buffered (haux[frame parity]), as frame t's ids pass runs before frame t's rate pass reads frame t-1's. */
 #include "vbuf_family.h"
 
 #include <math.h>
@@ -23,11 +27,16 @@ typedef struct vrs_state {
 	bool rates_all;
 	float gaze[2], inner, outer; /* fovea */
 	vkdev_buffer index, dbg;
-	vkdev_image hc, hc2, hpos, haux;
+	vkdev_image hcol[2], hpos, haux[2]; /* hcol: display colours (taas: double-buffered, see set) */
 	VkDescriptorSetLayout set_layout;
-	VkDescriptorSet set;
+	/* set[c], bound in the frames whose ids pass writes haux[c]: hist_aux = haux[1 - c]; taas: hist_color =
+	 * hcol[1 - c] (frame t-1), hist_color2 = hcol[c] (t-2, which the history pass then overwrites with frame t's,
+	 * so no copy); the others: hist_color = hist_color2 = hcol[0] */
+	VkDescriptorSet set[2];
 	VkPipelineLayout layout;
-	VkPipeline rate, finalize, history, centres; /* centres: casedge's tile-centre positions */
+	VkPipeline rate, finalize, history, centres; /* history: per pixel (casedge, taas); centres: per tile */
+	bool aux;                                     /* castexel, mas, taas: the ids pass writes haux */
+	render_pipeline ids_pipe, ids_pipe_mask;      /* ... with these pipelines */
 	int64_t last_frame;
 	uint32_t run;       /* frames since the (re)start */
 	uint32_t cur;       /* the current half of S this frame */
@@ -82,11 +91,12 @@ static int fovea_check(const void *options, char *err, size_t err_size)
 
 enum { VRS_BINDINGS = 6 };
 
-static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *out, char *err, size_t err_size)
+static int make_image(render *r, VkFormat fmt, VkImageUsageFlags usage, const char *name, vkdev_image *out, char *err,
+		      size_t err_size)
 {
 	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, fmt,
-					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
-					  false, name, out);
+					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | usage,
+					  VK_IMAGE_ASPECT_COLOR_BIT, false, name, out);
 	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
 }
 
@@ -97,6 +107,39 @@ static int make_compute(render *r, vrs_state *s, const char *path, const char *e
 	snprintf(defs, sizeof defs, "#define %s 1\n%s%s", kind_define[s->kind], s->rates_all ? "#define VRS_RATES_ALL 1\n" : "",
 		 extra);
 	return render_compute_defs(r, path, defs, s->layout, out, err, err_size);
+}
+
+/* The ids pass of castexel, mas and taas: common/ids.{vert,frag}.in with IDS_VRS_AUX and the method's define, the ids
+ * pass's set 1, a second colour attachment (RGBA32F, haux). */
+static int make_ids_pipelines(render *r, vbuf_pass *p, vrs_state *s, char *err, size_t err_size)
+{
+	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
+	size_t vn = 0, fn = 0, mn = 0;
+	char defs[96], mask[128];
+	snprintf(defs, sizeof defs, "#define IDS_VRS_AUX 1\n#define %s 1\n", kind_define[s->kind]);
+	snprintf(mask, sizeof mask, "%s#define IDS_ALPHA_MASK 1\n", defs);
+	int rc = render_compile_defs(r, "common/ids.vert.in", defs, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
+	if (!rc)
+		rc = render_compile_defs(r, "common/ids.frag.in", defs, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
+	if (!rc)
+		rc = render_compile_defs(r, "common/ids.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
+	if (!rc) {
+		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
+				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
+				       .color2_format = VK_FORMAT_R32G32B32A32_SFLOAT, .method_set = p->ids.set_layout};
+		VkResult res = render_make_graphics(r, &pd, &s->ids_pipe);
+		if (!res) {
+			pd.fs = fm;
+			pd.fs_size = mn;
+			res = render_make_graphics(r, &pd, &s->ids_pipe_mask);
+		}
+		if (res)
+			rc = render_vk_error(err, err_size, "vrs: ids pipeline", res);
+	}
+	free(vs);
+	free(fs);
+	free(fm);
+	return rc;
 }
 
 static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t err_size)
@@ -111,10 +154,14 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 				       "vrs tile debug", &s->dbg)))
 		return render_vk_error(err, err_size, "vrs buffers", res);
 	int rc;
-	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vrs history colour", &s->hc, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vrs history colour t-2", &s->hc2, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, "vrs history position", &s->hpos, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, "vrs history motion", &s->haux, err, err_size)))
+	const VkImageUsageFlags att = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, "vrs history colour 0", &s->hcol[0], err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, "vrs history colour 1", &s->hcol[1], err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, 0, "vrs history position", &s->hpos, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, "vrs motion / texel density 0", &s->haux[0], err,
+			     err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, "vrs motion / texel density 1", &s->haux[1], err,
+			     err_size)))
 		return rc;
 	VkDescriptorSetLayoutBinding b[VRS_BINDINGS];
 	for (uint32_t i = 0; i < VRS_BINDINGS; i++)
@@ -125,32 +172,40 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 					      .bindingCount = VRS_BINDINGS, .pBindings = b};
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "vrs: descriptor set layout", res);
+	VkDescriptorSetLayout two[2] = {s->set_layout, s->set_layout};
 	VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
-					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = &s->set_layout};
-	if ((res = vkAllocateDescriptorSets(d, &ai, &s->set)))
+					  .descriptorPool = r->pool, .descriptorSetCount = 2, .pSetLayouts = two};
+	if ((res = vkAllocateDescriptorSets(d, &ai, s->set)))
 		return render_vk_error(err, err_size, "vrs: descriptor set", res);
-	const vkdev_image *imgs[VRS_BINDINGS] = {NULL, &s->hc, &s->hc2, &s->hpos, &s->haux, NULL};
-	const vkdev_buffer *bufs[VRS_BINDINGS] = {&s->index, NULL, NULL, NULL, NULL, &s->dbg};
-	vkdev_write_storage_set(d, s->set, VRS_BINDINGS, bufs, imgs);
+	for (int c = 0; c < 2; c++) {
+		bool two_colours = s->kind == VRS_TAAS;
+		const vkdev_image *imgs[VRS_BINDINGS] = {NULL, &s->hcol[two_colours ? 1 - c : 0],
+							 &s->hcol[two_colours ? c : 0], &s->hpos, &s->haux[1 - c], NULL};
+		const vkdev_buffer *bufs[VRS_BINDINGS] = {&s->index, NULL, NULL, NULL, NULL, &s->dbg};
+		vkdev_write_storage_set(d, s->set[c], VRS_BINDINGS, bufs, imgs);
+	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, p->set_layout, s->set_layout};
 	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
 	VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 3,
 					  .pSetLayouts = sets, .pushConstantRangeCount = 1, .pPushConstantRanges = &pcr};
 	if ((res = vkCreatePipelineLayout(d, &pli, NULL, &s->layout)))
 		return render_vk_error(err, err_size, "vrs: pipeline layout", res);
+	s->aux = s->kind == VRS_CASTEXEL || s->kind == VRS_MAS || s->kind == VRS_TAAS;
 	if ((rc = make_compute(r, s, "vbuf/rate.comp.in", "", &s->rate, err, err_size)) ||
 	    (rc = make_compute(r, s, "vbuf/finalize.comp.in", "", &s->finalize, err, err_size)) ||
-	    (rc = make_compute(r, s, "vbuf/history.comp.in", "", &s->history, err, err_size)) ||
-	    (s->kind == VRS_CASEDGE &&
-	     (rc = make_compute(r, s, "vbuf/history.comp.in", "#define CENTRES 1\n", &s->centres, err, err_size))))
+	    ((s->kind == VRS_CASEDGE || s->kind == VRS_TAAS) &&
+	     (rc = make_compute(r, s, "vbuf/history.comp.in", "", &s->history, err, err_size))) ||
+	    (s->kind != VRS_FOVEA &&
+	     (rc = make_compute(r, s, "vbuf/history.comp.in", "#define CENTRES 1\n", &s->centres, err, err_size))) ||
+	    (s->aux && (rc = make_ids_pipelines(r, p, s, err, err_size))))
 		return rc;
 	VkCommandBuffer cmd;
 	if ((res = vkdev_cmd_begin(r->dev, &cmd)))
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[4] = {&s->hc, &s->hc2, &s->hpos, &s->haux};
-	for (int i = 0; i < 4; i++) {
+	const vkdev_image *im[5] = {&s->hcol[0], &s->hcol[1], &s->hpos, &s->haux[0], &s->haux[1]};
+	for (int i = 0; i < 5; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -186,7 +241,7 @@ static void vrs_rate_prepare(render *r, vbuf_pass *p, void *user, uint32_t frame
 
 static void bind(render *r, vbuf_pass *p, vrs_state *s, VkCommandBuffer cmd, VkPipeline pipe, const uint32_t aux[4])
 {
-	VkDescriptorSet sets[3] = {r->scene_set, p->set, s->set};
+	VkDescriptorSet sets[3] = {r->scene_set, p->set, s->set[s->cur]};
 	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
 	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->layout, 0, 3, sets, 0, NULL);
 	gpu_push pc = {0, 0, (uint32_t)r->scene->object_count, 0, {aux[0], aux[1], aux[2], aux[3]}};
@@ -221,12 +276,31 @@ static void vrs_rate_after(render *r, vbuf_pass *p, void *user, VkCommandBuffer 
 	if (s->kind == VRS_FOVEA)
 		return;
 	uint32_t aux[4] = {s->cur, 0, 0, 0};
-	bind(r, p, s, cmd, s->history, aux);
-	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	if (s->history) {
+		bind(r, p, s, cmd, s->history, aux);
+		vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	}
 	if (s->centres) { /* writes other images than the per-pixel pass: no barrier between them */
 		bind(r, p, s, cmd, s->centres, aux);
 		vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 63) / 64, 1, 1);
 	}
+}
+
+/* castexel, mas, taas: the ids pass with the second attachment haux[cur] (cleared to the background's (0, 0, 1/2, 0):
+ * no motion, untextured density), in place of ids_pass_record; push constants' aux[2], aux[3]: the size. */
+static void vrs_ids_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer cmd, uint32_t frame)
+{
+	vrs_state *s = user;
+	(void)frame;
+	if (!s->aux) {
+		ids_pass_record(r, &p->ids, cmd, 0);
+		return;
+	}
+	const VkClearColorValue clear = {.float32 = {0.0f, 0.0f, 0.5f, 0.0f}};
+	const uint32_t size[2] = {r->desc.width, r->desc.height};
+	ids_begin_aux(r, cmd, &p->ids.image, &s->haux[s->cur], &clear);
+	ids_draw_objects(r, cmd, p->ids.set, &s->ids_pipe, &s->ids_pipe_mask, 0, size);
+	ids_end_aux(cmd, &p->ids.image, &s->haux[s->cur]);
 }
 
 static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)
@@ -244,8 +318,10 @@ static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
 	vkdev_buffer_destroy(r->dev, &s->index);
 	vkdev_buffer_destroy(r->dev, &s->dbg);
-	vkdev_image *im[4] = {&s->hc, &s->hc2, &s->hpos, &s->haux};
-	for (int i = 0; i < 4; i++)
+	render_pipeline_destroy(r, &s->ids_pipe);
+	render_pipeline_destroy(r, &s->ids_pipe_mask);
+	vkdev_image *im[5] = {&s->hcol[0], &s->hcol[1], &s->hpos, &s->haux[0], &s->haux[1]};
+	for (int i = 0; i < 5; i++)
 		vkdev_image_destroy(r->dev, im[i]);
 	free(s);
 }
@@ -264,6 +340,7 @@ static int vrs_init(render *r, vrs_kind kind, char *err, size_t err_size)
 	vbuf_variant v = {.force = o->force_reshade, .centroid = o->centroid, .truth = o->truth, .truth_t = o->truth_t,
 			  .rate_init = vrs_rate_init, .rate_prepare = vrs_rate_prepare,
 			  .rate_record = vrs_rate_record, .rate_after = vrs_rate_after, .rate_finish = vrs_rate_finish,
+			  .ids_record = vrs_ids_record,
 			  .user = s};
 	return vbuf_family_init(r, &v, err, err_size);
 }

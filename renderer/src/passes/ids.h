@@ -53,6 +53,11 @@ void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *image);
 void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const render_pipeline *pipe,
 		      const render_pipeline *pipe_mask, uint32_t slot, const uint32_t aux23[2]);
 void ids_end(VkCommandBuffer cmd, const vkdev_image *image);
+/* The same with a second colour attachment AUX (location 1 of PIPE's fragment shader, cleared to AUX_CLEAR; the VRS
+ * methods' per-pixel motion and texel density, methods/vrs.c), which ids_end_aux also makes readable by compute. */
+void ids_begin_aux(render *r, VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux,
+		   const VkClearColorValue *aux_clear);
+void ids_end_aux(VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux);
 
 /* Multiview: creates the 2-layer images, the set and the pipelines, and makes eyes[v] (uninitialised) the view of
  * layer v (bound like an ids_pass's image; ids_pass_finish frees only the view, ids_multiview_finish the rest). Needs
