@@ -118,10 +118,13 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.alphaBlendOp = VK_BLEND_OP_ADD,
 		.colorWriteMask = 0xF,
 	};
+	/* pd->color attachments (0, 1 or 2), all of one format and blend state */
+	uint32_t ncolor = pd->color > 2 ? 2u : (uint32_t)(pd->color > 0 ? pd->color : 0);
+	VkPipelineColorBlendAttachmentState cbas[2] = {cba, cba};
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
-		.attachmentCount = pd->color ? 1u : 0u,
-		.pAttachments = &cba,
+		.attachmentCount = ncolor,
+		.pAttachments = cbas,
 	};
 	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
 	VkPipelineDynamicStateCreateInfo dy = {
@@ -130,11 +133,12 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.pDynamicStates = dyn,
 	};
 	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
+	VkFormat cfmts[2] = {cfmt, cfmt};
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.viewMask = pd->view_mask,
-		.colorAttachmentCount = pd->color ? 1u : 0u,
-		.pColorAttachmentFormats = &cfmt,
+		.colorAttachmentCount = ncolor,
+		.pColorAttachmentFormats = cfmts,
 		.depthAttachmentFormat = pd->depth_format ? pd->depth_format : RENDER_DEPTH_FORMAT,
 		.stencilAttachmentFormat = pd->stencil ? RENDER_DEPTH_FORMAT : VK_FORMAT_UNDEFINED,
 	};

@@ -233,7 +233,7 @@ typedef struct render_pipe_desc {
 	const uint32_t *vs, *fs; /* vs NULL: common/scene.vert, the one vertex shader of all scene passes */
 	size_t vs_size, fs_size;
 	unsigned attributes;   /* bit i: vertex attribute location i (0 position, 1 normal, 2 uv, 3 tangent) */
-	int depth_write, color, bias, blend;
+	int depth_write, color, bias, blend; /* color: the number of colour attachments (0-2, one format) */
 	VkCompareOp depth_op;
 	int no_depth_test;     /* depth test off (full-screen passes) */
 	int stencil;           /* RENDER_STENCIL_* */

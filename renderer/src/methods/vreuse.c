@@ -62,14 +62,19 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
 	return make_compute_x(r, s, path, "", out, err, err_size);
 }
 
-/* warp's reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
- * scene's vertices and indices), writing what the lookup needs instead of the ids; MASK objects alpha-tested. */
+/* The reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
+ * scene's vertices and indices), writing what the lookup needs; MASK objects alpha-tested. warp: instead of the ids
+ * (its extrapolated frames shade nothing); the rrc variants and stu: beside them (VIS_IDS, two targets: the ids
+ * and the record), so that one geometry pass serves the shading and the lookup. */
+static bool vis_writes_ids(const vreuse_state *s) { return s->v.mode != VREUSE_WARP; }
+
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
 {
 	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
 	size_t vn = 0, fn = 0, mn = 0;
-	const char *rec = s->v.mode == VREUSE_WARP ? "" : "#define VIS_RECORD 1\n"; /* rrc: this frame's distance too */
-	char mask[64];
+	/* rrc, stu: this frame's distance too (the record), and the ids */
+	const char *rec = vis_writes_ids(s) ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n" : "";
+	char mask[128];
 	snprintf(mask, sizeof mask, "%s#define VIS_ALPHA_MASK 1\n", rec);
 	int rc = render_compile_defs(r, "vreuse/vis.vert.in", rec, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
@@ -77,7 +82,8 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 	if (!rc)
 		rc = render_compile_defs(r, "vreuse/vis.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
 	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
+		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = vis_writes_ids(s) ? 2 : 1,
+				       .depth_write = 1,
 				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 				       .method_set = s->p.ids.set_layout};
 		VkResult res = render_make_graphics(r, &pd, &s->vis_pipe);
@@ -96,13 +102,17 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 }
 
 /* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the
- * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. */
+ * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. For the
+ * rrc variants and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment 1). */
 static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
 {
 	const uint32_t aux23[2] = {key_slot, r->desc.width | r->desc.height << 16};
-	ids_begin(r, cmd, &s->vis);
+	const vkdev_image *targets[2] = {&s->p.ids.image, &s->vis};
+	uint32_t n = vis_writes_ids(s) ? 2 : 1;
+	const vkdev_image *const *t = n == 2 ? targets : targets + 1;
+	ids_begin(r, cmd, t, n);
 	ids_draw_objects(r, cmd, s->p.ids.set, &s->vis_pipe, &s->vis_pipe_mask, 0, aux23);
-	ids_end(cmd, &s->vis);
+	ids_end(cmd, t, n);
 }
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
@@ -355,8 +365,7 @@ static void record_truth(render *r, vreuse_state *s, VkCommandBuffer cmd)
 static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading */
-	record_vis(r, s, cmd, 1);            /* for the lookup (and the record): the previous frame is slot 1 */
+	record_vis(r, s, cmd, 1); /* the ids (for the shading) and the lookup's record: the previous frame is slot 1 */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
@@ -440,8 +449,7 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading and the windows */
-	record_vis(r, s, cmd, 1);            /* for the lookups (decide, the history) and the record */
+	record_vis(r, s, cmd, 1); /* the ids (the shading, the windows) and the record (decide, the history) */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
