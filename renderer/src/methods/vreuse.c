@@ -379,10 +379,16 @@ static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 
 static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
-	if (s->key) { /* ref's depth pre-pass and shading (warp/1 is ref), its counter zeroed first */
+	if (s->key) { /* ref's shading (warp/1 is ref), its counter zeroed first, after the visibility pass */
 		vkCmdFillBuffer(cmd, r->shade_count.buffer, 0, VK_WHOLE_SIZE, 0);
 		vbuf_barrier(cmd);
-		render_pass_depth(r, cmd, 0);
+		/* the depth pre-pass: the visibility pass leaves ref's depth (the same `precise` positions of the same
+		 * triangles as common/scene.vert, the nearest surface kept; LESS_OR_EQUAL writes the values LESS does) and
+		 * the keyframe's record beside it - one geometry pass for both */
+		record_vis(r, s, cmd, 0);
+		render_barrier(cmd, VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+			       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+			       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
 	}
 	render_ts(r, cmd);
 	if (s->key) {
@@ -395,7 +401,8 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 		render_stats_begin(r, cmd);
 	}
 	render_ts(r, cmd);
-	record_vis(r, s, cmd, s->key ? 0 : 1); /* (on keyframes slot 1 is this frame too) */
+	if (!s->key) /* (keyframes: above, as the depth pre-pass) */
+		record_vis(r, s, cmd, 1);
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	if (s->key) { /* the cache := the keyframe (the record from the vis pass) */
