@@ -21,6 +21,9 @@ layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
 // warp: the reprojecting visibility pass (vis.frag.in): object + 1, the keyframe position (x, y), its view distance
 layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
+// the cache of the next frame: rrc variants, the other of two cache images (swapped per frame, so that decide can
+// write it while its lookups read cache_rec); the other methods, cache_rec itself
+layout(set = 2, binding = 8, rgba32ui) uniform writeonly uimage2D cache_next;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 

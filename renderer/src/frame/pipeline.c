@@ -124,7 +124,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		so.reference = 0;
 	ds.front = ds.back = so;
 	/* Blending: "over" for colour; coverage alpha accumulates as a + (1 - a) * dst. */
-	VkPipelineColorBlendAttachmentState cba[2] = {{
+	VkPipelineColorBlendAttachmentState cba = {
 		.blendEnable = pd->blend ? VK_TRUE : VK_FALSE,
 		.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA,
 		.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
@@ -133,13 +133,14 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
 		.alphaBlendOp = VK_BLEND_OP_ADD,
 		.colorWriteMask = 0xF,
-	}};
-	cba[1] = cba[0];
-	uint32_t ncolor = pd->color ? (pd->color2_format ? 2u : 1u) : 0u;
+	};
+	/* pd->color attachments (0, 1 or 2), one blend state; the second of color2_format where set */
+	uint32_t ncolor = pd->color > 2 ? 2u : (uint32_t)(pd->color > 0 ? pd->color : 0);
+	VkPipelineColorBlendAttachmentState cbas[2] = {cba, cba};
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
 		.attachmentCount = ncolor,
-		.pAttachments = cba,
+		.pAttachments = cbas,
 	};
 	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
 	VkPipelineDynamicStateCreateInfo dy = {
@@ -147,12 +148,13 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 3u,
 		.pDynamicStates = dyn,
 	};
-	VkFormat cfmt[2] = {pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT, pd->color2_format};
+	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
+	VkFormat cfmts[2] = {cfmt, pd->color2_format ? pd->color2_format : cfmt};
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.viewMask = pd->view_mask,
 		.colorAttachmentCount = ncolor,
-		.pColorAttachmentFormats = cfmt,
+		.pColorAttachmentFormats = cfmts,
 		.depthAttachmentFormat = pd->depth_format ? pd->depth_format : RENDER_DEPTH_FORMAT,
 		.stencilAttachmentFormat = pd->stencil ? RENDER_DEPTH_FORMAT : VK_FORMAT_UNDEFINED,
 	};

@@ -13,7 +13,7 @@ const char *const vreuse_rrc_passes[9] = {"shadow", "ids",   "decide",  "shade",
 const char *const vreuse_warp_passes[10] = {"shadow", "depth", "shade", "ids",     "warp",
 					    "fill",   "truth", "blend", "display", "readback"};
 
-enum { VREUSE_BINDINGS = 8 };
+enum { VREUSE_BINDINGS = 9 };
 /* decide's aux[1] flags */
 enum { FLAG_HAVE_CACHE = 1u };
 
@@ -21,6 +21,7 @@ typedef struct vreuse_state {
 	vreuse_variant v;
 	vbuf_pass p;
 	vkdev_image cache_col, cache_rec, rec_new, flag;
+	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
 	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
@@ -31,6 +32,7 @@ typedef struct vreuse_state {
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
 	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu;
+	VkPipeline hshade; /* rrc: the path's shade writing the HDR target (shade.comp.in VBUF_TO_HDR) */
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
 	bool key;          /* warp: this frame is shaded in full */
@@ -62,14 +64,19 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
 	return make_compute_x(r, s, path, "", out, err, err_size);
 }
 
-/* warp's reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
- * scene's vertices and indices), writing what the lookup needs instead of the ids; MASK objects alpha-tested. */
+/* The reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
+ * scene's vertices and indices), writing what the lookup needs; MASK objects alpha-tested. warp: instead of the ids
+ * (its extrapolated frames shade nothing); the rrc variants and stu: beside them (VIS_IDS, two targets: the ids
+ * and the record), so that one geometry pass serves the shading and the lookup. */
+static bool vis_writes_ids(const vreuse_state *s) { return s->v.mode != VREUSE_WARP; }
+
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
 {
 	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
 	size_t vn = 0, fn = 0, mn = 0;
-	const char *rec = s->v.mode == VREUSE_WARP ? "" : "#define VIS_RECORD 1\n"; /* rrc: this frame's distance too */
-	char mask[64];
+	/* rrc, stu: this frame's distance too (the record), and the ids */
+	const char *rec = vis_writes_ids(s) ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n" : "";
+	char mask[128];
 	snprintf(mask, sizeof mask, "%s#define VIS_ALPHA_MASK 1\n", rec);
 	int rc = render_compile_defs(r, "vreuse/vis.vert.in", rec, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
@@ -77,7 +84,8 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 	if (!rc)
 		rc = render_compile_defs(r, "vreuse/vis.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
 	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
+		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = vis_writes_ids(s) ? 2 : 1,
+				       .depth_write = 1,
 				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 				       .method_set = s->p.ids.set_layout};
 		VkResult res = render_make_graphics(r, &pd, &s->vis_pipe);
@@ -96,13 +104,17 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 }
 
 /* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the
- * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. */
+ * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. For the
+ * rrc variants and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment 1). */
 static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
 {
 	const uint32_t aux23[2] = {key_slot, r->desc.width | r->desc.height << 16};
-	ids_begin(r, cmd, &s->vis);
+	const vkdev_image *targets[2] = {&s->p.ids.image, &s->vis};
+	uint32_t n = vis_writes_ids(s) ? 2 : 1;
+	const vkdev_image *const *t = n == 2 ? targets : targets + 1;
+	ids_begin(r, cmd, t, n, NULL);
 	ids_draw_objects(r, cmd, s->p.ids.set, &s->vis_pipe, &s->vis_pipe_mask, 0, aux23);
-	ids_end(cmd, &s->vis);
+	ids_end(cmd, t, n);
 }
 
 int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
@@ -136,6 +148,11 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	}
 	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
 	bool vis = warp || rrc || stu; /* the methods that look up through the reprojecting visibility pass */
+	VkResult rc2 = vkdev_image_create(r->dev, rrc ? r->desc.width : 1, rrc ? r->desc.height : 1, 1, 1,
+					  VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+					  VK_IMAGE_ASPECT_COLOR_BIT, false, "vreuse cache record 2", &s->cache_rec2);
+	if (rc2)
+		return render_vk_error(err, err_size, "vreuse cache record 2", rc2);
 	VkResult rv = vkdev_image_create(r->dev, vis ? r->desc.width : 1, vis ? r->desc.height : 1, 1, 1,
 					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
@@ -169,10 +186,12 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					  .descriptorPool = r->pool, .descriptorSetCount = 2, .pSetLayouts = two};
 	if ((res = vkAllocateDescriptorSets(d, &ai, s->set)))
 		return render_vk_error(err, err_size, "vreuse: descriptor set", res);
-	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's */
-		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, NULL,
-							    &s->sub[1 - i], &s->sub[i], &s->vis};
-		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL};
+	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's; rrc: the
+				       * cache recs[1 - i] is read, recs[i] written (cache_next) */
+		const vkdev_image *recs[2] = {&s->cache_rec, rrc ? &s->cache_rec2 : &s->cache_rec};
+		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, recs[1 - i], &s->rec_new, &s->flag, NULL,
+							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i]};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL, NULL};
 		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
 	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
@@ -189,6 +208,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return rc;
 	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
+	if (rrc && (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_TO_HDR 1\n", &s->hshade, err,
+					   err_size)))
+		return rc;
 	if (amss && ((rc = make_compute(r, s, "vreuse/amss.comp.in", &s->amss, err, err_size)) ||
 		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
 					     err_size))))
@@ -202,8 +224,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[7] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1], &s->vis};
-	for (int i = 0; i < 7; i++) {
+	const vkdev_image *im[8] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag,
+				    &s->sub[0],     &s->sub[1],     &s->vis,     &s->cache_rec2};
+	for (int i = 0; i < 8; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -279,8 +302,6 @@ static bool is_rrc(const vreuse_state *s)
 
 static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame, uint32_t flags)
 {
-	if (is_rrc(s)) /* decide writes the shaded pixels' flags only */
-		clear_image(cmd, &s->flag);
 	uint32_t aux[4] = {1, flags, frame, s->v.period | s->v.group << 8};
 	bind(r, s, cmd, s->decide, aux);
 	if (s->v.mode == VREUSE_AMSS)
@@ -293,15 +314,17 @@ static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint3
 	vbuf_barrier(cmd);
 }
 
-/* The resolve (the shaded pixels' values into the HDR target) and the cache := the frame's opaque values (before
- * BLEND) and its record (resolve.comp.in). */
+/* The resolve: the cache := the frame's opaque values (before BLEND) and its record (resolve.comp.in); amss, stu: the
+ * shaded pixels' values into the HDR target first; rrc variants: the shaded pixels' texels only (decide stored the
+ * reused ones, the shade wrote the HDR target). */
 static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
 	uint32_t aux[4] = {0, 0, 0, 0};
-	if (is_rrc(s)) /* resolve writes the covered pixels' texels only (the background: object 0) */
-		clear_image(cmd, &s->cache_rec);
 	bind(r, s, cmd, s->resolve, aux);
-	dispatch_pixels(r, cmd);
+	if (is_rrc(s)) /* over the list of shaded samples (the shade's indirect arguments) */
+		vkCmdDispatchIndirect(cmd, s->p.counters.buffer, 2 * sizeof(uint32_t));
+	else
+		dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
 }
 
@@ -355,14 +378,18 @@ static void record_truth(render *r, vreuse_state *s, VkCommandBuffer cmd)
 static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading */
-	record_vis(r, s, cmd, 1);            /* for the lookup (and the record): the previous frame is slot 1 */
+	record_vis(r, s, cmd, 1); /* the ids (for the shading) and the lookup's record: the previous frame is slot 1 */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
+	/* the next cache (cache_next of set[parity]): decide writes the reused pixels' texels, resolve the shaded
+	 * ones; the background stays 0 */
+	clear_image(cmd, s->parity ? &s->cache_rec2 : &s->cache_rec);
 	record_decide(r, s, cmd, frame, s->have_cache ? FLAG_HAVE_CACHE : 0);
 	render_ts(r, cmd);
-	vbuf_record_shade(r, p, cmd, 0);
+	vbuf_bind(r, p, cmd, s->hshade, 0, NULL); /* the path's indirect shade, into the HDR target */
+	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	record_resolve(r, s, cmd);
 	record_truth(r, s, cmd);
@@ -370,10 +397,16 @@ static void record_rrc(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 
 static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
-	if (s->key) { /* ref's depth pre-pass and shading (warp/1 is ref), its counter zeroed first */
+	if (s->key) { /* ref's shading (warp/1 is ref), its counter zeroed first, after the visibility pass */
 		vkCmdFillBuffer(cmd, r->shade_count.buffer, 0, VK_WHOLE_SIZE, 0);
 		vbuf_barrier(cmd);
-		render_pass_depth(r, cmd, 0);
+		/* the depth pre-pass: the visibility pass leaves ref's depth (the same `precise` positions of the same
+		 * triangles as common/scene.vert, the nearest surface kept; LESS_OR_EQUAL writes the values LESS does) and
+		 * the keyframe's record beside it - one geometry pass for both */
+		record_vis(r, s, cmd, 0);
+		render_barrier(cmd, VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+			       VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+			       VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
 	}
 	render_ts(r, cmd);
 	if (s->key) {
@@ -386,7 +419,8 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 		render_stats_begin(r, cmd);
 	}
 	render_ts(r, cmd);
-	record_vis(r, s, cmd, s->key ? 0 : 1); /* (on keyframes slot 1 is this frame too) */
+	if (!s->key) /* (keyframes: above, as the depth pre-pass) */
+		record_vis(r, s, cmd, 1);
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	if (s->key) { /* the cache := the keyframe (the record from the vis pass) */
@@ -440,8 +474,7 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0); /* for the shading and the windows */
-	record_vis(r, s, cmd, 1);            /* for the lookups (decide, the history) and the record */
+	record_vis(r, s, cmd, 1); /* the ids (the shading, the windows) and the record (decide, the history) */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
@@ -511,16 +544,18 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[9] = {s->decide, s->resolve, s->pull, s->push, s->fill_args, s->amss, s->jshade, s->stu_grad, s->stu};
-	for (int i = 0; i < 9; i++)
+	VkPipeline pp[10] = {s->decide,  s->resolve, s->pull,     s->push, s->fill_args,
+			     s->amss,    s->jshade,  s->stu_grad, s->stu,  s->hshade};
+	for (int i = 0; i < 10; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
 		vkDestroyPipelineLayout(d, s->layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
-	vkdev_image *im[7] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0], &s->sub[1], &s->vis};
-	for (int i = 0; i < 7; i++)
+	vkdev_image *im[8] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag,
+			      &s->sub[0],     &s->sub[1],     &s->vis,     &s->cache_rec2};
+	for (int i = 0; i < 8; i++)
 		vkdev_image_destroy(r->dev, im[i]);
 	render_pipeline_destroy(r, &s->vis_pipe);
 	render_pipeline_destroy(r, &s->vis_pipe_mask);

@@ -5,12 +5,14 @@
  * which samples to shade, the listed samples are shaded by the path's indirect shade, the rest show the cache
  * (bilinear with per-tap validity, TAS-METHODS section 1) or, for warp, are filled by pull-push.
  *
- * Frame (rrc variants; state slot 0 = t, slot 1 = t-1): shadow, ids, decide (reproject, decide, append; the
- * dispatch arguments), shade (indirect), resolve (shaded values into the HDR target; the cache stored), truth
- * (--truth only, vbuf_record_truth; left out of the frame time), blend,
- * display, readback.
- * Frame (warp; slot 1 = the keyframe): key frames are ref's passes (depth pre-pass, shading), then ids and a store
- * of the cache; other frames: ids, warp (reproject the keyframe), fill (pull-push into the holes); then truth
+ * Frame (rrc variants; state slot 0 = t, slot 1 = t-1): shadow, ids (one geometry pass writing the ids and the
+ * reprojecting visibility record), decide (reproject, decide, append; the reused pixels' values and next-cache
+ * texels; the dispatch arguments), shade (indirect, into the HDR target), resolve (indirect: the shaded pixels'
+ * next-cache texels; the two caches swap per frame), truth (--truth only, vbuf_record_truth; left out of the frame
+ * time), blend, display, readback.
+ * Frame (warp; slot 1 = the keyframe): key frames are ref's shading after the visibility pass, which leaves ref's
+ * depth (the pre-pass) and the record, then a store of the cache; other frames: ids (the visibility pass), warp
+ * (reproject the keyframe), fill (pull-push into the holes); then truth
  * (--truth: this frame's ids, shadows on extrapolated frames, the truth pass), blend, display,
  * readback - no shading of opaque surfaces is launched.
  * Frame (amss; slot 1 = t-1): as the rrc variants, every covered pixel shaded once at the frame's sub-pixel offset;

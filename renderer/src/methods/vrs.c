@@ -124,7 +124,7 @@ static int make_ids_pipelines(render *r, vbuf_pass *p, vrs_state *s, char *err, 
 	if (!rc)
 		rc = render_compile_defs(r, "common/ids.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
 	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
+		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 2, .depth_write = 1,
 				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 				       .color2_format = VK_FORMAT_R32G32B32A32_SFLOAT, .method_set = p->ids.set_layout};
 		VkResult res = render_make_graphics(r, &pd, &s->ids_pipe);
@@ -298,9 +298,11 @@ static void vrs_ids_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer 
 	}
 	const VkClearColorValue clear = {.float32 = {0.0f, 0.0f, 0.5f, 0.0f}};
 	const uint32_t size[2] = {r->desc.width, r->desc.height};
-	ids_begin_aux(r, cmd, &p->ids.image, &s->haux[s->cur], &clear);
+	const VkClearColorValue clears[2] = {{{0}}, clear};
+	const vkdev_image *targets[2] = {&p->ids.image, &s->haux[s->cur]};
+	ids_begin(r, cmd, targets, 2, clears);
 	ids_draw_objects(r, cmd, p->ids.set, &s->ids_pipe, &s->ids_pipe_mask, 0, size);
-	ids_end_aux(cmd, &p->ids.image, &s->haux[s->cur]);
+	ids_end(cmd, targets, 2);
 }
 
 static void vrs_rate_finish(render *r, vbuf_pass *p, void *user)

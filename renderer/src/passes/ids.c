@@ -140,65 +140,51 @@ void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const
 	}
 }
 
-void ids_begin_aux(render *r, VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux,
-		   const VkClearColorValue *aux_clear)
+void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count,
+	       const VkClearColorValue *clears)
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
-	/* cleared to 0 (background), depth to 1; the previous frame's compute reads of the image come first */
-	vkdev_barrier_image(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-	if (aux)
-		vkdev_barrier_image(cmd, aux, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+	VkRenderingAttachmentInfo ca[IDS_MAX_TARGETS];
+	for (uint32_t i = 0; i < count; i++) {
+		/* cleared to CLEARS[i] (0 without: background), depth to 1; the previous frame's compute reads of the image come first */
+		vkdev_barrier_image(cmd, images[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
 				    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
 				    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
 				    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+		ca[i] = (VkRenderingAttachmentInfo){.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+						    .imageView = images[i]->view,
+						    .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+						    .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+						    .clearValue = {.color = clears ? clears[i] : (VkClearColorValue){{0}}}};
+	}
 	render_depth_discard(r, cmd);
-	VkRenderingAttachmentInfo ca[2] = {
-		{.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = image->view,
-		 .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-		 .storeOp = VK_ATTACHMENT_STORE_OP_STORE},
-		{.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = aux ? aux->view : VK_NULL_HANDLE,
-		 .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-		 .storeOp = VK_ATTACHMENT_STORE_OP_STORE, .clearValue = {.color = aux_clear ? *aux_clear : (VkClearColorValue){{0}}}}};
 	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
 					.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
 					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
 					.clearValue = {.depthStencil = {1.0f, 0}}};
 	VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO, .renderArea = {{0, 0}, {w, h}}, .layerCount = 1,
-			      .colorAttachmentCount = aux ? 2u : 1u, .pColorAttachments = ca, .pDepthAttachment = &da};
+			      .colorAttachmentCount = count, .pColorAttachments = ca, .pDepthAttachment = &da};
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, w, h);
 }
 
-void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *image)
-{
-	ids_begin_aux(r, cmd, image, NULL, NULL);
-}
-
-void ids_end_aux(VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux)
+void ids_end(VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count)
 {
 	vkCmdEndRendering(cmd);
-	const vkdev_image *im[2] = {image, aux};
-	for (int i = 0; i < 2 && im[i]; i++)
-		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+	for (uint32_t i = 0; i < count; i++)
+		vkdev_barrier_image(cmd, images[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
 				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
 				    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
 				    VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
 }
 
-void ids_end(VkCommandBuffer cmd, const vkdev_image *image)
-{
-	ids_end_aux(cmd, image, NULL);
-}
-
 void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot)
 {
 	static const uint32_t no_aux[2] = {0, 0};
-	ids_begin(r, cmd, &p->image);
+	const vkdev_image *image = &p->image;
+	ids_begin(r, cmd, &image, 1, NULL);
 	ids_draw_objects(r, cmd, p->set, &p->pipe, &p->pipe_mask, slot, no_aux);
-	ids_end(cmd, &p->image);
+	ids_end(cmd, &image, 1);
 }
 
 int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size)

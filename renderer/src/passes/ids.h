@@ -44,20 +44,20 @@ void ids_pass_finish(render *r, ids_pass *p);
  * shader reads; the caller orders earlier reads of the image (previous frame) by the pass's own barrier. */
 void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot);
 
-/* The pieces of ids_pass_record for passes that draw the same way with other shaders into another image (the
- * reprojecting visibility pass of methods/vreuse.c): ids_begin orders the previous frame's compute reads of IMAGE,
- * clears it to 0 and the render's depth target to 1 and begins rendering; ids_draw_objects draws every opaque and
- * masked object in scene order with PIPE / PIPE_MASK (set 1 = SET), push constants' aux = (the mesh's first index,
- * its vertex offset, aux23[0], aux23[1]); ids_end ends rendering and makes IMAGE readable by compute shaders. */
-void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *image);
+/* The pieces of ids_pass_record for passes that draw the same way with other shaders into other images (the
+ * reprojecting visibility pass of methods/vreuse.c, alone or writing the ids too as a second target; the VRS methods'
+ * ids pass with their per-pixel motion and texel density as the second target, methods/vrs.c): ids_begin
+ * orders the previous frame's compute reads of IMAGES[0..COUNT) (COUNT <= IDS_MAX_TARGETS, colour attachments
+ * 0..COUNT-1), clears them to CLEARS[0..COUNT) (NULL: all 0) and the render's depth target to 1 and begins rendering;
+ * ids_draw_objects draws every opaque and masked object in scene order with PIPE / PIPE_MASK (set 1 = SET), push
+ * constants' aux = (the mesh's first index, its vertex offset, aux23[0], aux23[1]); ids_end ends rendering and makes
+ * the images readable by compute shaders. */
+enum { IDS_MAX_TARGETS = 2 };
+void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count,
+	       const VkClearColorValue *clears);
 void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const render_pipeline *pipe,
 		      const render_pipeline *pipe_mask, uint32_t slot, const uint32_t aux23[2]);
-void ids_end(VkCommandBuffer cmd, const vkdev_image *image);
-/* The same with a second colour attachment AUX (location 1 of PIPE's fragment shader, cleared to AUX_CLEAR; the VRS
- * methods' per-pixel motion and texel density, methods/vrs.c), which ids_end_aux also makes readable by compute. */
-void ids_begin_aux(render *r, VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux,
-		   const VkClearColorValue *aux_clear);
-void ids_end_aux(VkCommandBuffer cmd, const vkdev_image *image, const vkdev_image *aux);
+void ids_end(VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count);
 
 /* Multiview: creates the 2-layer images, the set and the pipelines, and makes eyes[v] (uninitialised) the view of
  * layer v (bound like an ids_pass's image; ids_pass_finish frees only the view, ids_multiview_finish the rest). Needs
