@@ -1,7 +1,7 @@
 // study_adaptive.mjs — the adaptive design through the participant page in Debian's Chromium (playwright-core;
 // issue 28): the participant answers every trial by keyboard and reloads the page at the third trial (the same trial
-// must come back, with the same clips); the token-protected export must hold every trial once, 4 counted test trials
-// at rendered levels of T and the catch trial. Then the same answers (and the page's telemetry, so that the server
+// must come back, with the same clips); the token-protected export must hold every trial once, the 4 planned test
+// trials at rendered levels of T and the catch trial, each counted once unless its playback broke three times. Then the same answers (and the page's telemetry, so that the server
 // judges the playbacks alike) go to a second study of the same design and seed through the API alone, without a
 // page: its export must list the same trials with the same T — the server chose them, from the seed and the answers.
 //   node study_adaptive.mjs BASE CODE TOKEN REPLAY_BASE REPLAY_CODE REPLAY_TOKEN
@@ -58,7 +58,24 @@ try {
   const Ts = tests.map(r => r.T);
   console.log(`answered ${answered} in the browser (reloaded once); export: ${rows.length} rows, ${rows.length - counted.length} broken playbacks, test trials at T = ${Ts.join(', ')}`);
   if (new Set(rows.map(r => r.trial)).size !== rows.length || rows.length !== answered) fail('the export does not hold every answer once');
-  if (tests.length !== 4 || counted.filter(r => r.trial_type === 'catch').length !== 1) fail('expected 4 counted test trials and 1 catch trial');
+  // The plan: 4 test trials and 1 catch trial. A playback the server judged broken (headless Chromium drops frames
+  // on a loaded machine) is retaken at most twice, so each planned trial has at most one counted answer, after
+  // only broken ones, or three broken answers and none counted.
+  const planned = rows.filter(r => r.retake_of === '');
+  if (planned.filter(r => r.trial_type === 'test').length !== 4 || planned.filter(r => r.trial_type === 'catch').length !== 1)
+    fail('expected 4 planned test trials and 1 catch trial');
+  let countedPlans = 0;
+  for (const p of planned) {
+    const tries = rows.filter(r => r.trial === p.trial || r.retake_of === p.trial);
+    const ok = tries.filter(r => r.broken === '');
+    if (tries.some(r => r.trial_type !== p.trial_type)) fail(`trial ${p.trial}: a retake of another kind`);
+    if (ok.length > 1 || (ok.length === 1 && ok[0] !== tries[tries.length - 1]))
+      fail(`trial ${p.trial}: counted answers ${ok.map(r => r.trial)} among ${tries.map(r => r.trial)}`);
+    else if (ok.length === 0 && tries.length !== 3) fail(`trial ${p.trial}: ${tries.length} broken answers and no retake left`);
+    countedPlans += ok.length;
+  }
+  if (countedPlans !== counted.length) fail('a counted answer outside the planned trials and their retakes');
+  if (tests.length === 0) fail('no test trial counted: every playback broken (a machine too loaded for the page?)');
   if (Ts.some(t => !['2', '4', '8', '16'].includes(t))) fail('a T that is not a rendered level');
   if (rows.some(r => r.play_a_ms === '' || r.total_frames === '')) fail('an answer from the page without telemetry');
   // The replay: the same answers and telemetry, through the API alone.
