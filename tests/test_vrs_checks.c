@@ -438,8 +438,14 @@ static void test_truth(void **state)
 	by_cpu = cpu_late(a.disp[0], v.disp[0], v.hdr[0], W, H, 8);
 	printf("truth: ads@0 late %lld, odd pixels %lld, CPU %lld\n", (long long)a.st[0].late_samples, (long long)odd,
 	       (long long)by_cpu);
-	assert_int_equal(a.st[0].late_samples, odd);
+	/* the truth pass counts what the CPU counts, on every device; that every odd pixel is late is the checker's
+	 * texel-centre sampling, exact on lavapipe: an H200 (2026-11-27) sampled 124 of the 2048 odd pixels within
+	 * T = 8 of vref (late 1924, the CPU 1924), so another device must show at least 90 % of them late */
 	assert_int_equal(a.st[0].late_samples, by_cpu);
+	if (TU_ON_LAVAPIPE)
+		assert_int_equal(a.st[0].late_samples, odd);
+	else
+		assert_true(a.st[0].late_samples <= odd && a.st[0].late_samples * 10 >= odd * 9);
 	tu_clip_free(&a);
 	tu_clip_free(&v);
 	assert_int_equal(vkdev_validation_messages(dev), 0);
