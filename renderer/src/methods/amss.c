@@ -3,7 +3,10 @@
  * filter whose variance ratio is a / (2 - a) (a = 2/5: 1/4). `--buffers 4` (default): a 2x2 sub-pixel buffer updated
  * round-robin, quadrant k = t mod 4 at offset (+-1/4, +-1/4) px taking the new sample, the others reprojected (a tent
  * of one subsample's radius over the previous frame's subsamples); the output is the quadrant mean, so a static view
- * converges to `ref --ssaa 2` (75 % fewer shadings per frame). Shaded on the compacted sample path (vreuse.h). */
+ * converges to `ref --ssaa 2` (75 % fewer shadings per frame). `--change-bound E`: a signal change (the smoothed
+ * residual of a quadrant's sample against its own history) raises the new sample's weight as YNS09 bound alpha, in
+ * every quadrant, so that moving lights and shadows on a still view do not drift from ssaa2 (amss.comp.in). Shaded
+ * on the compacted sample path (vreuse.h). */
 #include "vreuse.h"
 
 #include <stddef.h>
@@ -11,6 +14,7 @@
 typedef struct amss_options {
 	uint32_t buffers;
 	float alpha;
+	float bound;
 } amss_options;
 
 static const uint32_t buffer_counts[] = {1, 4, 0};
@@ -21,12 +25,17 @@ static const method_option amss_option_table[] = {
 	{.name = "alpha", .arg = "A", .help = "weight of the new sample in its quadrant (eq. 2; a miss or an empty "
 					      "quadrant uses 1)",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(amss_options, alpha), .def = 0.4, .min = 1e-6, .max = 1},
+	{.name = "change-bound", .arg = "E", .help = "4 buffers: a signal change (the smoothed residual R of a quadrant's "
+						 "sample against its own history, in x/(1+x)) above E raises the weight of "
+						 "the new sample to 1 - E/R, in every quadrant (YNS09's bound on alpha; 0: off)",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(amss_options, bound), .def = 0.01, .min = 0, .max = 1},
 };
 
 static int amss_init(render *r, char *err, size_t err_size)
 {
 	const amss_options *o = (const amss_options *)r->config.values.bytes;
-	vreuse_variant v = {.mode = VREUSE_AMSS, .buffers = o->buffers, .alpha = o->alpha};
+	vreuse_variant v = {.mode = VREUSE_AMSS, .buffers = o->buffers, .alpha = o->alpha,
+			     .bound = o->bound};
 	return vreuse_init(r, &v, err, err_size);
 }
 
