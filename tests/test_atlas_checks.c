@@ -73,13 +73,14 @@ static void test_filter_unit(void **state)
 	uint32_t P = 0;
 	atlas_debug_blocks(r, &P);
 	assert_int_equal(P, 32);
-	/* for every global patch a triangle of it: pid = object base + tri_info >> 3 (atlas.glsl patch_at) */
-	uint32_t tri_of[32], obj_of[32];
+	/* for every global patch a triangle of it and the ids pass's y for it: pid << 3 | side << 2 | rotation, the pid
+	 * being the object's base + tri_info >> 3 (passes/ids.h ids_patches) */
+	uint32_t code_of[32], obj_of[32];
 	for (uint32_t o = 0; o < 2; o++) {
 		int m = s->objects[o].mesh;
 		for (uint32_t t = 0; t < p.mesh_tri_base[m + 1] - p.mesh_tri_base[m]; t++) {
-			uint32_t pid = o * 16 + (p.tri_info[p.mesh_tri_base[m] + t] >> 3);
-			tri_of[pid] = t, obj_of[pid] = o;
+			uint32_t info = p.tri_info[p.mesh_tri_base[m] + t], pid = o * 16 + (info >> 3);
+			code_of[pid] = pid << 3 | (info & 7u), obj_of[pid] = o;
 		}
 	}
 	float G[32];
@@ -110,7 +111,7 @@ static void test_filter_unit(void **state)
 				float b1 = 0.25f, b2 = 0.25f;
 				uint32_t *e = ids[y][x];
 				e[0] = pid < 0 ? 0 : obj_of[pid] + 1;
-				e[1] = pid < 0 ? 0 : tri_of[pid];
+				e[1] = pid < 0 ? 0 : code_of[pid];
 				memcpy(&e[2], &b1, 4);
 				memcpy(&e[3], &b2, 4);
 			}
@@ -170,15 +171,23 @@ static void round_trip(vkdev *dev, const char *name)
 	atlas_patches p;
 	assert_int_equal(atlas_patches_build(s, &p, err, sizeof err), TL_OK);
 	uint32_t *base = patch_bases(s, &p);
-	size_t covered = 0;
+	size_t covered = 0, side_b = 0;
 	double worst = 0, sum = 0, worst_abs = 0;
 	for (size_t i = 0; i < (size_t)W * H; i++) {
 		const uint32_t *id = ids + 4 * i;
 		if (id[0] == 0)
 			continue;
-		uint32_t o = id[0] - 1, t = id[1];
+		/* y: the pid << 3 | side << 2 | rotation (passes/ids.h ids_patches); the triangle is the mesh's one with
+		 * that patch, side and rotation (the two triangles of a patch differ in side) */
+		uint32_t o = id[0] - 1, t = UINT32_MAX;
 		int m = s->objects[o].mesh;
 		const scene_mesh *mesh = &s->meshes[m];
+		assert_true(id[1] >> 3 >= base[o]);
+		uint32_t want_info = ((id[1] >> 3) - base[o]) << 3 | (id[1] & 7u);
+		for (uint32_t k = 0; k < p.mesh_tri_base[m + 1] - p.mesh_tri_base[m] && t == UINT32_MAX; k++)
+			if (p.tri_info[p.mesh_tri_base[m] + k] == want_info)
+				t = k;
+		assert_true(t != UINT32_MAX);
 		float b1, b2;
 		memcpy(&b1, &id[2], 4);
 		memcpy(&b2, &id[3], 4);
@@ -192,6 +201,7 @@ static void round_trip(vkdev *dev, const char *name)
 		/* its patch, block and texel spacing: the longest patch edge over the texel steps along it */
 		uint32_t mp = p.mesh_patch_base[m] + (p.tri_info[p.mesh_tri_base[m] + t] >> 3), pid = base[o] + (mp - p.mesh_patch_base[m]);
 		assert_true(pid < P);
+		assert_int_equal(pid, id[1] >> 3);
 		assert_int_equal(blocks[4 * pid + 2], mp);
 		assert_int_equal(blocks[4 * pid + 3], o);
 		uint32_t bw = 1u << (blocks[4 * pid + 1] & 0xFFu), bh = 1u << ((blocks[4 * pid + 1] >> 8) & 0xFFu);
@@ -235,7 +245,11 @@ static void round_trip(vkdev *dev, const char *name)
 		worst = fmax(worst, d / spacing), worst_abs = fmax(worst_abs, d);
 		sum += d / spacing;
 		covered++;
+		side_b += (id[1] >> 2) & 1u;
 	}
+	/* the triangle found from y is self-consistent with the resolve; that y carries the side at all is checked here:
+	 * both scenes' quads are two triangles, so the pixels of side B triangles must show it */
+	assert_true(side_b > 0 && side_b < covered);
 	print_message("S4 %s: %zu covered pixels, position error max %.4f texel spacings (%.5f units), mean %.4f\n", name,
 		      covered, worst, worst_abs, sum / (double)covered);
 	assert_true(covered > (size_t)W * H / 4);

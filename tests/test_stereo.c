@@ -256,12 +256,12 @@ static void test_filter_both_eyes(void **state)
 	uint32_t P = 0;
 	atlas_debug_blocks(r, &P);
 	assert_int_equal(P, 32);
-	uint32_t tri_of[32], obj_of[32];
+	uint32_t code_of[32], obj_of[32];
 	for (uint32_t o = 0; o < 2; o++) {
 		int m = s->objects[o].mesh;
 		for (uint32_t t = 0; t < p.mesh_tri_base[m + 1] - p.mesh_tri_base[m]; t++) {
-			uint32_t pid = o * 16 + (p.tri_info[p.mesh_tri_base[m] + t] >> 3);
-			tri_of[pid] = t, obj_of[pid] = o;
+			uint32_t info = p.tri_info[p.mesh_tri_base[m] + t], pid = o * 16 + (info >> 3);
+			code_of[pid] = pid << 3 | (info & 7u), obj_of[pid] = o;
 		}
 	}
 	float G[32];
@@ -284,7 +284,7 @@ static void test_filter_both_eyes(void **state)
 				float b1 = 0.25f, b2 = 0.25f;
 				uint32_t *v = ids[e][y][x];
 				v[0] = pid < 0 ? 0 : obj_of[pid] + 1;
-				v[1] = pid < 0 ? 0 : tri_of[pid];
+				v[1] = pid < 0 ? 0 : code_of[pid];
 				memcpy(&v[2], &b1, 4);
 				memcpy(&v[3], &b2, 4);
 			}

@@ -47,7 +47,8 @@ void block_of(uint pid, out uvec2 origin, out uvec2 size)
 const uint NO_PATCH = 0xFFFFFFFFu;
 
 // The pid of the surface visible at pixel p (the id pass), or NO_PATCH for the background; also the
-// triangle's side and rotation in its pid (tri_info) and its barycentrics in index order.
+// triangle's side and rotation in its pid and its barycentrics in index order. The ids pass writes the pid with the
+// side and rotation (passes/ids.h, IDS_PATCHES: looked up per vertex there), so this reads the image only.
 uint patch_at(ivec2 p, out uint info, out vec3 bary)
 {
 	uvec4 id = imageLoad(ids, p);
@@ -55,11 +56,10 @@ uint patch_at(ivec2 p, out uint info, out vec3 bary)
 	bary = vec3(1.0, 0.0, 0.0);
 	if (id.x == 0u)
 		return NO_PATCH;
-	uvec4 oi = obj_info[2u * (id.x - 1u)];
-	info = tri_info[oi.z + id.y];
+	info = id.y & 7u;
 	float b1 = uintBitsToFloat(id.z), b2 = uintBitsToFloat(id.w);
 	bary = vec3(1.0 - b1 - b2, b1, b2);
-	return oi.x + (info >> 3);
+	return id.y >> 3;
 }
 
 // Side and barycentrics of block coordinates (u, v) of a pid with corners c: the three vertices (indices) and

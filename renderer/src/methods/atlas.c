@@ -2,8 +2,8 @@
  *
  * Frame t (state slot 0; frames in order, a jump starts over):
  *   shadow maps                                            (shared pass)
- *   ids      visibility pass (passes/ids.c, shared with the sample path): per pixel (object + 1, triangle,
- *            barycentrics) — the exact visible set of step 1
+ *   ids      visibility pass (passes/ids.c, shared with the sample path): per pixel (object + 1, pid << 3 | side
+ *            << 2 | rotation, barycentrics) — the exact visible set of step 1 (the pid looked up per vertex)
  *   visible  compute over pixels: visible[patch]; tasa: the 2x2 image-space max of last frame's gradients (step 2)
  *   alloc    CPU (between two submits): free the blocks of patches no longer visible or resized, allocate the new
  *            ones in ascending patch id (shelf + buddy, atlas_alloc.c), decide which blocks to shade (sa: all;
@@ -321,12 +321,14 @@ int atlas_init(render *r, const atlas_variant *v, char *err, size_t err_size)
 	if (!rc)
 		rc = make_buffers(r, s, err, err_size);
 	/* per eye (stereo): the visibility pass's image and the set binding it and the eye's HDR target */
+	/* the ids pass writes each pixel's pid (ids.h ids_patches): looked up per vertex, not per pixel in the passes */
+	ids_patches pt = {&s->buf[B_OBJINFO], &s->buf[B_TRIINFO]};
 	if (!rc && r->multiview)
-		rc = ids_multiview_init(r, &s->mv, s->ids, err, err_size);
+		rc = ids_multiview_init(r, &s->mv, s->ids, &pt, err, err_size);
 	for (uint32_t v = 0; !rc && v < r->view_count; v++) {
 		render_use_view(r, v);
 		if (!r->multiview)
-			rc = ids_pass_init(r, &s->ids[v], err, err_size);
+			rc = ids_pass_init(r, &s->ids[v], &pt, err, err_size);
 		if (!rc)
 			rc = make_set(r, s, v, err, err_size);
 	}

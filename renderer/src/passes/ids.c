@@ -3,21 +3,28 @@
  * Moved out of methods/atlas.c so that the compacted sample path can use it too (issue 30.4). */
 #include "ids.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* Set 1 of the pass: the scene's vertex and index buffers, read by the vertex stage; multiview adds binding 2, the
- * right eye's state ring (its view_proj; the left eye's is the scene set's). */
+ * right eye's state ring (its view_proj; the left eye's is the scene set's); with patch tables (the atlas methods)
+ * bindings 3 and 4 are their object and triangle tables (common/ids.vert.in IDS_PATCHES). */
 static int make_set(render *r, VkDescriptorSetLayout *layout, VkDescriptorSet *set, const vkdev_buffer *states_r,
-		    char *err, size_t err_size)
+		    const ids_patches *pt, char *err, size_t err_size)
 {
 	VkDevice d = r->dev->device;
-	VkDescriptorSetLayoutBinding b[3] = {
-		{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL},
-		{1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL},
-		{2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL},
-	};
-	uint32_t n = states_r ? 3 : 2;
+	const vkdev_buffer *bufs[5] = {&r->vertices, &r->indices, states_r, pt ? pt->obj_info : NULL,
+				       pt ? pt->tri_info : NULL};
+	VkDescriptorSetLayoutBinding b[5];
+	VkDescriptorBufferInfo bi[5];
+	uint32_t n = 0;
+	for (uint32_t i = 0; i < 5; i++) {
+		if (!bufs[i])
+			continue;
+		b[n] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL};
+		bi[n++] = (VkDescriptorBufferInfo){bufs[i]->buffer, 0, VK_WHOLE_SIZE};
+	}
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = n, .pBindings = b};
 	VkResult res;
@@ -27,25 +34,25 @@ static int make_set(render *r, VkDescriptorSetLayout *layout, VkDescriptorSet *s
 					  .descriptorPool = r->pool, .descriptorSetCount = 1, .pSetLayouts = layout};
 	if ((res = vkAllocateDescriptorSets(d, &ai, set)))
 		return render_vk_error(err, err_size, "ids: descriptor set", res);
-	VkDescriptorBufferInfo bi[3] = {{r->vertices.buffer, 0, VK_WHOLE_SIZE},
-					{r->indices.buffer, 0, VK_WHOLE_SIZE},
-					{states_r ? states_r->buffer : VK_NULL_HANDLE, 0, VK_WHOLE_SIZE}};
-	VkWriteDescriptorSet w[3];
+	VkWriteDescriptorSet w[5];
 	for (uint32_t i = 0; i < n; i++)
-		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = *set, .dstBinding = i,
-					      .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-					      .pBufferInfo = &bi[i]};
+		w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = *set,
+					      .dstBinding = b[i].binding, .descriptorCount = 1,
+					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi[i]};
 	vkUpdateDescriptorSets(d, n, w, 0, NULL);
 	return TL_OK;
 }
 
-/* The opaque and MASK pipelines; multiview (view_mask 0b11): common/ids.vert.in with IDS_MULTIVIEW. */
-static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t view_mask, render_pipeline *pipe,
-			 render_pipeline *pipe_mask, char *err, size_t err_size)
+/* The opaque and MASK pipelines; multiview (view_mask 0b11): common/ids.vert.in with IDS_MULTIVIEW; patch tables:
+ * with IDS_PATCHES. */
+static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t view_mask, bool patches,
+			 render_pipeline *pipe, render_pipeline *pipe_mask, char *err, size_t err_size)
 {
 	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
 	size_t vn = 0, fn = 0, mn = 0;
-	const char *vdefs = view_mask ? "#extension GL_EXT_multiview : require\n#define IDS_MULTIVIEW 1\n" : "";
+	char vdefs[128];
+	snprintf(vdefs, sizeof vdefs, "%s%s", view_mask ? "#extension GL_EXT_multiview : require\n#define IDS_MULTIVIEW 1\n" : "",
+		 patches ? "#define IDS_PATCHES 1\n" : "");
 	int rc = render_compile_defs(r, "common/ids.vert.in", vdefs, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
 		rc = render_compile_defs(r, "common/ids.frag.in", "", SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
@@ -71,7 +78,7 @@ static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t v
 	return rc;
 }
 
-int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size)
+int ids_pass_init(render *r, ids_pass *p, const ids_patches *pt, char *err, size_t err_size)
 {
 	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, VK_FORMAT_R32G32B32A32_UINT,
 					  VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
@@ -79,8 +86,8 @@ int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size)
 					  VK_IMAGE_ASPECT_COLOR_BIT, false, "ids", &p->image);
 	if (res)
 		return render_vk_error(err, err_size, "ids image", res);
-	int rc = make_set(r, &p->set_layout, &p->set, NULL, err, err_size);
-	return rc ? rc : make_pipeline(r, p->set_layout, 0, &p->pipe, &p->pipe_mask, err, err_size);
+	int rc = make_set(r, &p->set_layout, &p->set, NULL, pt, err, err_size);
+	return rc ? rc : make_pipeline(r, p->set_layout, 0, pt != NULL, &p->pipe, &p->pipe_mask, err, err_size);
 }
 
 void ids_pass_finish(render *r, ids_pass *p)
@@ -227,7 +234,7 @@ int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char
 
 /* ---- multiview (STEREO.md "Vulkan multiview") ---- */
 
-int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], char *err, size_t err_size)
+int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], const ids_patches *pt, char *err, size_t err_size)
 {
 	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 2, 1, VK_FORMAT_R32G32B32A32_UINT,
 					  VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
@@ -252,8 +259,8 @@ int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], char *err,
 	}
 	if (res)
 		return render_vk_error(err, err_size, "ids (multiview) images", res);
-	int rc = make_set(r, &m->set_layout, &m->set, &r->views[1].states, err, err_size);
-	return rc ? rc : make_pipeline(r, m->set_layout, 0x3u, &m->pipe, &m->pipe_mask, err, err_size);
+	int rc = make_set(r, &m->set_layout, &m->set, &r->views[1].states, pt, err, err_size);
+	return rc ? rc : make_pipeline(r, m->set_layout, 0x3u, pt != NULL, &m->pipe, &m->pipe_mask, err, err_size);
 }
 
 void ids_multiview_finish(render *r, ids_multiview *m)

@@ -4,7 +4,10 @@
  * surfaces found here, so it lives among the passes (issue 30.4; ARCHITECTURE.md "Where new work goes").
  *
  * The image (width x height, RGBA32UI): x object + 1 (0: background), y triangle in the object's mesh, z and w
- * the perspective-correct barycentrics of corners 1 and 2 as float bits. Opaque and masked objects are drawn
+ * the perspective-correct barycentrics of corners 1 and 2 as float bits. With patch tables (ids_patches: the
+ * shading-atlas methods) y is instead the triangle's patch and its place in it, pid << 3 | side << 2 | rotation
+ * (atlas.glsl's tri_info with the object's pid base added), found per vertex, so that the passes reading the image
+ * per pixel need no table lookups (issue 25). Opaque and masked objects are drawn
  * (MASK alpha-tested as in the depth pre-pass); BLEND objects are not, they are composited later. The pass also
  * leaves the frame's depth in the render's depth target (for that compositing).
  *
@@ -35,7 +38,15 @@ typedef struct ids_multiview {
 	render_pipeline pipe, pipe_mask;  /* as ids_pass's, with viewMask 0b11 */
 } ids_multiview;
 
-int ids_pass_init(render *r, ids_pass *p, char *err, size_t err_size);
+/* The atlas methods' tables (methods/atlas.c, atlas.glsl): obj_info (uvec4 per object, two per object: x the
+ * object's pid base, z its mesh's first triangle in tri_info) and tri_info (per mesh triangle, mesh pid << 3 |
+ * side << 2 | rotation); with them the image's y holds the global pid << 3 | side << 2 | rotation. */
+typedef struct ids_patches {
+	const vkdev_buffer *obj_info, *tri_info;
+} ids_patches;
+
+/* pt: NULL for (object, triangle) ids, or the patch tables for pid ids */
+int ids_pass_init(render *r, ids_pass *p, const ids_patches *pt, char *err, size_t err_size);
 void ids_pass_finish(render *r, ids_pass *p);
 
 /* Records the pass for state slot `slot`: the image cleared to 0 and the depth target to 1, then every opaque and
@@ -62,7 +73,7 @@ void ids_end(VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t cou
 /* Multiview: creates the 2-layer images, the set and the pipelines, and makes eyes[v] (uninitialised) the view of
  * layer v (bound like an ids_pass's image; ids_pass_finish frees only the view, ids_multiview_finish the rest). Needs
  * the device's multiview feature and 2 views. */
-int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], char *err, size_t err_size);
+int ids_multiview_init(render *r, ids_multiview *m, ids_pass eyes[2], const ids_patches *pt, char *err, size_t err_size);
 void ids_multiview_finish(render *r, ids_multiview *m);
 /* Records both eyes' pass for state slot `slot` (view 0 active): what ids_pass_record does for each eye, in one render
  * pass; with BLEND objects in the scene each eye's layer of the depth is then copied into the eye's depth target

@@ -80,7 +80,7 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 					  false, "vbuf samples", &v->svals);
 	if (res)
 		return render_vk_error(err, err_size, "vbuf samples image", res);
-	int rc = ids_pass_init(r, &v->ids, err, err_size);
+	int rc = ids_pass_init(r, &v->ids, NULL, err, err_size);
 	if (!rc)
 		rc = make_set(r, v, err, err_size);
 	if (rc)
