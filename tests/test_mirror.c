@@ -183,8 +183,8 @@ static void test_methods(void **state)
 			size_t nd = flip_diff(a.disp[f], b.disp[f], false, &dmax);
 			int hmax;
 			size_t nh = flip_diff(a.hdr[f], b.hdr[f], true, &hmax);
-			print_message("%-12s frame %u: %zu display pixels differ from the flipped twin (max %d), %zu half-float (max %d ulp); "
-				      "visible %lld / %lld, shaded %lld / %lld\n",
+			print_message("%-12s frame %u: %zu display pixels differ from the flipped twin (max %d), %zu half-float "
+				      "(max %d ulp); visible %lld / %lld, shaded %lld / %lld\n",
 				      variants[v], f, nd, dmax, nh, hmax, (long long)b.st[f].visible_samples,
 				      (long long)a.st[f].visible_samples, (long long)b.st[f].shaded_samples,
 				      (long long)a.st[f].shaded_samples);
