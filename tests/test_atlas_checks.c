@@ -7,8 +7,8 @@
  *  S4  texel <-> surface round trip: with TASLAB_ATLAS_DEBUG=positions the atlas holds each texel's object-space
  *      position; resolved, every covered pixel is within one texel spacing of the visibility-pass position;
  *  facing calibration: the atlas's facing rule (triangle winding seen from the eye, on the CPU and in the shading)
- *      against gl_FrontFacing: double-sided quads (one upside down, one mirrored) seen from above and below shade
- *      as ref does, and the CPU's facing of every visible patch is front exactly when the rasterizer keeps the
+ *      against gl_FrontFacing: double-sided quads (one upside down, one mirrored by its node) seen from above and
+ *      below shade as ref does, and the CPU's facing of every visible patch is front exactly when the rasterizer keeps the
  *      patch with back-face culling;
  *  A5  matched budgets on a built-in scene: tasa@16 vs sau/4 and tasa@32 vs sau/8 shade a similar number of samples
  *      and tasa exceeds T against sa less often. */
@@ -316,8 +316,9 @@ static void test_facing(void **state)
 			      s->cameras[cam].name, sum / (double)px, far);
 		assert_true(sum / (double)px < 0.5);
 		assert_true(far <= px / 1000);
-		/* single-sided: the rasterizer culls the back faces (VK_FRONT_FACE_COUNTER_CLOCKWISE, the rule of
-		 * gl_FrontFacing), so exactly the front-facing patches keep a block; the quads do not overlap */
+		/* single-sided: the rasterizer culls the back faces (counter-clockwise front faces, clockwise for the quad
+		 * mirrored by its node's scale: render_set_facing, issue 40), so exactly the front-facing patches keep a
+		 * block; the quads do not overlap */
 		for (size_t m = 0; m < s->material_count; m++)
 			s->materials[m].double_sided = false;
 		facing_frame(dev, s, cam, W, H, disp1, facing1, &n1);

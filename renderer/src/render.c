@@ -128,8 +128,9 @@ int render_create_ops(vkdev *dev, const render_desc *desc, const render_method *
 	for (uint32_t i = 0; i < r->state_ring; i++)
 		r->slot_time[i] = NAN;
 	r->world = calloc(r->scene->object_count, sizeof *r->world);
+	r->mirrored = calloc(r->scene->object_count + 1, 1);
 	r->light_states = calloc(r->scene->light_count + 1, sizeof *r->light_states);
-	if (!r->world || !r->light_states) {
+	if (!r->world || !r->mirrored || !r->light_states) {
 		rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
 		goto fail;
 	}
@@ -215,6 +216,7 @@ void render_destroy(render **pr)
 	colour_destroy(&r->own_colour);
 	free(r->blend_order);
 	free(r->world);
+	free(r->mirrored);
 	free(r->light_states);
 	free(r->slot_time);
 	free(r);

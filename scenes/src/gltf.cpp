@@ -327,7 +327,14 @@ int node_trs(loader &L, int index, const tinygltf::Node &n, tlm_trs *out)
 		tlm_vec3 c0 = tlm_v3((float)m[0], (float)m[1], (float)m[2]), c1 = tlm_v3((float)m[4], (float)m[5], (float)m[6]),
 			 c2 = tlm_v3((float)m[8], (float)m[9], (float)m[10]);
 		t.s = tlm_v3(tlm_v3_length(c0), tlm_v3_length(c1), tlm_v3_length(c2));
-		c0 = tlm_v3_scale(c0, 1.0f / std::fmax(t.s.x, 1e-20f));
+		// A mirroring matrix (negative determinant, §3.7.2.1: clockwise front faces) is a rotation times a scale
+		// with one negative factor: put the sign on x, else the lengths above lose it and the quaternion below
+		// comes from a reflection, not a rotation.
+		if (tlm_v3_dot(c0, tlm_v3_cross(c1, c2)) < 0.0f) {
+			t.s.x = -t.s.x;
+			c0 = tlm_v3_scale(c0, -1.0f);
+		}
+		c0 = tlm_v3_scale(c0, 1.0f / std::fmax(std::fabs(t.s.x), 1e-20f));
 		c1 = tlm_v3_scale(c1, 1.0f / std::fmax(t.s.y, 1e-20f));
 		c2 = tlm_v3_scale(c2, 1.0f / std::fmax(t.s.z, 1e-20f));
 		float tr = c0.x + c1.y + c2.z; // rotation matrix to quaternion (Shepperd's method)

@@ -50,6 +50,12 @@ void scene_eval(const scene *s, float t, tlm_mat4 *world, scene_light_state *lig
 		}
 }
 
+void scene_mirrors(const scene *s, const tlm_mat4 *world, uint8_t *mirrored)
+{
+	for (size_t i = 0; i < s->object_count; i++)
+		mirrored[i] = tlm_mat4_det3(world[i]) < 0.0f;
+}
+
 int scene_find_camera(const scene *s, const char *name)
 {
 	return s->camera_count ? SCENE_FIND(s->cameras, s->camera_count, name) : -1;

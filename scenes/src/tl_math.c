@@ -189,6 +189,14 @@ tlm_mat4 tlm_mat4_transpose(tlm_mat4 a)
 	return r;
 }
 
+float tlm_mat4_det3(tlm_mat4 a)
+{
+	/* columns c0, c1, c2 (m[col*4+row]): det = c0 . (c1 x c2), in double so that the sign of a tiny one is right */
+	const float *m = a.m;
+	double c1x = m[4], c1y = m[5], c1z = m[6], c2x = m[8], c2y = m[9], c2z = m[10];
+	return (float)(m[0] * (c1y * c2z - c1z * c2y) + m[1] * (c1z * c2x - c1x * c2z) + m[2] * (c1x * c2y - c1y * c2x));
+}
+
 tlm_mat4 tlm_mat4_inverse(tlm_mat4 a)
 {
 	/* Cofactor expansion (as in MESA's gluInvertMatrix), in double for accuracy. */

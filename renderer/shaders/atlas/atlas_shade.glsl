@@ -13,7 +13,8 @@
 //    textureGrad; behind the eye or degenerate, the texel spacing is the footprint.
 //  - Facing (replaces gl_FrontFacing): the triangle's winding seen from the eye, dot(cross(b - a, c - a), eye - p) > 0
 //    (the projection flips y, so a counter-clockwise triangle in view space is counter-clockwise in Vulkan's
-//    framebuffer coordinates, VK_FRONT_FACE_COUNTER_CLOCKWISE).
+//    framebuffer coordinates, VK_FRONT_FACE_COUNTER_CLOCKWISE); flipped for a mirrored object (clockwise front
+//    faces, glTF 2.0 section 3.7.2.1): shading.glsl winding_front, the CPU's patch facing in atlas.c alike.
 vec3 atlas_shade_texel(uint slot, uint pid, uint texel, out ivec2 tc, out bool inside)
 {
 	uvec4 b = blocks[pid];
@@ -60,7 +61,7 @@ vec3 atlas_shade_texel(uint slot, uint pid, uint texel, out ivec2 tc, out bool i
 	}
 	vec3 wa = (o.world * vec4(A.p, 1.0)).xyz, wb = (o.world * vec4(B.p, 1.0)).xyz, wc = (o.world * vec4(C.p, 1.0)).xyz;
 	vec3 wp = (o.world * vec4(v.p, 1.0)).xyz;
-	bool front = dot(cross(wb - wa, wc - wa), states[slot].camera_time.xyz - wp) > 0.0;
+	bool front = winding_front(o, wa, wb, wc, wp, states[slot].camera_time.xyz);
 #ifdef ATLAS_DEBUG_POSITIONS
 	return v.p; // diagnostic (TASLAB_ATLAS_DEBUG=positions): the texel's object-space position (test S4)
 #endif

@@ -84,7 +84,7 @@ GPU_STRUCT(FrameState) {
 GPU_STRUCT(GpuObject) {
 	GPU_MAT4(world);
 	GPU_MAT4(normal_matrix); /* inverse transpose of world (upper 3x3 used) */
-	GPU_UVEC4(material);     /* x material index */
+	GPU_UVEC4(material);     /* x material index, y 1 when world mirrors (det < 0: clockwise front faces, glTF 2.0 section 3.7.2.1) */
 };
 
 GPU_STRUCT(GpuMaterial) {

@@ -203,6 +203,16 @@ vec2 tl_duv_dx, tl_duv_dy;
 #define TL_TEX(sampler, coord) texture(sampler, coord)
 #endif
 
+// The side of a triangle the eye sees, as the rasterizer decides gl_FrontFacing: the winding of its world-space
+// corners a, b, c seen from the eye at point p on it, counter-clockwise in front, clockwise for a mirrored object
+// (GpuObject.material.y: its world matrix has a negative determinant, glTF 2.0 section 3.7.2.1; the draws set the front
+// face alike, frame/draw.c render_set_facing). The compute passes that shade a triangle fetched per pixel (the
+// atlas, the compacted sample path) use it in place of gl_FrontFacing.
+bool winding_front(GpuObject o, vec3 a, vec3 b, vec3 c, vec3 p, vec3 eye)
+{
+	return (dot(cross(b - a, c - a), eye - p) > 0.0) != (o.material.y != 0u);
+}
+
 // Material evaluation at a surface point given in object space, with the object's transform at `slot`.
 Surface surface_at(uint slot, uint object, vec3 p_obj, vec3 n_obj, vec4 t_obj, vec2 uv, bool front_facing)
 {
@@ -232,7 +242,9 @@ Surface surface_at(uint slot, uint object, vec3 p_obj, vec3 n_obj, vec4 t_obj, v
 		vec3 tn = TL_TEX(data_textures, vec3(uv, float(m.tex0.z))).xyz * 2.0 - 1.0;
 		tn.xy *= m.emissive_normal_scale.w;
 		t = normalize(t - n * dot(n, t));
-		vec3 b = cross(n, t) * t_obj.w;
+		// glTF's bitangent cross(normal, tangent) * w is in object space; a mirroring world matrix reverses the
+		// cross product of the transformed vectors, so a mirrored object's normal map is the mirror image
+		vec3 b = cross(n, t) * (o.material.y != 0u ? -t_obj.w : t_obj.w);
 		n = normalize(mat3(t, b, n) * tn);
 	}
 	s.normal = n;

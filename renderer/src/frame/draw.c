@@ -46,7 +46,7 @@ void render_draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p
 	gpu_push pc = {slot, (uint32_t)i, (uint32_t)s->object_count, layer, {r->push_aux[0], r->push_aux[1], r->push_aux[2], r->push_aux[3]}};
 	vkCmdPushConstants(cmd, p->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
 	if (set_cull)
-		vkCmdSetCullMode(cmd, s->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+		render_set_facing(r, cmd, slot, i);
 	const scene_mesh *m = &s->meshes[o->mesh];
 	vkCmdDrawIndexed(cmd, m->index_count, 1, r->mesh_first_index[o->mesh], (int32_t)r->mesh_vertex_offset[o->mesh], 0);
 }
@@ -63,6 +63,21 @@ void render_draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *
 		if (modes & RENDER_ALPHA_BIT(s->materials[o->material].alpha_mode))
 			render_draw_object(r, cmd, p, slot, layer, i, set_cull);
 	}
+}
+
+bool render_object_mirrored(const render *r, uint32_t slot, size_t i)
+{
+	/* the flag the shaders read (state.c writes it with the slot's world matrices), so that the rasterizer's front
+	 * face and the shaders' winding tests cannot disagree; a 4-byte read of the host-visible ring per draw, as
+	 * shadow.c reads the slot's world matrices */
+	return ((const gpu_object *)r->objects.mapped)[(size_t)slot * r->scene->object_count + i].material[1] != 0;
+}
+
+void render_set_facing(const render *r, VkCommandBuffer cmd, uint32_t slot, size_t i)
+{
+	const scene_object *o = &r->scene->objects[i];
+	vkCmdSetCullMode(cmd, r->scene->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+	vkCmdSetFrontFace(cmd, render_object_mirrored(r, slot, i) ? VK_FRONT_FACE_CLOCKWISE : VK_FRONT_FACE_COUNTER_CLOCKWISE);
 }
 
 int render_has_alpha_mode(const render *r, scene_alpha_mode mode)

@@ -142,10 +142,13 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.attachmentCount = ncolor,
 		.pAttachments = cbas,
 	};
-	VkDynamicState dyn[3] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
+	/* cull mode and front face per draw (render_set_facing): single-sided materials cull, mirrored objects' front
+	 * faces are clockwise (glTF 2.0 §3.7.2.1); both dynamic states are core in Vulkan 1.3, which vkdev requires */
+	VkDynamicState dyn[4] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE,
+				 VK_DYNAMIC_STATE_FRONT_FACE};
 	VkPipelineDynamicStateCreateInfo dy = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 3u,
+		.dynamicStateCount = pd->bias || pd->fullscreen ? 2u : 4u,
 		.pDynamicStates = dyn,
 	};
 	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;

@@ -174,6 +174,7 @@ struct render {
 
 	/* scratch */
 	tlm_mat4 *world;
+	uint8_t *mirrored; /* scene_mirrors of `world` (GpuObject.material.y of the slot last evaluated) */
 	scene_light_state *light_states;
 };
 
@@ -304,6 +305,12 @@ void render_draw_object(render *r, VkCommandBuffer cmd, const render_pipeline *p
 void render_draw_objects(render *r, VkCommandBuffer cmd, const render_pipeline *p, uint32_t slot, uint32_t layer,
 			 unsigned modes, const uint8_t *only, int set_cull);
 int render_has_alpha_mode(const render *r, scene_alpha_mode mode);
+/* Whether object i is mirrored at state slot `slot` of the active view (its GpuObject.material.y, scene_mirrors):
+ * glTF 2.0 §3.7.2.1, its front faces are clockwise. */
+bool render_object_mirrored(const render *r, uint32_t slot, size_t i);
+/* Sets the cull mode (back faces for single-sided materials) and the front face (clockwise for a mirrored object
+ * at `slot`) of object i's draw: the pipelines with a dynamic cull mode (render_make_graphics) take both. */
+void render_set_facing(const render *r, VkCommandBuffer cmd, uint32_t slot, size_t i);
 /* Writes the next timestamp (call before each pass and once at the end of the frame). */
 void render_ts(render *r, VkCommandBuffer cmd);
 /* The render's command buffer: reset + begin; end + submit + wait on its fence (render_frame, analysis). */

@@ -105,10 +105,12 @@ static void update_state_view(render *r, uint32_t slot, double time_s)
 	float t = (float)time_s;
 	memset(st, 0, sizeof *st);
 	scene_eval(s, t, r->world, r->light_states);
+	scene_mirrors(s, r->world, r->mirrored); /* per slot, so a scale animated through zero flips at its frame */
 	for (size_t i = 0; i < s->object_count; i++) {
 		mat_copy(ob[i].world, r->world[i]);
 		mat_copy(ob[i].normal_matrix, tlm_mat4_transpose(tlm_mat4_inverse(r->world[i])));
 		ob[i].material[0] = s->objects[i].material >= 0 ? (uint32_t)s->objects[i].material : 0u;
+		ob[i].material[1] = r->mirrored[i];
 	}
 	scene_camera_state cam = view_camera(r, time_s, (int)r->view);
 	r->eye = cam.eye;

@@ -142,7 +142,7 @@ void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const
 			       {r->mesh_first_index[o->mesh], r->mesh_vertex_offset[o->mesh], aux23[0], aux23[1]}};
 		vkCmdPushConstants(cmd, bound->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
 				   sizeof pc, &pc);
-		vkCmdSetCullMode(cmd, sc->materials[o->material].double_sided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+		render_set_facing(r, cmd, slot, i);
 		vkCmdDraw(cmd, sc->meshes[o->mesh].index_count, 1, 0, 0);
 	}
 }

@@ -209,6 +209,14 @@ void scene_destroy(scene **s);
 /* Object world matrices (object_count entries, parents applied) and light placements
  * (light_count entries) at time t. Either output may be NULL. */
 void scene_eval(const scene *s, float t, tlm_mat4 *object_world, scene_light_state *lights);
+/* Mirror flags of world matrices as scene_eval writes them (object_count entries each): 1 where the determinant of
+ * the upper 3x3 is negative, else 0. glTF 2.0 §3.7.2.1: "the determinant of the node's global transform defines the
+ * winding order of that primitive. If the determinant is a positive value, the winding order triangle faces is
+ * counterclockwise; in the opposite case, the winding order is clockwise." A mirrored object's front faces are
+ * therefore clockwise: the renderer sets the rasterizer's front face per draw and flips its own winding tests
+ * (README "Mirrored nodes"). The flag follows the world matrix, so an animated scale that changes sign flips it
+ * at the frame it does. */
+void scene_mirrors(const scene *s, const tlm_mat4 *object_world, uint8_t *mirrored);
 /* Index of the named camera, or -1. */
 int scene_find_camera(const scene *s, const char *name);
 scene_camera_state scene_camera_eval(const scene *s, int camera, float t);

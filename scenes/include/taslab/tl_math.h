@@ -61,6 +61,8 @@ tlm_mat4 tlm_mat4_translate(tlm_vec3 t);
 tlm_mat4 tlm_mat4_scale(tlm_vec3 s);
 tlm_mat4 tlm_mat4_from_quat(tlm_quat q);
 tlm_mat4 tlm_mat4_transpose(tlm_mat4 a);
+/* Determinant of the upper-left 3x3 (the linear part of an affine transform): negative for a mirroring one. */
+float tlm_mat4_det3(tlm_mat4 a);
 /* General inverse; returns identity when the matrix is singular (|det| < 1e-20). */
 tlm_mat4 tlm_mat4_inverse(tlm_mat4 a);
 /* View matrix for an eye at `eye` looking at `target`; `up` must not be parallel to the view direction. */
