@@ -48,8 +48,10 @@ static uint32_t *read_rates(const char *run, const run_stats *st, uint32_t f, ui
 	double hist[4] = {0};
 	for (uint32_t t = 0; t < tx * ty; t++) {
 		int c = run_rate_code(rgb + 3 * t);
-		if (c < 0)
+		if (c < 0) { /* fail_msg does not return; the break tells the compiler so (-O3 -Warray-bounds) */
 			fail_msg("%s tile %u: colour %u,%u,%u is no rate", path, t, rgb[3 * t], rgb[3 * t + 1], rgb[3 * t + 2]);
+			break;
+		}
 		codes[t] = code_of[c];
 		hist[c == FRAME_RATE_1X1 ? 0 : c == FRAME_RATE_2X2 ? 1 : c == FRAME_RATE_4X4 ? 2 : 3] += 1;
 	}
