@@ -317,7 +317,7 @@ static void test_facing(void **state)
 		assert_true(sum / (double)px < 0.5);
 		assert_true(far <= px / 1000);
 		/* single-sided: the rasterizer culls the back faces (counter-clockwise front faces, clockwise for the quad
-		 * mirrored by its node's scale: render_set_facing, issue 40), so exactly the front-facing patches keep a
+		 * mirrored by its node's scale: render_set_facing), so exactly the front-facing patches keep a
 		 * block; the quads do not overlap */
 		for (size_t m = 0; m < s->material_count; m++)
 			s->materials[m].double_sided = false;

@@ -1,4 +1,4 @@
-/* test_mirror.c — glTF nodes with a mirroring transform (issue 40), on lavapipe with the validation layer.
+/* test_mirror.c — glTF nodes with a mirroring transform, on lavapipe with the validation layer.
  *
  * glTF 2.0 §3.7.2.1: when the determinant of a node's global transform is negative, its triangles' front faces are
  * clockwise. tests/data/mirror.json places tests/data/mirror.gltf: a single-sided cube under a node scaled
