@@ -402,9 +402,11 @@ static void plan_levels(render *r, atlas_state *s)
 		q->want_lh = (uint8_t)atlas_level(lv, s->rho, s->v.lmax, q->allocated ? q->req_lh : 0, &cv);
 		q->clamped = cu || cv;
 		/* facing of triangle A as seen from the eye (a double-sided patch turning around is new); a mirrored
-		 * object's front faces wind clockwise (glTF 2.0 §3.7.2.1), as the rasterizer and atlas_shade.glsl take it */
+		 * object's front faces wind clockwise (glTF 2.0 §3.7.2.1), as the rasterizer and atlas_shade.glsl take it;
+		 * r->mirrored is the flag of r->world used above (state.c computes both together), read from the CPU's
+		 * array rather than per patch from the mapped object ring (uncached memory on a discrete GPU) */
 		tlm_vec3 n = tlm_v3_cross(tlm_v3_sub(w[1], w[0]), tlm_v3_sub(w[2], w[0]));
-		q->want_facing = (tlm_v3_dot(n, tlm_v3_sub(shade_eye, w[0])) > 0.0f) != render_object_mirrored(r, s->shade_slot, o);
+		q->want_facing = (tlm_v3_dot(n, tlm_v3_sub(shade_eye, w[0])) > 0.0f) != (r->mirrored[o] != 0);
 		bool keeps = q->allocated && q->want_lw == q->req_lw && q->want_lh == q->req_lh && q->want_facing == q->facing;
 		G[p] = keeps && q->phase == 2 ? q->G : 0.0f;
 	}
