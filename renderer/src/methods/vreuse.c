@@ -72,35 +72,14 @@ static bool vis_writes_ids(const vreuse_state *s) { return s->v.mode != VREUSE_W
 
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
 {
-	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
-	size_t vn = 0, fn = 0, mn = 0;
 	/* rrc, stu: this frame's distance too (the record), and the ids */
 	const char *rec = vis_writes_ids(s) ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n" : "";
-	char mask[128];
-	snprintf(mask, sizeof mask, "%s#define VIS_ALPHA_MASK 1\n", rec);
-	int rc = render_compile_defs(r, "vreuse/vis.vert.in", rec, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
-	if (!rc)
-		rc = render_compile_defs(r, "vreuse/vis.frag.in", rec, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
-	if (!rc)
-		rc = render_compile_defs(r, "vreuse/vis.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
-	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = vis_writes_ids(s) ? 2 : 1,
-				       .depth_write = 1,
-				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
-				       .method_set = s->p.ids.set_layout};
-		VkResult res = render_make_graphics(r, &pd, &s->vis_pipe);
-		if (!res) {
-			pd.fs = fm;
-			pd.fs_size = mn;
-			res = render_make_graphics(r, &pd, &s->vis_pipe_mask);
-		}
-		if (res)
-			rc = render_vk_error(err, err_size, "warp: visibility pipeline", res);
-	}
-	free(vs);
-	free(fs);
-	free(fm);
-	return rc;
+	ids_pipe_src src = {"vreuse/vis.vert.in", rec, "vreuse/vis.frag.in", rec, "#define VIS_ALPHA_MASK 1\n"};
+	render_pipe_desc pd = {.color = vis_writes_ids(s) ? 2 : 1, .depth_write = 1,
+			       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
+			       .method_set = s->p.ids.set_layout};
+	return ids_make_pipelines(r, &src, pd, &s->vis_pipe, &s->vis_pipe_mask, "warp: visibility pipeline", err,
+				  err_size);
 }
 
 /* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the

@@ -113,33 +113,13 @@ static int make_compute(render *r, vrs_state *s, const char *path, const char *e
  * pass's set 1, a second colour attachment (RGBA32F, haux). */
 static int make_ids_pipelines(render *r, vbuf_pass *p, vrs_state *s, char *err, size_t err_size)
 {
-	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
-	size_t vn = 0, fn = 0, mn = 0;
-	char defs[96], mask[128];
+	char defs[96];
 	snprintf(defs, sizeof defs, "#define IDS_VRS_AUX 1\n#define %s 1\n", kind_define[s->kind]);
-	snprintf(mask, sizeof mask, "%s#define IDS_ALPHA_MASK 1\n", defs);
-	int rc = render_compile_defs(r, "common/ids.vert.in", defs, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
-	if (!rc)
-		rc = render_compile_defs(r, "common/ids.frag.in", defs, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
-	if (!rc)
-		rc = render_compile_defs(r, "common/ids.frag.in", mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
-	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 2, .depth_write = 1,
-				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
-				       .color2_format = VK_FORMAT_R32G32B32A32_SFLOAT, .method_set = p->ids.set_layout};
-		VkResult res = render_make_graphics(r, &pd, &s->ids_pipe);
-		if (!res) {
-			pd.fs = fm;
-			pd.fs_size = mn;
-			res = render_make_graphics(r, &pd, &s->ids_pipe_mask);
-		}
-		if (res)
-			rc = render_vk_error(err, err_size, "vrs: ids pipeline", res);
-	}
-	free(vs);
-	free(fs);
-	free(fm);
-	return rc;
+	ids_pipe_src src = {"common/ids.vert.in", defs, "common/ids.frag.in", defs, "#define IDS_ALPHA_MASK 1\n"};
+	render_pipe_desc pd = {.color = 2, .depth_write = 1, .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL,
+			       .color_format = VK_FORMAT_R32G32B32A32_UINT, .color2_format = VK_FORMAT_R32G32B32A32_SFLOAT,
+			       .method_set = p->ids.set_layout};
+	return ids_make_pipelines(r, &src, pd, &s->ids_pipe, &s->ids_pipe_mask, "vrs: ids pipeline", err, err_size);
 }
 
 static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t err_size)

@@ -43,26 +43,20 @@ static int make_set(render *r, VkDescriptorSetLayout *layout, VkDescriptorSet *s
 	return TL_OK;
 }
 
-/* The opaque and MASK pipelines; multiview (view_mask 0b11): common/ids.vert.in with IDS_MULTIVIEW; patch tables:
- * with IDS_PATCHES. */
-static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t view_mask, bool patches,
-			 render_pipeline *pipe, render_pipeline *pipe_mask, char *err, size_t err_size)
+int ids_make_pipelines(render *r, const ids_pipe_src *src, render_pipe_desc pd, render_pipeline *pipe,
+		       render_pipeline *pipe_mask, const char *what, char *err, size_t err_size)
 {
 	uint32_t *vs = NULL, *fs = NULL, *fm = NULL;
 	size_t vn = 0, fn = 0, mn = 0;
-	char vdefs[128];
-	snprintf(vdefs, sizeof vdefs, "%s%s", view_mask ? "#extension GL_EXT_multiview : require\n#define IDS_MULTIVIEW 1\n" : "",
-		 patches ? "#define IDS_PATCHES 1\n" : "");
-	int rc = render_compile_defs(r, "common/ids.vert.in", vdefs, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
+	char mask[256];
+	snprintf(mask, sizeof mask, "%s%s", src->fs_defs, src->mask_def);
+	int rc = render_compile_defs(r, src->vs, src->vs_defs, SHC_STAGE_VERTEX, &vs, &vn, err, err_size);
 	if (!rc)
-		rc = render_compile_defs(r, "common/ids.frag.in", "", SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
+		rc = render_compile_defs(r, src->fs, src->fs_defs, SHC_STAGE_FRAGMENT, &fs, &fn, err, err_size);
 	if (!rc)
-		rc = render_compile_defs(r, "common/ids.frag.in", "#define IDS_ALPHA_MASK 1\n", SHC_STAGE_FRAGMENT, &fm, &mn,
-					 err, err_size);
+		rc = render_compile_defs(r, src->fs, mask, SHC_STAGE_FRAGMENT, &fm, &mn, err, err_size);
 	if (!rc) {
-		render_pipe_desc pd = {.vs = vs, .vs_size = vn, .fs = fs, .fs_size = fn, .color = 1, .depth_write = 1,
-				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
-				       .method_set = set_layout, .view_mask = view_mask};
+		pd.vs = vs, pd.vs_size = vn, pd.fs = fs, pd.fs_size = fn;
 		VkResult res = render_make_graphics(r, &pd, pipe);
 		if (!res) {
 			pd.fs = fm;
@@ -70,12 +64,26 @@ static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t v
 			res = render_make_graphics(r, &pd, pipe_mask);
 		}
 		if (res)
-			rc = render_vk_error(err, err_size, "ids: visibility pipeline", res);
+			rc = render_vk_error(err, err_size, what, res);
 	}
 	free(vs);
 	free(fs);
 	free(fm);
 	return rc;
+}
+
+/* The ids pass's own pipelines; multiview (view_mask 0b11): common/ids.vert.in with IDS_MULTIVIEW; patch tables:
+ * with IDS_PATCHES. */
+static int make_pipeline(render *r, VkDescriptorSetLayout set_layout, uint32_t view_mask, bool patches,
+			 render_pipeline *pipe, render_pipeline *pipe_mask, char *err, size_t err_size)
+{
+	char vdefs[128];
+	snprintf(vdefs, sizeof vdefs, "%s%s", view_mask ? "#extension GL_EXT_multiview : require\n#define IDS_MULTIVIEW 1\n" : "",
+		 patches ? "#define IDS_PATCHES 1\n" : "");
+	ids_pipe_src src = {"common/ids.vert.in", vdefs, "common/ids.frag.in", "", "#define IDS_ALPHA_MASK 1\n"};
+	render_pipe_desc pd = {.color = 1, .depth_write = 1, .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL,
+			       .color_format = VK_FORMAT_R32G32B32A32_UINT, .method_set = set_layout, .view_mask = view_mask};
+	return ids_make_pipelines(r, &src, pd, pipe, pipe_mask, "ids: visibility pipeline", err, err_size);
 }
 
 int ids_pass_init(render *r, ids_pass *p, const ids_patches *pt, char *err, size_t err_size)

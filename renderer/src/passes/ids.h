@@ -70,6 +70,16 @@ void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const
 		      const render_pipeline *pipe_mask, uint32_t slot, const uint32_t aux23[2]);
 void ids_end(VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count);
 
+/* The opaque and MASK pipelines of a pass drawn like this one (ids_draw_objects; the ids pass itself, the VRS
+ * methods' ids pass, the reprojecting visibility pass): the vertex template VS with VS_DEFS, the fragment template FS
+ * with FS_DEFS and, for the alpha-tested MASK objects, with FS_DEFS and MASK_DEF; PD gives the rest (attachments,
+ * depth, set 1; its shader fields are filled here). WHAT names the pipeline in the error message. */
+typedef struct ids_pipe_src {
+	const char *vs, *vs_defs, *fs, *fs_defs, *mask_def;
+} ids_pipe_src;
+int ids_make_pipelines(render *r, const ids_pipe_src *src, render_pipe_desc pd, render_pipeline *pipe,
+		       render_pipeline *pipe_mask, const char *what, char *err, size_t err_size);
+
 /* Multiview: creates the 2-layer images, the set and the pipelines, and makes eyes[v] (uninitialised) the view of
  * layer v (bound like an ids_pass's image; ids_pass_finish frees only the view, ids_multiview_finish the rest). Needs
  * the device's multiview feature and 2 views. */
