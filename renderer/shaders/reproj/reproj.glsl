@@ -19,7 +19,7 @@ layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
 layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
-// binding 4: the HDR target, binding 9: the pre-pass record (both only in reproj/reproject.comp.in)
+// binding 4: none; binding 9: the pre-pass record (only in reproj/reproject.comp.in)
 layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
 layout(std430, set = 1, binding = 6) buffer Counters {
 	uint covered; // opaque/masked samples (the reproject pass runs once per visible sample)

@@ -6,12 +6,13 @@
  *              of the lookup (object, previous position, both view distances: reproj/prepass.frag.in; its
  *              vertex shader reproject.vert computes them per vertex, so no fragment reads a matrix)
  *   reproject  screen space (reproj/reproject.comp.in; issue 32.1, lever 3): from the record, C' and the
- *              provisional state into the next cache, C' to HDR (cleared to the sky first)
+ *              provisional state into the next cache (its colour cleared to the sky first)
  *   filter     tarc: G (the steady samples' gradients, read from the provisional state by
  *              reproj/max_down_state.comp) -> 8x8 max -> 9x9 max = F (passes/tas_filter.c, as the TFR analysis)
  *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
- *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading, the next cache
- *              (oracle: every sample, no stencil test)
+ *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading into the next cache only
+ *              (oracle: every sample, no stencil test); then the next cache colour, now the opaque frame, is
+ *              copied into the HDR target (record_to_hdr)
  *   truth      --truth: stencil EQUAL 0, counts reused samples more than T from the truth
  *   blend      glTF BLEND objects with the reference shading on top (excluded from the counters)
  *   display, readback
@@ -135,7 +136,7 @@ static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size
 	if (rc)
 		return rc;
 	if ((rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
-						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 1, 0, &s->shade,
+						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 0, 0, &s->shade,
 						err, err_size)))
 		return rc;
 	if (!s->v.oracle && (rc = render_make_template_pipeline(r, "reproj/mark.frag.in", defs, s->set_layout,
@@ -153,13 +154,15 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 	VkDevice d = r->dev->device;
 	VkResult res;
 	VkShaderStageFlags st = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	/* bindings 0-5 and 7-9 images, 6 the counters (reproj.glsl; 4 the HDR target, 9 the pre-pass record) */
-	VkDescriptorSetLayoutBinding b[10];
-	for (uint32_t i = 0; i < 10; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, i == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+	/* bindings 0-3, 5 and 7-9 images, 6 the counters (reproj.glsl; 9 the pre-pass record; no binding 4) */
+	static const uint32_t nums[9] = {0, 1, 2, 3, 5, 7, 8, 9, 6};
+	VkDescriptorSetLayoutBinding b[9];
+	for (uint32_t i = 0; i < 9; i++)
+		b[i] = (VkDescriptorSetLayoutBinding){nums[i], nums[i] == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+									   : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 						      1, st, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-					      .bindingCount = 10, .pBindings = b};
+					      .bindingCount = 9, .pBindings = b};
 	if ((res = vkCreateDescriptorSetLayout(d, &li, NULL, &s->set_layout)))
 		return render_vk_error(err, err_size, "reprojection cache: descriptor set layout", res);
 	VkDescriptorSetLayout layouts[2] = {s->set_layout, s->set_layout};
@@ -168,24 +171,24 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 	if ((res = vkAllocateDescriptorSets(d, &ai, s->sets)))
 		return render_vk_error(err, err_size, "reprojection cache: descriptor sets", res);
 	for (int p = 0; p < 2; p++) {
-		const vkdev_image *im[9] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
-					    &s->img[IMG_STATE0 + 1 - p], &r->hdr, &s->img[IMG_F],
+		const vkdev_image *im[8] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
+					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_F],
 					    &s->img[IMG_DISP0 + p], &s->img[IMG_DISP0 + 1 - p], &s->img[IMG_RECORD]};
-		VkDescriptorImageInfo ii[9];
-		VkWriteDescriptorSet w[10];
-		for (uint32_t i = 0; i < 9; i++) {
+		VkDescriptorImageInfo ii[8];
+		VkWriteDescriptorSet w[9];
+		for (uint32_t i = 0; i < 8; i++) {
 			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, im[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i + (i >= 6)] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-								 .dstSet = s->sets[p], .dstBinding = i + (i >= 6),
+			w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+								 .dstSet = s->sets[p], .dstBinding = nums[i],
 								 .descriptorCount = 1,
 								 .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 								 .pImageInfo = &ii[i]};
 		}
 		VkDescriptorBufferInfo bi = {s->counters.buffer, 0, VK_WHOLE_SIZE};
-		w[6] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
+		w[8] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
 					      .dstBinding = 6, .descriptorCount = 1,
 					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi};
-		vkUpdateDescriptorSets(d, 10, w, 0, NULL);
+		vkUpdateDescriptorSets(d, 9, w, 0, NULL);
 	}
 	return TL_OK;
 }
@@ -217,6 +220,8 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
 		if (i == IMG_RECORD)
 			use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+		if (i <= IMG_COLOUR1) /* copied into the HDR target (record_to_hdr) */
+			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, use, VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
@@ -297,17 +302,14 @@ static void record_prepass(render *r, reproj_state *s, VkCommandBuffer cmd, uint
 	vkCmdEndRendering(cmd);
 }
 
-/* The screen-space reproject pass (reproj/reproject.comp.in): the HDR target cleared to the sky (what the scene
- * passes clear it to) in GENERAL layout, C' stored into it per covered pixel, then back to the attachment layout. */
+/* The screen-space reproject pass (reproj/reproject.comp.in): the next cache colour cleared to the sky (what the
+ * scene passes clear the HDR target to, coverage 0), C' stored into it per covered pixel. */
 static void record_reproject(render *r, reproj_state *s, VkCommandBuffer cmd, uint32_t slot)
 {
 	const scene *sc = r->scene;
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
 	VkClearColorValue sky = {{sc->sky[0] * sc->exposure, sc->sky[1] * sc->exposure, sc->sky[2] * sc->exposure, 0.0f}};
-	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
-			    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT,
-			    VK_ACCESS_2_TRANSFER_WRITE_BIT);
-	vkCmdClearColorImage(cmd, r->hdr.image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
+	vkCmdClearColorImage(cmd, s->img[IMG_COLOUR0 + 1 - s->parity].image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
 	barrier_all(cmd);
 	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->reproject);
 	VkDescriptorSet sets[2] = {r->scene_set, s->sets[s->parity]};
@@ -315,11 +317,33 @@ static void record_reproject(render *r, reproj_state *s, VkCommandBuffer cmd, ui
 	gpu_push pc = {slot, 0, (uint32_t)sc->object_count, 0, {r->push_aux[0], r->push_aux[1], r->push_aux[2], r->push_aux[3]}};
 	vkCmdPushConstants(cmd, s->reproject_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
 	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
-	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
-			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-			    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 	barrier_all(cmd);
+}
+
+/* After the shading pass the next cache colour is the opaque frame (C' or the new shading per covered pixel, the sky
+ * elsewhere): copied into the HDR target, for the BLEND objects and the display. The shading pass writes the
+ * cache only, so a reshaded sample is stored once, not twice (issue 32.1, lever 3). */
+static void record_to_hdr(render *r, reproj_state *s, VkCommandBuffer cmd)
+{
+	VkImageCopy c = {.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+			 .dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+			 .extent = {r->desc.width, r->desc.height, 1}};
+	vkdev_image *colour = &s->img[IMG_COLOUR0 + 1 - s->parity];
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+			    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0,
+			    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+	vkdev_barrier_image(cmd, colour, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+			    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_GRAPHICS_BIT,
+			    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+	vkCmdCopyImage(cmd, colour->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, r->hdr.image,
+		       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &c);
+	vkdev_barrier_image(cmd, colour, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+			    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+			    VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 }
 
 void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
@@ -357,9 +381,9 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	}
 	render_ts(r, cmd);
 	render_pass_scene(r, cmd, slot,
-			  &(render_scene_pass){.pipe = &s->shade, .set = set, .hdr = RENDER_HDR_LOAD,
-					       .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
+			  &(render_scene_pass){.pipe = &s->shade, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
 	barrier_all(cmd);
+	record_to_hdr(r, s, cmd);
 	render_ts(r, cmd);
 	if (s->truth.pipeline) {
 		render_pass_scene(r, cmd, slot,
