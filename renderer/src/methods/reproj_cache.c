@@ -2,7 +2,7 @@
  *
  * Frame t, in order (state slots t and t - 1, consecutive frames; a jump or the first frame starts over):
  *   shadow maps                                     (shared pass)
- *   pre-pass   depth LESS as the shared depth pre-pass, clears the stencil, and writes per sample the record
+ *   pre-pass   the shared pre-pass's depths (LESS_OR_EQUAL), clears the stencil, and writes per sample the record
  *              of the lookup (object, previous position, both view distances: reproj/prepass.frag.in; its
  *              vertex shader reproject.vert computes them per vertex, so no fragment reads a matrix)
  *   reproject  screen space (reproj/reproject.comp.in; issue 32.1, lever 3): from the record, C' and the
@@ -12,7 +12,7 @@
  *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
  *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading into the next cache only
  *              (oracle: every sample, no stencil test); then the next cache colour, now the opaque frame, is
- *              copied into the HDR target (record_to_hdr)
+ *              copied into the HDR target (copy_colour_to_hdr)
  *   truth      --truth: stencil EQUAL 0, counts reused samples more than T from the truth
  *   blend      glTF BLEND objects with the reference shading on top (excluded from the counters)
  *   display, readback
@@ -220,7 +220,7 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
 		if (i == IMG_RECORD)
 			use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-		if (i <= IMG_COLOUR1) /* copied into the HDR target (record_to_hdr) */
+		if (i <= IMG_COLOUR1) /* copied into the HDR target (copy_colour_to_hdr) */
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
@@ -323,7 +323,7 @@ static void record_reproject(render *r, reproj_state *s, VkCommandBuffer cmd, ui
 /* After the shading pass the next cache colour is the opaque frame (C' or the new shading per covered pixel, the sky
  * elsewhere): copied into the HDR target, for the BLEND objects and the display. The shading pass writes the
  * cache only, so a reshaded sample is stored once, not twice (issue 32.1, lever 3). */
-static void record_to_hdr(render *r, reproj_state *s, VkCommandBuffer cmd)
+static void copy_colour_to_hdr(render *r, reproj_state *s, VkCommandBuffer cmd)
 {
 	VkImageCopy c = {.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
 			 .dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
@@ -383,7 +383,7 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_pass_scene(r, cmd, slot,
 			  &(render_scene_pass){.pipe = &s->shade, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
 	barrier_all(cmd);
-	record_to_hdr(r, s, cmd);
+	copy_colour_to_hdr(r, s, cmd);
 	render_ts(r, cmd);
 	if (s->truth.pipeline) {
 		render_pass_scene(r, cmd, slot,
