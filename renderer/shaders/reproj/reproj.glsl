@@ -19,8 +19,7 @@ layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
 layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
-// binding 4: unused (was G, the gradients of steady pixels; tarc's filter now reads them from the state,
-// reproj/max_down_state.comp)
+// binding 4: none; binding 9: the pre-pass record (only in reproj/reproject.comp.in)
 layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
 layout(std430, set = 1, binding = 6) buffer Counters {
 	uint covered; // opaque/masked samples (the reproject pass runs once per visible sample)
@@ -90,26 +89,60 @@ bool cached_here(uvec4 rec, uint object, float dist)
 	return rec.x == object + 1u && abs(uintBitsToFloat(rec.y) - dist) <= 0.02 * dist;
 }
 
-// Cache lookup (TAS-METHODS section 1). Nearest: the pixel f falls in, one validity test. Bilinear: the four
-// taps around f - 0.5 with fractions quantised to 1/64 (a static view then gives weights exactly 0 and 1, so
-// reuse is bit-exact), each tap tested on its own (object and 2% view-distance match, `was_visible`),
-// invalid taps weighted 0 and the rest renormalised; the discrete state comes from the valid tap with the
-// largest weight (ties: the lowest tap). False: a cache miss.
-// prev_clip and dist: the surface point's clip position and view distance in the previous frame.
+// ---- The pre-pass record (issue 32.1, lever 3). The depth pre-pass of rrc/tarc (reproj/prepass.frag.in) writes,
+// for the sample it leaves visible, everything the lookup needs into one RGBA32UI attachment, so that the reprojection
+// runs in screen space (reproj/reproject.comp.in) instead of rasterising the scene a second time:
+//   x: bits 0..21 object + 1 (0: background), bits 22..31 bits 11..20 of the lookup position's y
+//   y: the view distance now (float bits; the state's y), z: the view distance in the previous frame (float bits)
+//   w: bits 0..20 the lookup position's x, bits 21..31 bits 0..10 of its y
+// The lookup position per axis (21 bits): NEAREST floor(f); bilinear (x0 + 1) * 64 + the fraction in 64ths, i.e.
+// exactly the quantities the lookup takes from f (TAS-METHODS section 1); all ones: no position (behind the eye or
+// outside the frame). reproj_cache.c bounds the object count (2^22 - 2) and the frame size (32766).
+const uint POS_NONE = 0x1FFFFFu;
+const uint OBJECT_BITS_MASK = 0x3FFFFFu;
+
+uvec4 prepass_record(uint object, vec4 prev_clip, float prev_dist, float cur_dist, ivec2 size)
+{
+	vec2 f;
+	uvec2 p = uvec2(POS_NONE);
+	if (reproject_f(prev_clip, size, f)) {
+#ifdef NEAREST
+		p = uvec2(ivec2(f));
+#else
+		vec2 g = f - 0.5;
+		vec2 x0 = floor(g);
+		vec2 fr = round((g - x0) * 64.0);
+		x0 += step(64.0, fr); // a fraction rounded up to 1 moves to the next tap with fraction 0
+		fr = fr - 64.0 * step(64.0, fr);
+		p = uvec2(ivec2(x0) + 1) * 64u + uvec2(fr);
+#endif
+	}
+	return uvec4((object + 1u) | (p.y >> 11) << 22, floatBitsToUint(cur_dist), floatBitsToUint(prev_dist),
+		     p.x | (p.y & 0x7FFu) << 21);
+}
+
+uint record_object(uvec4 m) { return (m.x & OBJECT_BITS_MASK) - 1u; } // m.x & OBJECT_BITS_MASK != 0: covered
+uvec2 record_position(uvec4 m) { return uvec2(m.w & POS_NONE, (m.w >> 21) | (m.x >> 22) << 11); }
+
+// Cache lookup (TAS-METHODS section 1) at the lookup position p of the pre-pass record. Nearest: the pixel f
+// falls in, one validity test. Bilinear: the four taps around f - 0.5 with fractions quantised to 1/64 (a static
+// view then gives weights exactly 0 and 1, so reuse is bit-exact), each tap tested on its own (object and 2%
+// view-distance match, `was_visible`), invalid taps weighted 0 and the rest renormalised; the discrete state comes
+// from the valid tap with the largest weight (ties: the lowest tap). False: a cache miss.
+// dist: the surface point's view distance in the previous frame.
 // KEEP_DISP: disp = the cached display values of the tap the discrete state comes from (one tap, not four: on
 // lavapipe every image load costs the same whatever its weight). Under a static view (weights 0 and 1) exactly
 // disp(C'); under motion the display values of the last shading the state travelled with, not of the blend C'.
-bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
+bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
 {
 	ivec2 size = imageSize(prev_state);
-	vec2 f;
 	colour = vec3(0.0);
 	disp = vec3(0.0);
 	state = uvec4(0u);
-	if (!reproject_f(prev_clip, size, f))
+	if (p.x == POS_NONE)
 		return false;
 #ifdef NEAREST
-	ivec2 q = ivec2(f);
+	ivec2 q = ivec2(p);
 	uvec4 rec = imageLoad(prev_state, q);
 	if (!cached_here(rec, object, dist))
 		return false;
@@ -120,17 +153,14 @@ bool cache_lookup(uint object, vec4 prev_clip, float dist, out vec3 colour, out 
 	state = rec;
 	return true;
 #else
-	vec2 g = f - 0.5;
-	vec2 x0 = floor(g);
-	vec2 fr = round((g - x0) * 64.0) / 64.0;
-	x0 += step(1.0, fr); // a fraction rounded up to 1 moves to the next tap with fraction 0
-	fr = fr - step(1.0, fr);
+	ivec2 x0 = ivec2(p >> 6u) - 1;
+	vec2 fr = vec2(p & 63u) / 64.0;
 	float wsum = 0.0, wbest = -1.0;
 	vec3 acc = vec3(0.0);
 	ivec2 qbest = ivec2(0);
 	for (int k = 0; k < 4; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);
-		ivec2 q = ivec2(x0) + o;
+		ivec2 q = x0 + o;
 		float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
 		if (w <= 0.0 || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
 			continue;

@@ -1,15 +1,18 @@
 /* reproj_cache.c — the reprojection cache of rrc and tarc (reproj_cache.h; TAS-METHODS sections 1-3, 8).
  *
  * Frame t, in order (state slots t and t - 1, consecutive frames; a jump or the first frame starts over):
- *   shadow maps, depth pre-pass                     (shared passes)
- *   reproject  scene geometry, depth EQUAL: C' and the provisional state into the next cache, C' to HDR;
- *              clears the stencil. Its vertex shader (reproject.vert) computes the previous clip
- *              position and both view-distance vectors per vertex, so its fragments read no matrix
+ *   shadow maps                                     (shared pass)
+ *   pre-pass   the shared pre-pass's depths (LESS_OR_EQUAL), clears the stencil, and writes per sample the record
+ *              of the lookup (object, previous position, both view distances: reproj/prepass.frag.in; its
+ *              vertex shader reproject.vert computes them per vertex, so no fragment reads a matrix)
+ *   reproject  screen space (reproj/reproject.comp.in; issue 32.1, lever 3): from the record, C' and the
+ *              provisional state into the next cache (its colour cleared to the sky first)
  *   filter     tarc: G (the steady samples' gradients, read from the provisional state by
  *              reproj/max_down_state.comp) -> 8x8 max -> 9x9 max = F (passes/tas_filter.c, as the TFR analysis)
  *   mark       full-screen: stencil = 1 where the sample is reshaded (discard elsewhere)
- *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading, the next cache
- *              (oracle: every sample, no stencil test)
+ *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading into the next cache only
+ *              (oracle: every sample, no stencil test); then the next cache colour, now the opaque frame, is
+ *              copied into the HDR target (copy_colour_to_hdr)
  *   truth      --truth: stencil EQUAL 0, counts reused samples more than T from the truth
  *   blend      glTF BLEND objects with the reference shading on top (excluded from the counters)
  *   display, readback
@@ -23,11 +26,15 @@
 
 #include "method_debug.h"
 #include "shaders/reproj/max_down_state_comp.h"
+#include "shaders/reproj/reproject_mask_vert.h"
 #include "shaders/reproj/reproject_vert.h"
 
 /* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP); one texel each for rrc and the oracle.
- * G: one texel (binding 4, unused: tarc's filter reads the gradients from the state, reproj/max_down_state.comp). */
-enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_G, IMG_L1, IMG_F, IMG_DISP0, IMG_DISP1, IMG_COUNT };
+ * RECORD: the pre-pass record (reproj.glsl prepass_record), a colour attachment of the pre-pass. */
+enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_RECORD, IMG_L1, IMG_F, IMG_DISP0, IMG_DISP1, IMG_COUNT };
+/* reproj.glsl prepass_record: 22 bits of object + 1, 21 bits per axis of the lookup position (< 64 * (size + 1)) */
+#define REPROJ_MAX_OBJECTS ((1u << 22) - 2u)
+#define REPROJ_MAX_SIZE 32766u
 
 typedef struct reproj_state {
 	reproj_variant v;
@@ -37,7 +44,9 @@ typedef struct reproj_state {
 	uint8_t *decision_codes;   /* frame_decision per pixel, unpacked from decision_buf */
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet sets[2]; /* sets[p]: read cache p, write cache 1 - p */
-	render_pipeline reproject, mark, shade, truth;
+	render_pipeline prepass, prepass_mask, mark, shade, truth;
+	VkPipelineLayout reproject_layout; /* set 0 the scene set, set 1 set_layout; compute push constants */
+	VkPipeline reproject;
 	tas_filter filter;
 	VkDescriptorSet filter_sets[2]; /* filter_sets[p]: reads cache state p (the one the frame writes) */
 	uint32_t parity;         /* cache `parity` holds the previous frame */
@@ -61,26 +70,73 @@ static const char *count_defines(VkPhysicalDevice pd)
 	}
 }
 
+/* The same for the screen-space reproject pass: there are no helper invocations in compute shaders. */
+static const char *count_defines_compute(VkPhysicalDevice pd)
+{
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
+	if (render_count_mode_of(pd) == RENDER_COUNT_ATOMIC || !(sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
+		return "";
+	return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";
+}
+
+/* The pre-pass pipelines: depth writes, LESS_OR_EQUAL (the same depths as the shared pre-pass's LESS, and the record
+ * of the last drawn of the nearest fragments, as the EQUAL pass it replaces left), the stencil attached (the pass
+ * clears it), the record as an RGBA32UI colour attachment; masked objects alpha-tested (MASK). */
+static int make_prepass(render *r, reproj_state *s, const char *defs, char *err, size_t err_size)
+{
+	for (int mask = 0; mask < 2; mask++) {
+		if (mask && !render_has_alpha_mode(r, SCENE_ALPHA_MASK))
+			break;
+		char d[224];
+		snprintf(d, sizeof d, "%s%s", defs, mask ? "#define MASK 1\n" : "");
+		uint32_t *spv = NULL;
+		size_t spv_size = 0;
+		int rc = render_compile_defs(r, "reproj/prepass.frag.in", d, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+		if (rc)
+			return rc;
+		render_pipe_desc pd = {.vs = mask ? reproject_mask_vert : reproject_vert,
+				       .vs_size = mask ? sizeof reproject_mask_vert : sizeof reproject_vert,
+				       .fs = spv, .fs_size = spv_size,
+				       .attributes = RENDER_ATTR_POSITION | (mask ? RENDER_ATTR_UV : 0u), .color = 1,
+				       .color_format = VK_FORMAT_R32G32B32A32_UINT, .depth_write = 1,
+				       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .stencil = RENDER_STENCIL_ATTACHED};
+		VkResult res = render_make_graphics(r, &pd, mask ? &s->prepass_mask : &s->prepass);
+		free(spv);
+		if (res)
+			return render_vk_error(err, err_size, "reproj/prepass.frag.in", res);
+	}
+	return TL_OK;
+}
+
+static int make_reproject(render *r, reproj_state *s, const char *defs, char *err, size_t err_size)
+{
+	VkDescriptorSetLayout layouts[2] = {r->scene_set_layout, s->set_layout};
+	VkPushConstantRange pcr = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu_push)};
+	VkPipelineLayoutCreateInfo pl = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 2,
+					 .pSetLayouts = layouts, .pushConstantRangeCount = 1, .pPushConstantRanges = &pcr};
+	VkResult res = vkCreatePipelineLayout(r->dev->device, &pl, NULL, &s->reproject_layout);
+	if (res)
+		return render_vk_error(err, err_size, "reproject pass: pipeline layout", res);
+	char d[224];
+	snprintf(d, sizeof d, "%s%s", defs, count_defines_compute(r->dev->physical));
+	return render_compute_defs(r, "reproj/reproject.comp.in", d, s->reproject_layout, &s->reproject, err, err_size);
+}
+
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
 {
-	char defs[192];
-	snprintf(defs, sizeof defs, "%s%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
-		 s->v.nearest ? "#define NEAREST 1\n" : "", count_defines(r->dev->physical));
-	/* reproject: its own vertex shader (the matrices per vertex, reproject.vert), position attribute only */
-	uint32_t *spv = NULL;
-	size_t spv_size = 0;
-	int rc = render_compile_defs(r, "reproj/reproject.frag.in", defs, SHC_STAGE_FRAGMENT, &spv, &spv_size, err, err_size);
+	char defs[192], vdefs[96];
+	snprintf(vdefs, sizeof vdefs, "%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
+		 s->v.nearest ? "#define NEAREST 1\n" : "");
+	snprintf(defs, sizeof defs, "%s%s", vdefs, count_defines(r->dev->physical));
+	int rc = make_prepass(r, s, vdefs, err, err_size);
+	if (!rc)
+		rc = make_reproject(r, s, vdefs, err, err_size);
 	if (rc)
 		return rc;
-	render_pipe_desc pd = {.vs = reproject_vert, .vs_size = sizeof reproject_vert, .fs = spv, .fs_size = spv_size,
-			       .attributes = RENDER_ATTR_POSITION, .color = 1, .depth_op = VK_COMPARE_OP_EQUAL,
-			       .stencil = RENDER_STENCIL_ATTACHED, .method_set = s->set_layout};
-	VkResult res = render_make_graphics(r, &pd, &s->reproject);
-	free(spv);
-	if (res)
-		return render_vk_error(err, err_size, "reproj/reproject.frag.in", res);
 	if ((rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
-						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 1, 0, &s->shade,
+						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 0, 0, &s->shade,
 						err, err_size)))
 		return rc;
 	if (!s->v.oracle && (rc = render_make_template_pipeline(r, "reproj/mark.frag.in", defs, s->set_layout,
@@ -98,10 +154,12 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 	VkDevice d = r->dev->device;
 	VkResult res;
 	VkShaderStageFlags st = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-	/* bindings 0-5 and 7-8 images, 6 the counters (reproj.glsl) */
+	/* bindings 0-3, 5 and 7-9 images, 6 the counters (reproj.glsl; 9 the pre-pass record; no binding 4) */
+	static const uint32_t nums[9] = {0, 1, 2, 3, 5, 7, 8, 9, 6};
 	VkDescriptorSetLayoutBinding b[9];
 	for (uint32_t i = 0; i < 9; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, i == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+		b[i] = (VkDescriptorSetLayoutBinding){nums[i], nums[i] == 6 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+									   : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 						      1, st, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = 9, .pBindings = b};
@@ -114,20 +172,20 @@ static int make_sets(render *r, reproj_state *s, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "reprojection cache: descriptor sets", res);
 	for (int p = 0; p < 2; p++) {
 		const vkdev_image *im[8] = {&s->img[IMG_COLOUR0 + p], &s->img[IMG_STATE0 + p], &s->img[IMG_COLOUR0 + 1 - p],
-					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_G], &s->img[IMG_F],
-					    &s->img[IMG_DISP0 + p], &s->img[IMG_DISP0 + 1 - p]};
+					    &s->img[IMG_STATE0 + 1 - p], &s->img[IMG_F],
+					    &s->img[IMG_DISP0 + p], &s->img[IMG_DISP0 + 1 - p], &s->img[IMG_RECORD]};
 		VkDescriptorImageInfo ii[8];
 		VkWriteDescriptorSet w[9];
 		for (uint32_t i = 0; i < 8; i++) {
 			ii[i] = (VkDescriptorImageInfo){VK_NULL_HANDLE, im[i]->view, VK_IMAGE_LAYOUT_GENERAL};
-			w[i + (i >= 6)] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-								 .dstSet = s->sets[p], .dstBinding = i + (i >= 6),
+			w[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+								 .dstSet = s->sets[p], .dstBinding = nums[i],
 								 .descriptorCount = 1,
 								 .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 								 .pImageInfo = &ii[i]};
 		}
 		VkDescriptorBufferInfo bi = {s->counters.buffer, 0, VK_WHOLE_SIZE};
-		w[6] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
+		w[8] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = s->sets[p],
 					      .dstBinding = 6, .descriptorCount = 1,
 					      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &bi};
 		vkUpdateDescriptorSets(d, 9, w, 0, NULL);
@@ -144,18 +202,26 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 	s->v = *v;
 	s->last_frame = -1;
 	uint32_t w = r->desc.width, h = r->desc.height, lw = (w + 7) / 8, lh = (h + 7) / 8;
+	if (r->scene->object_count > REPROJ_MAX_OBJECTS || w > REPROJ_MAX_SIZE || h > REPROJ_MAX_SIZE)
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
+				"rrc/tarc take at most %u objects and %u pixels a side (the pre-pass record packs both)",
+				REPROJ_MAX_OBJECTS, REPROJ_MAX_SIZE);
 	static const char *const names[IMG_COUNT] = {"cache colour 0", "cache colour 1", "cache state 0", "cache state 1",
-						      "tarc G", "tarc L1", "tarc F", "tarc disp 0", "tarc disp 1"};
+						      "pre-pass record", "tarc L1", "tarc F", "tarc disp 0", "tarc disp 1"};
 	VkResult res;
 	for (int i = 0; i < IMG_COUNT; i++) {
-		int low = i == IMG_L1 || i == IMG_F, arr = i >= IMG_G && i <= IMG_F, disp = i >= IMG_DISP0;
+		int low = i == IMG_L1 || i == IMG_F, arr = low, disp = i >= IMG_DISP0;
 		VkFormat f = i <= IMG_COLOUR1 ? VK_FORMAT_R16G16B16A16_SFLOAT
-			     : i <= IMG_STATE1 ? VK_FORMAT_R32G32B32A32_UINT
+			     : i <= IMG_RECORD ? VK_FORMAT_R32G32B32A32_UINT
 					       : VK_FORMAT_R32G32B32A32_SFLOAT;
-		/* rrc never reads G or F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
-		bool tiny = i == IMG_G || (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
+		/* rrc never reads F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
+		bool tiny = (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
 		uint32_t iw = tiny ? 1 : low ? lw : w, ih = tiny ? 1 : low ? lh : h;
 		VkImageUsageFlags use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+		if (i == IMG_RECORD)
+			use = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+		if (i <= IMG_COLOUR1) /* copied into the HDR target (copy_colour_to_hdr) */
+			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if (r->desc.decisions && (i == IMG_STATE0 || i == IMG_STATE1))
 			use |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 		if ((res = vkdev_image_create(r->dev, iw, ih, 1, 1, f, use, VK_IMAGE_ASPECT_COLOR_BIT, arr, names[i], &s->img[i])))
@@ -209,31 +275,98 @@ static void barrier_all(VkCommandBuffer cmd)
 	render_barrier(cmd, st, VK_ACCESS_2_MEMORY_WRITE_BIT, st, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 }
 
+/* The depth pre-pass with the record (make_prepass): depth and stencil cleared (1, 0), the record cleared to 0
+ * (background); opaque then masked objects in scene order, culled per material, as passes/depth.c draws them. */
+static void record_prepass(render *r, reproj_state *s, VkCommandBuffer cmd, uint32_t slot)
+{
+	render_depth_discard(r, cmd);
+	VkRenderingAttachmentInfo ca = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+					.imageView = s->img[IMG_RECORD].view, .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
+					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE};
+	VkRenderingAttachmentInfo da = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO, .imageView = r->depth.view,
+					.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+					.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR, .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+					.clearValue = {.depthStencil = {1.0f, 0}}};
+	VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
+			      .renderArea = {{0, 0}, {r->desc.width, r->desc.height}},
+			      .layerCount = 1, .colorAttachmentCount = 1, .pColorAttachments = &ca,
+			      .pDepthAttachment = &da, .pStencilAttachment = &da};
+	vkCmdBeginRendering(cmd, &ri);
+	render_set_viewport(cmd, r->desc.width, r->desc.height);
+	render_bind_scene(r, cmd, &s->prepass);
+	render_draw_objects(r, cmd, &s->prepass, slot, 0, RENDER_OPAQUE_BIT, NULL, 1);
+	if (s->prepass_mask.pipeline) {
+		render_bind_scene(r, cmd, &s->prepass_mask);
+		render_draw_objects(r, cmd, &s->prepass_mask, slot, 0, RENDER_MASK_BIT, NULL, 1);
+	}
+	vkCmdEndRendering(cmd);
+}
+
+/* The screen-space reproject pass (reproj/reproject.comp.in): the next cache colour cleared to the sky (what the
+ * scene passes clear the HDR target to, coverage 0), C' stored into it per covered pixel. */
+static void record_reproject(render *r, reproj_state *s, VkCommandBuffer cmd, uint32_t slot)
+{
+	const scene *sc = r->scene;
+	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+	VkClearColorValue sky = {{sc->sky[0] * sc->exposure, sc->sky[1] * sc->exposure, sc->sky[2] * sc->exposure, 0.0f}};
+	vkCmdClearColorImage(cmd, s->img[IMG_COLOUR0 + 1 - s->parity].image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
+	barrier_all(cmd);
+	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->reproject);
+	VkDescriptorSet sets[2] = {r->scene_set, s->sets[s->parity]};
+	vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->reproject_layout, 0, 2, sets, 0, NULL);
+	gpu_push pc = {slot, 0, (uint32_t)sc->object_count, 0, {r->push_aux[0], r->push_aux[1], r->push_aux[2], r->push_aux[3]}};
+	vkCmdPushConstants(cmd, s->reproject_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+	vkCmdDispatch(cmd, (r->desc.width + 7) / 8, (r->desc.height + 7) / 8, 1);
+	barrier_all(cmd);
+}
+
+/* After the shading pass the next cache colour is the opaque frame (C' or the new shading per covered pixel, the sky
+ * elsewhere): copied into the HDR target, for the BLEND objects and the display. The shading pass writes the
+ * cache only, so a reshaded sample is stored once, not twice (issue 32.1, lever 3). */
+static void copy_colour_to_hdr(render *r, reproj_state *s, VkCommandBuffer cmd)
+{
+	VkImageCopy c = {.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+			 .dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+			 .extent = {r->desc.width, r->desc.height, 1}};
+	vkdev_image *colour = &s->img[IMG_COLOUR0 + 1 - s->parity];
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+			    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0,
+			    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+	vkdev_barrier_image(cmd, colour, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+			    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_GRAPHICS_BIT,
+			    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+	vkCmdCopyImage(cmd, colour->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, r->hdr.image,
+		       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &c);
+	vkdev_barrier_image(cmd, colour, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+			    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+			    VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+	vkdev_barrier_image(cmd, &r->hdr, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+			    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+			    VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+			    VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+}
+
 void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 {
 	reproj_state *s = state_of(r);
 	uint32_t slot = frame & 1u, next = 1 - s->parity;
 	VkDescriptorSet set = s->sets[s->parity];
-	VkClearColorValue zero = {{0}};
-	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
 	vkCmdFillBuffer(cmd, s->counters.buffer, 0, VK_WHOLE_SIZE, 0);
-	vkCmdClearColorImage(cmd, s->img[IMG_STATE0 + next].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
 	barrier_all(cmd);
 	float T = s->v.threshold;
 	memcpy(&r->push_aux[3], &T, sizeof T);
 	r->push_aux[0] = 1 - slot;
 	r->push_aux[1] = (s->have_prev ? 1u : 0u) | (s->v.force ? 2u : 0u) | (s->v.period & 0xFFu) << 8 | s->v.max_age << 16;
-	r->push_aux[2] = frame;
 
 	render_ts(r, cmd);
 	render_pass_shadows(r, cmd, slot);
 	render_ts(r, cmd);
-	render_pass_depth(r, cmd, slot);
-	render_ts(r, cmd);
-	render_pass_scene(r, cmd, slot,
-			  &(render_scene_pass){.pipe = &s->reproject, .set = set, .hdr = RENDER_HDR_CLEAR,
-					       .stencil = RENDER_STENCIL_PASS_CLEAR});
+	r->push_aux[2] = r->desc.width | r->desc.height << 16; /* prepass.frag.in */
+	record_prepass(r, s, cmd, slot);
+	r->push_aux[2] = frame;
 	barrier_all(cmd);
+	render_ts(r, cmd);
+	record_reproject(r, s, cmd, slot);
 	render_ts(r, cmd);
 	if (s->v.tarc && !s->v.oracle) {
 		tas_filter_record(&s->filter, cmd, s->filter_sets[next], r->desc.width, r->desc.height, 1);
@@ -248,9 +381,9 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	}
 	render_ts(r, cmd);
 	render_pass_scene(r, cmd, slot,
-			  &(render_scene_pass){.pipe = &s->shade, .set = set, .hdr = RENDER_HDR_LOAD,
-					       .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
+			  &(render_scene_pass){.pipe = &s->shade, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
 	barrier_all(cmd);
+	copy_colour_to_hdr(r, s, cmd);
 	render_ts(r, cmd);
 	if (s->truth.pipeline) {
 		render_pass_scene(r, cmd, slot,
@@ -290,9 +423,12 @@ void reproj_collect(render *r, frame_stats *st)
 {
 	reproj_state *s = state_of(r);
 	const uint32_t *c = s->counters.mapped;
-	/* covered: opaque and masked samples; BLEND-only coverage is excluded from every counter (TAS-METHODS 0) */
+	/* covered: opaque and masked samples, one per pixel (the pre-pass record); BLEND-only coverage is excluded from
+	 * every counter (TAS-METHODS 0). Where two surfaces lie at exactly the same depth the shading pass (depth EQUAL,
+	 * as ref's) shades and counts both fragments, so covered - shaded is one low per such pixel reshaded: never
+	 * below 0 (frame 0 shades everything). */
 	st->shaded_samples = c[1];
-	st->reused_samples = (int64_t)c[0] - (int64_t)c[1];
+	st->reused_samples = c[0] > c[1] ? (int64_t)c[0] - (int64_t)c[1] : 0;
 	st->visible_units = st->visible_samples;
 	st->shaded_units = c[1];
 	st->new_units = c[2];
@@ -325,9 +461,13 @@ void reproj_finish(render *r)
 		return;
 	vkdev_buffer_destroy(r->dev, &s->decision_buf);
 	free(s->decision_codes);
-	render_pipeline *pipes[4] = {&s->reproject, &s->mark, &s->shade, &s->truth};
-	for (int i = 0; i < 4; i++)
+	render_pipeline *pipes[5] = {&s->prepass, &s->prepass_mask, &s->mark, &s->shade, &s->truth};
+	for (int i = 0; i < 5; i++)
 		render_pipeline_destroy(r, pipes[i]);
+	if (s->reproject)
+		vkDestroyPipeline(r->dev->device, s->reproject, NULL);
+	if (s->reproject_layout)
+		vkDestroyPipelineLayout(r->dev->device, s->reproject_layout, NULL);
 	tas_filter_finish(r, &s->filter);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(r->dev->device, s->set_layout, NULL);
