@@ -29,6 +29,26 @@ const uint VBUF_TILE = 16u;
 
 #include "vbuf/plane.glsl"
 
+#ifdef VBUF_ADS_DISPLAY
+// ads (shade.comp.in with ADS, ads_select.comp.in; after the OCIO display transform): the display code values (0..255)
+// of each covered pixel's value in svals, stored once where the value is made - by the shade pass for a shaded pixel,
+// by the select for an interpolated one - and read by the later selects' variance of a candidate's neighbours,
+// instead of transforming four neighbours per candidate in each of the five rounds. They are computed from the value
+// read back from svals (its half rounding, as the neighbours' svals were read before), in RGBA32F (exact).
+layout(set = 1, binding = 9, rgba32f) uniform image2D sdisp;
+
+vec3 vbuf_display_cv(vec3 c)
+{
+	return clamp(ocio_display(vec4(c, 1.0)).rgb, 0.0, 1.0) * 255.0;
+}
+
+// After svals[p] is written by this invocation (its own write is visible to its read).
+void vbuf_store_display(ivec2 p)
+{
+	imageStore(sdisp, p, vec4(vbuf_display_cv(imageLoad(svals, p).rgb), 0.0));
+}
+#endif
+
 // Barycentrics w of the sample at q (pixels) of footprint r on the triangle A, B, C of `object` at `slot`, and its
 // texture gradients: the differences of uv between the centres of the coarse pixels of its 2x2 coarse quad, in x
 // and y from the quad's first one (as the rasterizer's quad derivatives at this rate, so vref's texture LOD is

@@ -243,7 +243,10 @@ static void vrs_rate_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer
 		aux[3] = gx | gy << 16;
 	}
 	bind(r, p, s, cmd, s->rate, aux);
-	vkCmdDispatch(cmd, p->tiles_x, p->tiles_y, 1);
+	if (s->kind == VRS_TAAS) /* one invocation per tile, eight a workgroup (rate.comp.in taas_tile_sum) */
+		vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 7) / 8, 1, 1);
+	else /* one 16x16 workgroup per tile */
+		vkCmdDispatch(cmd, p->tiles_x, p->tiles_y, 1);
 	vbuf_barrier(cmd);
 	bind(r, p, s, cmd, s->finalize, aux);
 	vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 63) / 64, 1, 1);

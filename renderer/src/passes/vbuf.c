@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { VBUF_BINDINGS = 9 };
+enum { VBUF_BINDINGS = 10 };
 static bool is_image(uint32_t i) { return i >= 6; }
 
 static int make_set(render *r, vbuf_pass *v, char *err, size_t err_size)
@@ -27,7 +27,9 @@ static int make_set(render *r, vbuf_pass *v, char *err, size_t err_size)
 	if ((res = vkAllocateDescriptorSets(d, &ai, &v->set)))
 		return render_vk_error(err, err_size, "vbuf: descriptor set", res);
 	const vkdev_buffer *bufs[VBUF_BINDINGS] = {&r->vertices, &r->indices, &v->objinfo, &v->list, &v->counters, &v->rates};
-	const vkdev_image *imgs[VBUF_BINDINGS] = {[6] = &v->ids.image, [7] = &v->svals, [8] = &r->hdr};
+	/* binding 9, the display values, is ads's alone (the other passes do not declare it: svals stands in) */
+	const vkdev_image *imgs[VBUF_BINDINGS] = {[6] = &v->ids.image, [7] = &v->svals, [8] = &r->hdr,
+						  [9] = v->ads ? &v->sdisp : &v->svals};
 	vkdev_write_storage_set(d, v->set, VBUF_BINDINGS, bufs, imgs);
 	return TL_OK;
 }
@@ -80,6 +82,9 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 					  false, "vbuf samples", &v->svals);
 	if (res)
 		return render_vk_error(err, err_size, "vbuf samples image", res);
+	if (ads && (res = vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT,
+					     VK_IMAGE_ASPECT_COLOR_BIT, false, "vbuf display values", &v->sdisp)))
+		return render_vk_error(err, err_size, "vbuf display values image", res);
 	int rc = ids_pass_init(r, &v->ids, NULL, err, err_size);
 	if (!rc)
 		rc = make_set(r, v, err, err_size);
@@ -114,6 +119,11 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 	vkdev_barrier_image(cmd, &v->svals, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 			    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 	vkCmdClearColorImage(cmd, v->svals.image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+	if (ads) { /* written before it is read in every frame (vbuf.glsl): GENERAL only */
+		vkdev_barrier_image(cmd, &v->sdisp, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+				    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+	}
 	vbuf_barrier(cmd);
 	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
 		return render_vk_error(err, err_size, "vbuf setup", res);
@@ -135,6 +145,7 @@ void vbuf_finish(render *r, vbuf_pass *v)
 	for (int i = 0; i < 4; i++)
 		vkdev_buffer_destroy(r->dev, b[i]);
 	vkdev_image_destroy(r->dev, &v->svals);
+	vkdev_image_destroy(r->dev, &v->sdisp);
 	ids_pass_finish(r, &v->ids);
 	memset(v, 0, sizeof *v);
 }
