@@ -460,10 +460,11 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
-	uint32_t abits, ebits;
+	uint32_t abits, ebits, bbits;
 	memcpy(&abits, &s->v.alpha, 4);
 	memcpy(&ebits, &s->v.bound, 4);
-	uint32_t aux[4] = {k, abits, ebits, (s->have_cache ? 1u : 0u) | s->v.buffers << 1};
+	memcpy(&bbits, &s->v.blur_bound, 4);
+	uint32_t aux[4] = {bbits, abits, ebits, (s->have_cache ? 1u : 0u) | s->v.buffers << 1 | k << 4};
 	bind(r, s, cmd, s->amss, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
