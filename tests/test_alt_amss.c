@@ -14,13 +14,17 @@
  *      history, refreshed every 4th frame, lags the moving shadow by ~7 frames and the difference grows frame by
  *      frame (README "Temporal reuse alternatives"; printed per frame);
  *  M4  pan at 0.25 px per frame (half a subsample: the tent's largest blur, v (1 - v) = 1/4 per resampling) over a
- *      fine checker (tests/data/amss_blur.json, checks of 1.5 px, texels larger than a subsample so that the
+ *      fine checker (tests/data/amss_blur.json, checks of 2 px, texels larger than a subsample so that the
  *      texture LOD does not differ between amss and ssaa2), the signal-change bound off to isolate the blur: without
  *      the resampling-blur bound (--blur-bound 0) the repeatedly resampled history blurs and the mean max-RGB
  *      difference to `ref --ssaa 2` grows to more than twice that of frames 2-3 (the buffers filled, little
  *      history yet); with the default bound (0.25 px) the mean over frames 12-23 stays more than 15 % below the
- *      unbounded one (measured 15.9 vs 19.9 at 48 x 32: the floor left is the blur of the quadrants not due, README
- *      "Temporal reuse alternatives"); printed per frame;
+ *      unbounded one (the floor left is the blur of the quadrants not due, README "Temporal reuse
+ *      alternatives"); printed per frame;
+ *  M5  moderate / run at 64 x 36, frames 0-23: with the age limit (default 3) the quadrants not due that missed their
+ *      own turn show the new sample instead of a value carried over for many frames; the mean max-RGB difference
+ *      to `ref --ssaa 2` over frames 12-23 is more than 10 % below that with --age-limit 0, and frames 20-23 are
+ *      below frames 4-7 with the limit and above them without (the drift; printed per frame);
  *  --buffers 1 and --alpha 1: every frame is the jittered sample alone (no history). */
 #include <math.h>
 #include <stdio.h>
@@ -202,6 +206,40 @@ static void test_blur_bound(void **state)
 	vkdev_destroy(&dev);
 }
 
+static void test_age_limit(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	enum { W = 64, H = 36, F = 24, A = 12 };
+	scene *s = tu_load_scene("scenes/moderate.json");
+	int cam = tu_camera_index(s, "run");
+	tu_clip ss = tu_render_clip(dev, s, cam, "ref-ssaa2", NULL, NULL, W, H, F, false);
+	tu_clip a = tu_render_clip(dev, s, cam, "amss", NULL, NULL, W, H, F, false);
+	const char *const off[] = {"age-limit=0", NULL};
+	tu_clip a0 = tu_render_clip(dev, s, cam, "amss", off, NULL, W, H, F, false);
+	double ma = 0, m0 = 0, ea = 0, e0 = 0, la = 0, l0 = 0;
+	for (uint32_t f = 0; f < F; f++) {
+		double da = mean_diff(&a, &ss, f), d0 = mean_diff(&a0, &ss, f);
+		printf("M5 frame %2u: mean max-RGB vs ref-ssaa2: amss %.3f, --age-limit 0 %.3f\n", f, da, d0);
+		if (f >= 4 && f < 8)
+			ea += da / 4, e0 += d0 / 4;
+		if (f >= F - 4)
+			la += da / 4, l0 += d0 / 4;
+		if (f >= A)
+			ma += da / (F - A), m0 += d0 / (F - A);
+	}
+	printf("M5 frames %u-%u: amss %.3f, --age-limit 0 %.3f; frames 4-7 -> %u-%u: %.3f -> %.3f, %.3f -> %.3f\n", A,
+	       F - 1, ma, m0, F - 4, F - 1, ea, la, e0, l0);
+	assert_true(ma < 0.9 * m0);
+	assert_true(la < ea);
+	assert_true(l0 > e0);
+	tu_clip *all[] = {&ss, &a, &a0};
+	for (size_t i = 0; i < 3; i++)
+		tu_clip_free(all[i]);
+	scene_destroy(&s);
+	vkdev_destroy(&dev);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -209,6 +247,7 @@ int main(void)
 		cmocka_unit_test(test_pan),
 		cmocka_unit_test(test_moving_shadow),
 		cmocka_unit_test(test_blur_bound),
+		cmocka_unit_test(test_age_limit),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
