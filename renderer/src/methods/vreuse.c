@@ -24,7 +24,7 @@ typedef struct vreuse_state {
 	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
 	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
-	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R8_UINT, beside sub[]) */
+	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R32_UINT) */
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
 	render_pipeline vis_pipe, vis_pipe_mask;
 	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
@@ -146,7 +146,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 						 VK_IMAGE_ASPECT_COLOR_BIT, false, "amss sub-pixel buffer", &s->sub[i]);
 		if (r2)
 			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
-		r2 = vkdev_image_create(r->dev, amss ? sw : 1, amss ? sh : 1, 1, 1, VK_FORMAT_R8_UINT,
+		r2 = vkdev_image_create(r->dev, amss ? sw : 1, amss ? sh : 1, 1, 1, VK_FORMAT_R32_UINT,
 					VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
 					false, "amss sub-pixel age", &s->age[i]);
 		if (r2)
