@@ -24,6 +24,9 @@ layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 // the cache of the next frame: rrc variants, the other of two cache images (swapped per frame, so that decide can
 // write it while its lookups read cache_rec); the other methods, cache_rec itself
 layout(set = 2, binding = 8, rgba32ui) uniform writeonly uimage2D cache_next;
+// amss: frames since each subsample of sub_prev / sub_next took its own sample (amss.comp.in)
+layout(set = 2, binding = 9, r32ui) uniform readonly uimage2D age_prev;
+layout(set = 2, binding = 10, r32ui) uniform writeonly uimage2D age_next;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 

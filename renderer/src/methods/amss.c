@@ -5,8 +5,13 @@
  * of one subsample's radius over the previous frame's subsamples); the output is the quadrant mean, so a static view
  * converges to `ref --ssaa 2` (75 % fewer shadings per frame). `--change-bound E`: a signal change (the smoothed
  * residual of a quadrant's sample against its own history) raises the new sample's weight as YNS09 bound alpha, in
- * every quadrant, so that moving lights and shadows on a still view do not drift from ssaa2 (amss.comp.in). Shaded
- * on the compacted sample path (vreuse.h). */
+ * every quadrant, so that moving lights and shadows on a still view do not drift from ssaa2 (amss.comp.in).
+ * `--blur-bound B` (default 0.25 px): the blur that each frame's bilinear resampling adds to the history (variance
+ * v (1 - v) per resampling at fractional offset v, [S] sec. 4.2) summed over eq. 2's weights is kept within B by a
+ * lower bound on the updated value's alpha (YNS09's velocity bound, amss.comp.in). `--age-limit L` (default 3): a
+ * quadrant not due whose value has gone more than L frames without its own sample (carried over by the tent) is
+ * dropped for the new sample, as YNS09's buffers hold nothing older than 4 frames. Shaded on the compacted sample
+ * path (vreuse.h). */
 #include "vreuse.h"
 
 #include <stddef.h>
@@ -15,6 +20,8 @@ typedef struct amss_options {
 	uint32_t buffers;
 	float alpha;
 	float bound;
+	float blur_bound;
+	uint32_t age_limit;
 } amss_options;
 
 static const uint32_t buffer_counts[] = {1, 4, 0};
@@ -29,13 +36,22 @@ static const method_option amss_option_table[] = {
 						 "sample against its own history, in x/(1+x)) above E raises the weight of "
 						 "the new sample to 1 - E/R, in every quadrant (YNS09's bound on alpha; 0: off)",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(amss_options, bound), .def = 0.01, .min = 0, .max = 1},
+	{.name = "blur-bound", .arg = "B", .help = "the blur that repeated resampling of the history accumulates (its "
+						   "standard deviation in pixels, from the reprojection's fractional offset) "
+						   "is kept within B by raising the new sample's weight (YNS09's velocity "
+						   "bound on alpha; 0: off)",
+	 .type = METHOD_OPT_FLOAT, .offset = offsetof(amss_options, blur_bound), .def = 0.25, .min = 0, .max = 4},
+	{.name = "age-limit", .arg = "L", .help = "4 buffers: a quadrant not due whose value has gone more than L frames "
+						  "without its own sample shows the new sample instead (YNS09's buffers "
+						  "hold nothing older than 4 frames: 3; 0: no limit)",
+	 .type = METHOD_OPT_UINT, .offset = offsetof(amss_options, age_limit), .def = 3, .min = 0, .max = 15},
 };
 
 static int amss_init(render *r, char *err, size_t err_size)
 {
 	const amss_options *o = (const amss_options *)r->config.values.bytes;
 	vreuse_variant v = {.mode = VREUSE_AMSS, .buffers = o->buffers, .alpha = o->alpha,
-			     .bound = o->bound};
+			     .bound = o->bound, .blur_bound = o->blur_bound, .age_limit = o->age_limit};
 	return vreuse_init(r, &v, err, err_size);
 }
 

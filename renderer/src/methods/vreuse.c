@@ -13,7 +13,7 @@ const char *const vreuse_rrc_passes[9] = {"shadow", "ids",   "decide",  "shade",
 const char *const vreuse_warp_passes[10] = {"shadow", "depth", "shade", "ids",     "warp",
 					    "fill",   "truth", "blend", "display", "readback"};
 
-enum { VREUSE_BINDINGS = 9 };
+enum { VREUSE_BINDINGS = 11 };
 /* decide's aux[1] flags */
 enum { FLAG_HAVE_CACHE = 1u };
 
@@ -24,6 +24,7 @@ typedef struct vreuse_state {
 	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
 	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
+	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R32_UINT) */
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
 	render_pipeline vis_pipe, vis_pipe_mask;
 	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
@@ -124,6 +125,11 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 						 VK_IMAGE_ASPECT_COLOR_BIT, false, "amss sub-pixel buffer", &s->sub[i]);
 		if (r2)
 			return render_vk_error(err, err_size, "amss sub-pixel buffer", r2);
+		r2 = vkdev_image_create(r->dev, amss ? sw : 1, amss ? sh : 1, 1, 1, VK_FORMAT_R32_UINT,
+					VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
+					false, "amss sub-pixel age", &s->age[i]);
+		if (r2)
+			return render_vk_error(err, err_size, "amss sub-pixel age", r2);
 	}
 	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
 	bool vis = warp || rrc || stu; /* the methods that look up through the reprojecting visibility pass */
@@ -169,8 +175,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 				       * cache recs[1 - i] is read, recs[i] written (cache_next) */
 		const vkdev_image *recs[2] = {&s->cache_rec, rrc ? &s->cache_rec2 : &s->cache_rec};
 		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, recs[1 - i], &s->rec_new, &s->flag, NULL,
-							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i]};
-		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL, NULL};
+							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i],
+							    &s->age[1 - i], &s->age[i]};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL, NULL, NULL, NULL};
 		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
 	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
@@ -203,9 +210,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[8] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag,
-				    &s->sub[0],     &s->sub[1],     &s->vis,     &s->cache_rec2};
-	for (int i = 0; i < 8; i++) {
+	const vkdev_image *im[10] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0],
+				     &s->sub[1],     &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1]};
+	for (int i = 0; i < 10; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -439,10 +446,11 @@ static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
-	uint32_t abits, ebits;
+	uint32_t abits, ebits, bbits;
 	memcpy(&abits, &s->v.alpha, 4);
 	memcpy(&ebits, &s->v.bound, 4);
-	uint32_t aux[4] = {k, abits, ebits, (s->have_cache ? 1u : 0u) | s->v.buffers << 1};
+	memcpy(&bbits, &s->v.blur_bound, 4);
+	uint32_t aux[4] = {bbits, abits, ebits, (s->have_cache ? 1u : 0u) | s->v.buffers << 1 | k << 4 | s->v.age_limit << 6};
 	bind(r, s, cmd, s->amss, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
@@ -533,9 +541,9 @@ void vreuse_finish(render *r)
 		vkDestroyPipelineLayout(d, s->layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
-	vkdev_image *im[8] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag,
-			      &s->sub[0],     &s->sub[1],     &s->vis,     &s->cache_rec2};
-	for (int i = 0; i < 8; i++)
+	vkdev_image *im[10] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0],
+			       &s->sub[1],     &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1]};
+	for (int i = 0; i < 10; i++)
 		vkdev_image_destroy(r->dev, im[i]);
 	render_pipeline_destroy(r, &s->vis_pipe);
 	render_pipeline_destroy(r, &s->vis_pipe_mask);

@@ -33,6 +33,8 @@ typedef struct vreuse_variant {
 	uint32_t buffers; /* amss: 1 or 4 */
 	float alpha;      /* amss: the weight of the new sample */
 	float bound;      /* amss: the signal-change bound E (0: off; amss.comp.in) */
+	float blur_bound; /* amss: the resampling-blur bound B, pixels (0: off; amss.comp.in) */
+	uint32_t age_limit; /* amss: frames a quadrant not due may go without its own sample (0: no limit) */
 	bool truth;       /* --truth (not amss): count late_samples against vref's shading (vbuf truth pass) */
 	float truth_t;
 } vreuse_variant;
