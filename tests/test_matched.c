@@ -1,11 +1,13 @@
 /* test_matched.c — the matched-budget pairs (metrics_matched.h; BASELINES.md section 0 "Comparison") on a synthetic
  * summary: which runs are TAS, and for each TAS variant each other method at its nearest shaded samples per frame,
- * with the pairs worked out by hand below. */
+ * with the pairs worked out by hand below; and how the report's and table1.md's cells print a value
+ * (mtr_fprint_shown, metrics_runs.h). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "taslab/metrics_matched.h"
+#include "taslab/metrics_runs.h"
 #include "test_util.h"
 
 static void test_is_tas(void **state)
@@ -69,8 +71,28 @@ static void test_pairs(void **state)
 	assert_int_equal(mtr_match_budget(in, 2, got, 16), 0);
 }
 
+/* Table cells drop the minus sign of a value that rounds to zero (ref's reuse is -0.0035 % where a coplanar pixel is
+ * shaded twice: "-0.00 %" read as a defect), and keep every other sign. */
+static void test_shown_zero(void **state)
+{
+	(void)state;
+	char buf[256];
+	FILE *f = fmemopen(buf, sizeof buf, "w");
+	assert_non_null(f);
+	mtr_fprint_shown(f, "%.2f %%|", -0.0035);
+	mtr_fprint_shown(f, "%.2f %%|", -0.5);
+	mtr_fprint_shown(f, "%.3f|", -0.004);
+	mtr_fprint_shown(f, "%.0f|", -0.4);
+	mtr_fprint_shown(f, "%.2f×|", -0.001);
+	mtr_fprint_shown(f, "%.1f dB|", -10.04);
+	mtr_fprint_shown(f, "%.2f|", 0.0);
+	fclose(f);
+	assert_string_equal(buf, "0.00 %|-0.50 %|-0.004|0|0.00×|-10.0 dB|0.00|");
+}
+
 int main(void)
 {
-	const struct CMUnitTest tests[] = {cmocka_unit_test(test_is_tas), cmocka_unit_test(test_pairs)};
+	const struct CMUnitTest tests[] = {cmocka_unit_test(test_is_tas), cmocka_unit_test(test_pairs),
+					   cmocka_unit_test(test_shown_zero)};
 	return tu_finish(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -164,6 +164,17 @@ static void num(FILE *f, double v, const char *fmt)
 		fprintf(f, fmt, v);
 }
 
+void mtr_fprint_shown(FILE *f, const char *fmt, double v)
+{
+	char buf[64];
+	snprintf(buf, sizeof buf, fmt, v);
+	/* a rounded zero: only a sign, zeros, a point and the format's own text (no other digit) */
+	bool zero = buf[0] == '-';
+	for (const char *c = buf + 1; zero && *c; c++)
+		zero = !(*c >= '1' && *c <= '9');
+	fputs(zero ? buf + 1 : buf, f);
+}
+
 static json_t *jnum(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
 /* runs.csv columns, in order (mtr_runs_plot finds its columns here by name). */
@@ -199,10 +210,10 @@ static void write_table1(FILE *f, const mtr_run_summary *s, size_t n)
 				continue;
 			fprintf(f, "| %s | %.0f | ", s[i].variant, s[i].shaded_samples / (double)s[i].frames);
 			if (isfinite(s[i].reduction))
-				fprintf(f, "%.2f %% vs %s", 100 * s[i].reduction, s[i].baseline);
+				mtr_fprint_shown(f, "%.2f %%", 100 * s[i].reduction), fprintf(f, " vs %s", s[i].baseline);
 			else
 				fprintf(f, "–");
-			fprintf(f, " | %.2f %% | ", 100 * s[i].reuse_mean);
+			fputs(" | ", f), mtr_fprint_shown(f, "%.2f %%", 100 * s[i].reuse_mean), fputs(" | ", f);
 			if (isfinite(s[i].speedup_vs_ref))
 				fprintf(f, "%.2fx", s[i].speedup_vs_ref);
 			else

@@ -31,7 +31,7 @@ static void cellf(FILE *f, double v, const char *fmt)
 {
 	fputs("<td>", f);
 	if (isfinite(v))
-		fprintf(f, fmt, v);
+		mtr_fprint_shown(f, fmt, v);
 	else
 		fputs("–", f);
 	fputs("</td>", f);

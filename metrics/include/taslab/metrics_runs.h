@@ -6,6 +6,7 @@
 #define TASLAB_METRICS_RUNS_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "taslab/run.h"
 
@@ -48,6 +49,11 @@ int mtr_runs_summarise(const char *const *runs, size_t n, const char *baseline, 
  * paper's Table 1 layout per scene and camera path: variant, shaded samples per frame, reduction, reuse,
  * speedup). */
 int mtr_runs_write(const mtr_run_summary *s, size_t n, const char *dir, char *err, size_t err_size);
+
+/* Prints V with the printf format FMT (one floating conversion) into F for a table a reader reads, without the minus
+ * sign of a value that rounds to zero at FMT's precision ("-0.00 %": ref's reuse 1 - shaded / visible is -0.0035 %
+ * where a coplanar pixel is shaded twice); the CSV and JSON keep the value itself. */
+void mtr_fprint_shown(FILE *f, const char *fmt, double v);
 
 /* Writes only the Table 1 file (as in mtr_runs_write) to `path`, atomically (the sweep's SWEEP/table1.md). */
 int mtr_runs_write_table1(const char *path, const mtr_run_summary *s, size_t n, char *err, size_t err_size);
