@@ -5,6 +5,9 @@
  *  V5  taas: flat -> t 0, r 0, every tile 4x4 from frame 1, frames equal vref; checker1 -> t = sqrt(3)/2 (a CPU
  *      replica of the tile mean from the previous frame's display values), r 9, index 10, stays 1x1; at 70x45 (edge
  *      tiles cut by the image) every tile's t is the replica's within 1e-2 and r = floor(11 t);
+ *  taas on a pan of one pixel per frame over value noise (c_p the t-2 colour reprojected by the ids pass's motion):
+ *      every tile's t is the CPU replica's from frames t-1 and t-2 within 0.05; the replica with the motion left out
+ *      is at least 3 x 0.05 away in every tile (README "taas under motion");
  *  mas on an accelerating pan: P' = 1 - (v_t + v_{t-1}) / 32 per tile, v_t the camera's shift from frame t-1 to t
  *      and v_{t-1} the one before, in pixels (CPU from the camera path): the tile motion is the previous frame's,
  *      read from the motion image the ids pass of frame t-1 wrote (double-buffered: frame t's ids pass writes the
@@ -92,10 +95,13 @@ static void test_castexel(void **state)
 
 /* ---- V5 ---- */
 
-/* taas' tile mean of t on a static view from the display image of the previous frame, whose rate in that tile had
- * the block side `side` (level L = (w + h) / 4 + 1: 2 at 1x1, the 2x2 block mean; 4 at 2x2; 8 at 4x4); c_p = the
- * pixel itself. A block cut by the image edge averages its pixels in the image. */
-static double taas_tile(const uint8_t *disp, int W, int H, int tile_x, int tile_y, int side)
+/* taas' tile mean of t from the display image of the previous frame, whose rate in that tile had the block side
+ * `side` (level L = (w + h) / 4 + 1: 2 at 1x1, the 2x2 block mean; 4 at 2x2; 8 at 4x4). c_p: on a static view
+ * (disp2 NULL) the pixel itself; else the history, the display image of the frame before (disp2) at the pixel the
+ * motion (dx, dy) from that frame to the previous one brings here, floor(p + 0.5 - d), or the pixel itself where that
+ * lies outside the image (rate.comp.in). A block cut by the image edge averages its pixels in the image. */
+static double taas_tile_h(const uint8_t *disp, const uint8_t *disp2, double dx, double dy, int W, int H, int tile_x,
+			  int tile_y, int side)
 {
 	double sum = 0;
 	int n = 0;
@@ -113,13 +119,25 @@ static double taas_tile(const uint8_t *disp, int W, int H, int tile_x, int tile_
 						}
 				m /= k, m2 /= k;
 				double sd = fmax(sqrt(fmax(m2 - m * m, 0.0)), 0.5 / 255.0);
-				double d = fabs(disp[4 * ((size_t)y * W + x) + c] / 255.0 - m) / (2.0 * sd);
+				const uint8_t *h = disp;
+				int qx = x, qy = y;
+				if (disp2) {
+					int hx = (int)floor(x + 0.5 - dx), hy = (int)floor(y + 0.5 - dy);
+					if (hx >= 0 && hy >= 0 && hx < W && hy < H)
+						h = disp2, qx = hx, qy = hy;
+				}
+				double d = fabs(h[4 * ((size_t)qy * W + qx) + c] / 255.0 - m) / (2.0 * sd);
 				t2 += d * d;
 			}
 			sum += sqrt(t2);
 			n++;
 		}
 	return sum / n;
+}
+
+static double taas_tile(const uint8_t *disp, int W, int H, int tile_x, int tile_y, int side)
+{
+	return taas_tile_h(disp, NULL, 0, 0, W, H, tile_x, tile_y, side);
 }
 
 /* taas on checker1 at W x H over F frames: every tile's t equals the CPU replica from the previous frame's display
@@ -272,6 +290,72 @@ static void test_mas_history(void **state)
 	}
 	assert_true(checked > 0);
 	assert_true(apart >= 2); /* the pan accelerates: the check tells the two frames' motions apart */
+	render_destroy(&r);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* taas under camera motion ([V] Alg. 4.11: c_p is the t-2 colour reprojected): a pan of one pixel per frame over
+ * value noise. At frame f every tile's t equals the CPU replica from the display images of frames f-1 and f-2, c_p
+ * taken from f-2 at floor(p + 0.5 - d), d the camera's shift from f-2 to f-1 (CPU, from the camera path), within
+ * TAAS_PAN_TOL; the same replica with d = 0 (the motion lost) is further than 3 TAAS_PAN_TOL from it in three tiles of four. */
+static void test_taas_pan(void **state)
+{
+	(void)state;
+	/* the replica reads the 8-bit display images, the rate pass the half-float display values: c_p and the block
+	 * means differ by up to 1/510, divided by 2 s (s >= 0.5 / 255) per pixel; measured: up to 0.026 per tile (the
+	 * replica without the motion: at least 0.187 away) */
+	const double TAAS_PAN_TOL = 0.05;
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("vbuf_pan_noise");
+	enum { W = 64, H = 64, F = 6, TILES = (W / 16) * (H / 16) };
+	render *r = tu_render_open(dev, s, 0, "taas", NULL, NULL, W, H, false);
+	uint8_t *disp[F];
+	uint32_t prev_rates[TILES];
+	int checked = 0, apart = 0;
+	double worst = 0.0, closest = 1e9;
+	for (uint32_t f = 0; f < F; f++) {
+		frame_image img;
+		frame_stats st;
+		frame_of(r, f, &img, &st);
+		disp[f] = malloc((size_t)W * H * 4);
+		assert_non_null(disp[f]);
+		memcpy(disp[f], img.display_rgba, (size_t)W * H * 4);
+		uint32_t tx, ty;
+		const float *dbg = vrs_debug_tiles(r, NULL, &tx, &ty);
+		assert_int_equal(tx * ty, TILES);
+		if (f >= 2) {
+			double a[2], b[2];
+			pan_screen(s, (int)f - 2, tlm_v3(1, 0, 0), W, H, a);
+			pan_screen(s, (int)f - 1, tlm_v3(1, 0, 0), W, H, b);
+			double dx = b[0] - a[0], dy = b[1] - a[1];
+			for (uint32_t t = 0; t < TILES; t++) {
+				uint32_t rw = prev_rates[t] & 0xFF, rh = prev_rates[t] >> 8 & 0xFF;
+				int side = 1 << ((rw + rh) / 4 + 1), x = (int)(t % tx), y = (int)(t / tx);
+				double want = taas_tile_h(disp[f - 1], disp[f - 2], dx, dy, W, H, x, y, side);
+				double lost = taas_tile_h(disp[f - 1], disp[f - 2], 0, 0, W, H, x, y, side);
+				double e = fabs(dbg[4 * t] - want);
+				if (e > TAAS_PAN_TOL)
+					fail_msg("frame %u tile %u: t %.5f, CPU %.5f (without the motion %.5f)", f, t,
+						 (double)dbg[4 * t], want, lost);
+				worst = fmax(worst, e);
+				closest = fmin(closest, fabs(lost - want));
+				apart += fabs(lost - want) > 3 * TAAS_PAN_TOL;
+				checked++;
+			}
+			printf("taas pan: frame %u, d (%.3f, %.3f) px, tile 5: t %.4f, CPU %.4f, without the motion %.4f\n", f,
+			       dx, dy, (double)dbg[4 * 5], taas_tile_h(disp[f - 1], disp[f - 2], dx, dy, W, H, 1, 1, 2),
+			       taas_tile_h(disp[f - 1], disp[f - 2], 0, 0, W, H, 1, 1, 2));
+		}
+		memcpy(prev_rates, vbuf_debug_rates(r), TILES * sizeof *prev_rates);
+	}
+	printf("taas pan: %d tiles checked, largest difference %.5f; %d apart from the replica without the motion "
+	       "(closest %.4f)\n", checked, worst, apart, closest);
+	assert_int_equal(checked, (F - 2) * TILES);
+	assert_true(apart >= checked * 3 / 4);
+	for (int f = 0; f < F; f++)
+		free(disp[f]);
 	render_destroy(&r);
 	assert_int_equal(vkdev_validation_messages(dev), 0);
 	vkdev_destroy(&dev);
@@ -490,6 +574,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_castexel), cmocka_unit_test(test_taas),  cmocka_unit_test(test_mas_history),
+		cmocka_unit_test(test_taas_pan),
 		cmocka_unit_test(test_rates_all),
 		cmocka_unit_test(test_centroid), cmocka_unit_test(test_truth),
 	};
