@@ -198,7 +198,7 @@ static void test_blur_bound(void **state)
 	}
 	printf("M4 frames %u-%u: bound 0.25 px %.3f, no bound %.3f (frames 2-3 without: %.3f)\n", A, F - 1, mb, mu, early);
 	assert_true(mu > 2.0 * early); /* the unbounded history blurs frame by frame */
-	assert_true(mb < 0.85 * mu);
+	assert_true(mb < 0.9 * mu); /* measured 0.83 (11.1 against 13.4): a margin for other Mesa/LLVM versions */
 	tu_clip *all[] = {&ss, &b, &u};
 	for (size_t i = 0; i < 3; i++)
 		tu_clip_free(all[i]);

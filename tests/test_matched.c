@@ -86,8 +86,9 @@ static void test_shown_zero(void **state)
 	mtr_fprint_shown(f, "%.2f×|", -0.001);
 	mtr_fprint_shown(f, "%.1f dB|", -10.04);
 	mtr_fprint_shown(f, "%.2f|", 0.0);
+	mtr_fprint_shown(f, "%.1f|", -INFINITY);
 	fclose(f);
-	assert_string_equal(buf, "0.00 %|-0.50 %|-0.004|0|0.00×|-10.0 dB|0.00|");
+	assert_string_equal(buf, "0.00 %|-0.50 %|-0.004|0|0.00×|-10.0 dB|0.00|-inf|");
 }
 
 int main(void)

@@ -2,7 +2,8 @@
  * validation layer (any message fails): the acceptance checks of TAS-METHODS section 9 that follow from the
  * definitions (DESIGN section 4; paper secs. 5.1, 6, 6.1, 7.1), pixel by pixel through the decision maps
  * (render_desc.decisions, frame_decision):
- *  R1  rrc/1 equals ref bit for bit (PNG and EXR), both lookups;
+ *  R1  rrc/1 equals ref bit for bit (PNG and EXR), both lookups; also with a MASK object at an odd size
+ *      (81x47), where tarc@8 --force-reshade equals ref too;
  *  R2  static scene: rrc/N shades exactly the covered pixels of the due 16x16 tiles, (t + i) mod N = 0,
  *      misses only in frame 0, frames equal ref (both lookups: bilinear weights snap to 0/1);
  *  R4  --resample nearest: cache misses per frame equal tfr's disoccluded samples (the same rule);
@@ -88,6 +89,44 @@ static void test_rrc1_equals_ref(void **state)
 		tu_clip_free(&r1);
 	}
 	tu_clip_free(&ref);
+	vkdev_destroy(&dev);
+	scene_destroy(&s);
+}
+
+/* R1 with a glTF MASK object and an odd size: tests/data/reuse_mask.json (a fence with holes, alphaMode MASK,
+ * alpha-tested in the pre-pass as in ref's depth pass: reproj/prepass.frag.in MASK with reproject_mask.vert; a
+ * spinning box; a shadowing sun; stereo_multiview.json without its BLEND ball) at 81x47, which no 8x8 workgroup
+ * of the reproject pass and no 16x16 tile divides: rrc/1 and tarc@8 --force-reshade (every sample reshaded every
+ * frame) equal ref bit for bit (PNG and EXR); tarc@8 keeps the invariants (the decision map against the counters)
+ * and reuses from frame 2 (little: the 72x72-pixel filter footprint around the spinning box and its shadow covers most of
+ * an 81x47 frame). */
+static void test_mask_odd_size(void **state)
+{
+	(void)state;
+	scene *s = tu_load_scene("reuse_mask");
+	vkdev *dev = tu_lavapipe();
+	enum { N = 5, W = 81, H = 47 };
+	tu_clip ref = tu_render_clip(dev, s, 0, "ref", NULL, NULL, W, H, N, false);
+	const char *force[] = {"force-reshade", NULL};
+	const char *variants[] = {"rrc/1", "tarc@8", "tarc@8"};
+	for (int k = 0; k < 3; k++) {
+		tu_clip c = tu_render_clip(dev, s, 0, variants[k], k == 1 ? force : NULL, NULL, W, H, N, true);
+		assert_invariants(&c, variants[k]);
+		if (k < 2) {
+			tu_assert_same_frames(&ref, &c, true);
+		} else {
+			for (uint32_t f = 2; f < N; f++) {
+				printf("tarc@8 81x47 frame %u: reused %lld of %lld\n", f, (long long)c.st[f].reused_samples,
+				       (long long)c.st[f].visible_samples);
+				if (c.st[f].reused_samples <= 0)
+					fail_msg("tarc@8 frame %u: reused %lld of %lld", f, (long long)c.st[f].reused_samples,
+						 (long long)c.st[f].visible_samples);
+			}
+		}
+		tu_clip_free(&c);
+	}
+	tu_clip_free(&ref);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
 	vkdev_destroy(&dev);
 	scene_destroy(&s);
 }
@@ -606,6 +645,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_bad_input),
 		cmocka_unit_test(test_rrc1_equals_ref),
+		cmocka_unit_test(test_mask_odd_size),
 		cmocka_unit_test(test_rrc_static_schedule),
 		cmocka_unit_test(test_tarc_static),
 		cmocka_unit_test(test_tarc_forced_only),

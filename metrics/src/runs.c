@@ -168,8 +168,8 @@ void mtr_fprint_shown(FILE *f, const char *fmt, double v)
 {
 	char buf[64];
 	snprintf(buf, sizeof buf, fmt, v);
-	/* a rounded zero: only a sign, zeros, a point and the format's own text (no other digit) */
-	bool zero = buf[0] == '-';
+	/* a rounded zero: only a sign, zeros, a point and the format's own text (no other digit); -inf keeps its sign */
+	bool zero = buf[0] == '-' && isfinite(v);
 	for (const char *c = buf + 1; zero && *c; c++)
 		zero = !(*c >= '1' && *c <= '9');
 	fputs(zero ? buf + 1 : buf, f);

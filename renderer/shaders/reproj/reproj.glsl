@@ -59,7 +59,8 @@ layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEE
 
 #include "reproj/state_bits.glsl" // state.z: age, flags, decision
 
-// Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number; aux[3] T (float bits).
+// Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number (in the pre-pass: the frame size, width |
+// height << 16); aux[3] T (float bits).
 const uint FLAG_HAVE_PREV = 1u;   // the previous frame was rendered: the cache is valid
 const uint FLAG_FORCE = 2u;       // tarc --force-reshade (overhead measurement)
 uint period() { return (pc.aux[1] >> 8) & 0xFFu; }   // rrc N

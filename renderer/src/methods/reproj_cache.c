@@ -204,8 +204,9 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 	uint32_t w = r->desc.width, h = r->desc.height, lw = (w + 7) / 8, lh = (h + 7) / 8;
 	if (r->scene->object_count > REPROJ_MAX_OBJECTS || w > REPROJ_MAX_SIZE || h > REPROJ_MAX_SIZE)
 		return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
-				"rrc/tarc take at most %u objects and %u pixels a side (the pre-pass record packs both)",
-				REPROJ_MAX_OBJECTS, REPROJ_MAX_SIZE);
+				"rrc/tarc take at most %u objects and %u pixels a side (the pre-pass record packs both), not %zu "
+				"objects at %ux%u",
+				REPROJ_MAX_OBJECTS, REPROJ_MAX_SIZE, (size_t)r->scene->object_count, w, h);
 	static const char *const names[IMG_COUNT] = {"cache colour 0", "cache colour 1", "cache state 0", "cache state 1",
 						      "pre-pass record", "tarc L1", "tarc F", "tarc disp 0", "tarc disp 1"};
 	VkResult res;
