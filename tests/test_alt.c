@@ -27,13 +27,6 @@ static double now_s(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* ---- S1 ---- */
 
 static void test_ssaa(void **state)
@@ -57,10 +50,10 @@ static void test_ssaa(void **state)
 					float sum = 0;
 					for (int k = 0; k < 4; k++) {
 						size_t i = (size_t)(2 * y + (k >> 1)) * 2 * W + 2 * x + (k & 1);
-						sum += half_to_float(big.hdr[f][4 * i + c]);
+						sum += tu_half_to_float(big.hdr[f][4 * i + c]);
 					}
 					float want = sum / 4.0f;
-					float got = half_to_float(ss.hdr[f][4 * ((size_t)y * W + x) + c]);
+					float got = tu_half_to_float(ss.hdr[f][4 * ((size_t)y * W + x) + c]);
 					double d = fabs((double)got - (double)want) / fmax(fabs((double)want), 1e-4);
 					if (d > worst)
 						worst = d;

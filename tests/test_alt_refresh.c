@@ -27,13 +27,6 @@ static double now_s(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* ---- R5, R6 ---- */
 
 /* The CPU replica of decide.comp.in's refresh rule (eq. 1 with the A2 patterns). */
@@ -75,7 +68,7 @@ static void test_refresh_patterns(void **state)
 					int64_t want = 0;
 					for (uint32_t y = 0; y < H; y++)
 						for (uint32_t x = 0; x < W; x++)
-							want += half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f &&
+							want += tu_half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f &&
 								(f == 0 || refresh_due(random, x, y, W, f, n, grouped ? 2 : 1,
 										       grouped ? 2 : 1));
 					if (c.st[f].shaded_samples != want)
@@ -109,7 +102,7 @@ static int64_t cpu_late(const uint8_t *a, const uint8_t *b, const uint16_t *hdr,
 {
 	int64_t n = 0;
 	for (size_t i = 0; i < px; i++)
-		n += half_to_float(hdr[4 * i + 3]) != 0.0f && tu_max_diff(a + 4 * i, b + 4 * i, 1) > T;
+		n += tu_half_to_float(hdr[4 * i + 3]) != 0.0f && tu_max_diff(a + 4 * i, b + 4 * i, 1) > T;
 	return n;
 }
 

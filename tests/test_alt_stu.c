@@ -14,13 +14,6 @@
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 static void test_static(void **state)
 {
 	(void)state;
@@ -41,7 +34,7 @@ static void test_static(void **state)
 			uint32_t k = f % n;
 			for (uint32_t y = 0; y < H; y++)
 				for (uint32_t x = 0; x < W; x++)
-					want += half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f && x % a == k % a &&
+					want += tu_half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f && x % a == k % a &&
 						y % b == k / a;
 			assert_int_equal(c.st[f].shaded_samples, want);
 			bool same = !memcmp(c.disp[f], v.disp[f], px * 4) && !memcmp(c.hdr[f], v.hdr[f], px * 8);

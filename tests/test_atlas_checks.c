@@ -25,13 +25,6 @@
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* First global patch id of every object (atlas.c make_patches: opaque and masked objects in order). */
 static uint32_t *patch_bases(const scene *s, const atlas_patches *p)
 {
@@ -226,7 +219,7 @@ static void round_trip(vkdev *dev, const char *name)
 		double spacing = fmax(lu / (bw - 1), lv / (bh - 1));
 		double d = 0;
 		for (int k = 0; k < 3; k++) {
-			double e = half_to_float(img.hdr_rgba_half[4 * i + k]) - want[k];
+			double e = tu_half_to_float(img.hdr_rgba_half[4 * i + k]) - want[k];
 			d += e * e;
 		}
 		d = sqrt(d);

@@ -359,19 +359,12 @@ static void filter_8x8_9x9(const float *v, uint32_t w, uint32_t h, float *out)
 	free(l1);
 }
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* disp(x) of the raw config, max over RGB of the difference of two HDR pixels (TAS-METHODS section 0) */
 static float raw_maxrgb(const uint16_t *a, const uint16_t *b)
 {
 	float m = 0;
 	for (int k = 0; k < 3; k++) {
-		float x = fminf(fmaxf(half_to_float(a[k]), 0), 1) * 255.0f, y = fminf(fmaxf(half_to_float(b[k]), 0), 1) * 255.0f;
+		float x = fminf(fmaxf(tu_half_to_float(a[k]), 0), 1) * 255.0f, y = fminf(fmaxf(tu_half_to_float(b[k]), 0), 1) * 255.0f;
 		m = fmaxf(m, fabsf(x - y));
 	}
 	return m;

@@ -23,15 +23,8 @@
 #include "taslab/scene.h"
 #include "taslab/vkdev.h"
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* disp(x) of the raw config for one channel: the clamped HDR value in code values (TAS-METHODS section 0) */
-static float raw_cv(uint16_t h) { return fminf(fmaxf(half_to_float(h), 0), 1) * 255.0f; }
+static float raw_cv(uint16_t h) { return fminf(fmaxf(tu_half_to_float(h), 0), 1) * 255.0f; }
 
 /* max over RGB of the raw display difference of two HDR pixels */
 static float raw_maxrgb(const uint16_t *a, const uint16_t *b)
@@ -169,7 +162,7 @@ static void test_tarc_stored_gradient(void **state)
 				 * ulp each, in code values, over the age) */
 				float tol = 0;
 				for (int c = 0; c < 3; c++) {
-					float a = fabsf(half_to_float(ref.hdr[f][4 * i + c])), b = fabsf(half_to_float(ref.hdr[prev[i]][4 * i + c]));
+					float a = fabsf(tu_half_to_float(ref.hdr[f][4 * i + c])), b = fabsf(tu_half_to_float(ref.hdr[prev[i]][4 * i + c]));
 					float ua = ldexpf(1.0f, (a > 6.1e-5f ? (int)floorf(log2f(a)) : -14) - 10);
 					float ub = ldexpf(1.0f, (b > 6.1e-5f ? (int)floorf(log2f(b)) : -14) - 10);
 					tol = fmaxf(tol, 0.5f * (ua + ub) * 255.0f / (float)age);

@@ -206,3 +206,10 @@ double tu_csv_lookup(const char *path, const char *const *key, int nkey, int col
 		fclose(f);
 	return v;
 }
+
+float tu_half_to_float(uint16_t h)
+{
+	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
+	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
+	return h & 0x8000u ? -v : v;
+}

@@ -24,6 +24,9 @@ int tu_count_lines(const char *s);
 /* Value of column `col` (0-based) in the CSV row of `path` whose first `nkey` columns equal key[] (quotes around a
  * key cell ignored); NaN when there is no such row or the cell is empty. */
 double tu_csv_lookup(const char *path, const char *const *key, int nkey, int col);
+/* An IEEE half float (the HDR frames' and EXR's storage) as a float: normals, subnormals and signed zero exactly;
+ * exponent 31 (inf, NaN) is not decoded (the frames hold none). */
+float tu_half_to_float(uint16_t h);
 /* Runs `taslab ARGS` (TASLAB_BINARY) and fails the test unless it exits non-zero with exactly one line of output
  * containing `needle`. */
 void tu_expect_cli_error(const char *args, const char *needle);

@@ -29,13 +29,6 @@ static const char *const builtin[] = {"scenes/calm.json", "scenes/moderate.json"
 				      "scenes/turntable.json"};
 enum { NBUILTIN = sizeof builtin / sizeof builtin[0] };
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* p-th percentile and maximum of the per-pixel max-RGB display difference over all frames of two clips. */
 static void diff_stats(const tu_clip *a, const tu_clip *b, double p, int *pct, int *max)
 {
@@ -246,7 +239,7 @@ static void test_ramp(void **state)
 static int64_t ads_replay(const uint16_t *hdr, int W, int H, int s0, float S)
 {
 	int64_t shaded = 0;
-#define COVERED(x, y) (half_to_float(hdr[4 * ((size_t)(y) * W + (x)) + 3]) != 0.0f)
+#define COVERED(x, y) (tu_half_to_float(hdr[4 * ((size_t)(y) * W + (x)) + 3]) != 0.0f)
 	for (int y = 0; y < H; y += s0)
 		for (int x = 0; x < W; x += s0)
 			shaded += COVERED(x, y);
@@ -274,7 +267,7 @@ static int64_t ads_replay(const uint16_t *hdr, int W, int H, int s0, float S)
 						if (xx < 0 || yy < 0 || xx >= W || yy >= H || !COVERED(xx, yy))
 							continue;
 						for (int c = 0; c < 3; c++) {
-							float hv = half_to_float(hdr[4 * ((size_t)yy * W + xx) + c]);
+							float hv = tu_half_to_float(hdr[4 * ((size_t)yy * W + xx) + c]);
 							v[n][c] = fminf(fmaxf(hv, 0.0f), 1.0f) * 255.0f;
 							sum[c] += v[n][c];
 						}
@@ -314,7 +307,7 @@ static void test_replay(void **state)
 		int64_t level0 = 0;
 		for (int y = 0; y < H; y += 4)
 			for (int x = 0; x < W; x += 4)
-				level0 += half_to_float(a.hdr[F - 1][4 * ((size_t)y * W + x) + 3]) != 0.0f;
+				level0 += tu_half_to_float(a.hdr[F - 1][4 * ((size_t)y * W + x) + 3]) != 0.0f;
 		for (uint32_t f = 0; f < F; f++) {
 			int64_t want = ads_replay(a.hdr[f], W, H, 4, Ss[k]);
 			if (want != a.st[f].shaded_samples)

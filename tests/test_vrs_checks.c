@@ -43,13 +43,6 @@ static void frame_of(render *r, uint32_t f, frame_image *img, frame_stats *st)
 		fail_msg("frame %u: %s", f, err);
 }
 
-static float half_to_float(uint16_t h)
-{
-	uint32_t e = (h >> 10) & 31u, m = h & 1023u;
-	float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-	return h & 0x8000u ? -v : v;
-}
-
 /* ---- V4 ---- */
 
 static void castexel_case(vkdev *dev, scene *s, double height)
@@ -147,11 +140,8 @@ static void disp_float(const uint8_t *rgba, size_t px, float *out)
  * target's half floats: exactly the values the rate pass reads. */
 static void disp_raw(const uint16_t *hdr, size_t px, float *out)
 {
-	for (size_t i = 0; i < 4 * px; i++) {
-		uint32_t h = hdr[i], e = (h >> 10) & 31u, m = h & 1023u;
-		float v = e == 0 ? ldexpf((float)m, -24) : ldexpf((float)(m | 1024u), (int)e - 25);
-		out[i] = fminf(fmaxf(h & 0x8000u ? -v : v, 0.0f), 1.0f);
-	}
+	for (size_t i = 0; i < 4 * px; i++)
+		out[i] = fminf(fmaxf(tu_half_to_float(hdr[i]), 0.0f), 1.0f);
 }
 
 /* taas on checker1 at W x H over F frames: every tile's t equals the CPU replica from the previous frame's display
@@ -485,12 +475,12 @@ static double group_error(const tu_clip *c, const tu_clip *v, const uint32_t *id
 				for (int xx = x - x % 4; xx < x - x % 4 + 4 && xx < W; xx++) {
 					const uint32_t *o = ids + 4 * ((size_t)yy * W + xx);
 					if (o[0] == id[0] && o[1] == id[1]) {
-						mean += half_to_float(v->hdr[0][4 * ((size_t)yy * W + xx)]);
+						mean += tu_half_to_float(v->hdr[0][4 * ((size_t)yy * W + xx)]);
 						n++;
 					}
 				}
 			mean /= n;
-			double got = half_to_float(c->hdr[0][4 * ((size_t)y * W + x)]);
+			double got = tu_half_to_float(c->hdr[0][4 * ((size_t)y * W + x)]);
 			worst = fmax(worst, fabs(got - mean) * 255.0);
 		}
 	return worst;
@@ -541,7 +531,7 @@ static int64_t cpu_late(const uint8_t *a, const uint8_t *b, const uint16_t *hdr,
 {
 	int64_t n = 0;
 	for (size_t i = 0; i < (size_t)W * H; i++)
-		n += half_to_float(hdr[4 * i + 3]) != 0.0f && tu_max_diff(a + 4 * i, b + 4 * i, 1) > T;
+		n += tu_half_to_float(hdr[4 * i + 3]) != 0.0f && tu_max_diff(a + 4 * i, b + 4 * i, 1) > T;
 	return n;
 }
 
