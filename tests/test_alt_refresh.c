@@ -7,7 +7,8 @@
  *  R7  --truth (BASELINES.md section 0): on the static view rrc-random/4 and rrc-interleaved/4 count 0 late at
  *      T = 0 (their frames equal vref); on moderate's moving camera warp/1 counts 0 and warp/2's extrapolated frame
  *      counts exactly the pixels whose display value is more than T from vref's (a CPU count); the truth interval
- *      is left out of the frame time. */
+ *      is left out of the frame time; warp/4 with --truth keeps its keyframes at t mod 4 = 0 and its frames and
+ *      counts (on extrapolated frames every second frame was a keyframe until 2026-11-27). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -165,8 +166,22 @@ static void test_truth(void **state)
 	assert_true(by_cpu > 0);
 	assert_int_equal(w2.st[1].late_samples, by_cpu);
 	assert_truth_left_out(&w2);
-	tu_clip *all[] = {&v, &w1, &w2};
-	for (size_t i = 0; i < 3; i++)
+	/* --truth leaves warp/4's run as it was: the keyframes at t mod 4 = 0 only, the same frames and counts (on an
+	 * extrapolated frame the truth renders frame t's shadow maps itself) */
+	enum { F4 = 6 };
+	tu_clip w4 = tu_render_clip(dev, s, cam, "warp/4", NULL, NULL, W, H, F4, false);
+	tu_clip w4t = tu_render_clip(dev, s, cam, "warp/4", t8opt, NULL, W, H, F4, false);
+	tu_assert_same_frames(&w4, &w4t, true);
+	for (uint32_t f = 0; f < F4; f++) {
+		double key = f % 4 == 0 ? 1.0 : 0.0;
+		if (tu_extra(&w4.st[f], "key_frame") != key || tu_extra(&w4t.st[f], "key_frame") != key)
+			fail_msg("warp/4 frame %u: key_frame %g, with --truth %g, want %g", f, tu_extra(&w4.st[f], "key_frame"),
+				 tu_extra(&w4t.st[f], "key_frame"), key);
+		assert_int_equal(w4.st[f].shaded_samples, w4t.st[f].shaded_samples);
+		assert_int_equal(w4.st[f].new_units, w4t.st[f].new_units);
+	}
+	tu_clip *all[] = {&v, &w1, &w2, &w4, &w4t};
+	for (size_t i = 0; i < 5; i++)
 		tu_clip_free(all[i]);
 	scene_destroy(&s);
 	assert_int_equal(vkdev_validation_messages(dev), 0);

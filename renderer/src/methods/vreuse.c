@@ -237,8 +237,10 @@ int vreuse_prepare(render *r, uint32_t frame, char *err, size_t err_size)
 			s->key_frame = frame;
 		render_update_state(r, 1, (double)s->key_frame / fps);
 		s->shadows = s->key || r->blend_count; /* BLEND surfaces are shaded every frame */
-		if (!s->shadows && s->v.truth) /* the truth shades frame t: its shadow maps, in the truth interval */
+		if (!s->shadows && s->v.truth) { /* the truth shades frame t: its shadow maps, in the truth interval */
+			s->last_frame = frame;
 			return render_shadow_plan(r, 0, err, err_size);
+		}
 	} else {
 		s->have_cache = consecutive;
 		s->parity ^= 1u;
