@@ -33,7 +33,6 @@ enum { NBUILTIN = sizeof builtin / sizeof builtin[0] };
 static void diff_stats(const tu_clip *a, const tu_clip *b, double p, int *pct, int *max)
 {
 	size_t px = (size_t)a->w * a->h, n = px * a->n;
-	int *d = malloc(n * sizeof *d);
 	size_t hist[256] = {0};
 	*max = 0;
 	for (uint32_t f = 0; f < a->n; f++)
@@ -52,7 +51,6 @@ static void diff_stats(const tu_clip *a, const tu_clip *b, double p, int *pct, i
 			break;
 		}
 	}
-	free(d);
 }
 
 /* ---- B1 ---- */

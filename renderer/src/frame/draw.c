@@ -145,3 +145,16 @@ int render_vk_error(char *err, size_t err_size, const char *what, VkResult res)
 {
 	return tl_error(err, err_size, TL_ERR_VULKAN, "%s failed: %s", what, vkdev_result_string(res));
 }
+
+int render_storage_buffer(render *r, VkDeviceSize size, VkBufferUsageFlags extra, bool host, const char *name,
+			  vkdev_buffer *out, char *err, size_t err_size)
+{
+	VkDeviceSize range = r->dev->props.limits.maxStorageBufferRange;
+	if (size > range)
+		return tl_error(err, err_size, TL_ERR_UNSUPPORTED,
+				"%s needs %.1f MiB at %ux%u, more than this device's storage buffer range (%.1f MiB): "
+				"use a smaller --size",
+				name, (double)size / 1048576.0, r->desc.width, r->desc.height, (double)range / 1048576.0);
+	VkResult res = vkdev_buffer_create(r->dev, size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | extra, host, name, out);
+	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
+}

@@ -325,6 +325,10 @@ void render_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAcce
 
 /* Formats "what failed: VkResult" into err and returns TL_ERR_VULKAN (for `return render_vk_error(...)`). */
 int render_vk_error(char *err, size_t err_size, const char *what, VkResult res);
+/* A storage buffer bound whole (vkdev_buffer_create with STORAGE_BUFFER usage | extra): fails with one line naming
+ * the size when it exceeds the device's maxStorageBufferRange (128 MiB at least; a shader may read no further). */
+int render_storage_buffer(render *r, VkDeviceSize size, VkBufferUsageFlags extra, bool host, const char *name,
+			  vkdev_buffer *out, char *err, size_t err_size);
 /* In functions with `int rc`, `err`, `err_size` and a `fail:` label: checks a VkResult, records file:line
  * and the call (Mesa's vk_error habit), sets rc = TL_ERR_VULKAN and jumps to fail. */
 #define CHECK_VK(call)                                                                                     \

@@ -147,11 +147,10 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 		[B_GNEW] = {P * 4, "atlas G new"}, [B_COUNTERS] = {32, "atlas counters"}, [B_DMAX] = {P * 4, "atlas dmax"},
 	};
 	for (int i = 0; i < B_COUNT; i++) {
-		VkResult res = vkdev_buffer_create(r->dev, spec[i].size,
-						   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
-						   spec[i].name, &s->buf[i]);
-		if (res)
-			return render_vk_error(err, err_size, spec[i].name, res);
+		int rc = render_storage_buffer(r, spec[i].size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, spec[i].name,
+					       &s->buf[i], err, err_size);
+		if (rc)
+			return rc;
 	}
 	/* static tables: corners with the mesh's vertex offset (global vertex indices), triangle info, objects */
 	uint32_t *c = s->buf[B_CORNERS].mapped;

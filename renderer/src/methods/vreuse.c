@@ -153,11 +153,13 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	}
 	if (stu) /* stu keeps each pixel's world position and normal there (stu.comp.in) */
 		texels = 2 * (VkDeviceSize)r->desc.width * r->desc.height;
+	else if (!warp) /* the others use none */
+		texels = 1;
 	VkDevice d = r->dev->device;
-	VkResult res = vkdev_buffer_create(r->dev, texels * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-					   "vreuse pull-push pyramid", &s->pyr);
-	if (res)
-		return render_vk_error(err, err_size, "vreuse pyramid", res);
+	if ((rc = render_storage_buffer(r, texels * 16, 0, false, stu ? "stu's positions and normals" : "warp's pull-push pyramid",
+					&s->pyr, err, err_size)))
+		return rc;
+	VkResult res;
 	VkDescriptorSetLayoutBinding b[VREUSE_BINDINGS];
 	for (uint32_t i = 0; i < VREUSE_BINDINGS; i++)
 		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,

@@ -243,8 +243,10 @@ static void vrs_rate_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer
 		aux[3] = gx | gy << 16;
 	}
 	bind(r, p, s, cmd, s->rate, aux);
-	if (s->kind == VRS_TAAS) /* one invocation per tile, eight a workgroup (rate.comp.in taas_tile_sum) */
-		vkCmdDispatch(cmd, (p->tiles_x * p->tiles_y + 7) / 8, 1, 1);
+	if (s->kind == VRS_TAAS) /* one invocation per tile, eight tiles of a row a workgroup (rate.comp.in
+				  * taas_tile_sum); rows in y, so that 16384 x 16384 (1024 x 1024 tiles) stays within the
+				  * 65,535 workgroups a dimension may count */
+		vkCmdDispatch(cmd, (p->tiles_x + 7) / 8, p->tiles_y, 1);
 	else /* one 16x16 workgroup per tile */
 		vkCmdDispatch(cmd, p->tiles_x, p->tiles_y, 1);
 	vbuf_barrier(cmd);
@@ -327,7 +329,10 @@ static int vrs_init(render *r, vrs_kind kind, char *err, size_t err_size)
 			  .rate_record = vrs_rate_record, .rate_after = vrs_rate_after, .rate_finish = vrs_rate_finish,
 			  .ids_record = vrs_ids_record,
 			  .user = s};
-	return vbuf_family_init(r, &v, err, err_size);
+	int rc = vbuf_family_init(r, &v, err, err_size);
+	if (rc && !r->method_state) /* the family's state was not made, so its finish will not free ours */
+		free(s);
+	return rc;
 }
 
 const float *vrs_debug_tiles(render *r, const int32_t **index, uint32_t *tiles_x, uint32_t *tiles_y)

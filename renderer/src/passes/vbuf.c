@@ -61,11 +61,10 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 		{&v->rates, (VkDeviceSize)v->tiles_x * v->tiles_y * 4, 0, true, "vbuf tile rates"},
 	};
 	for (int i = 0; i < 4; i++) {
-		VkResult res = vkdev_buffer_create(r->dev, spec[i].size,
-						   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | spec[i].extra,
-						   spec[i].host, spec[i].name, spec[i].b);
-		if (res)
-			return render_vk_error(err, err_size, spec[i].name, res);
+		int rc = render_storage_buffer(r, spec[i].size, VK_BUFFER_USAGE_TRANSFER_DST_BIT | spec[i].extra, spec[i].host,
+					       spec[i].name, spec[i].b, err, err_size);
+		if (rc)
+			return rc;
 	}
 	uint32_t *oi = v->objinfo.mapped;
 	for (size_t o = 0; o < sc->object_count; o++) {
