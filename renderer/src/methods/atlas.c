@@ -459,10 +459,11 @@ static void dispatch_visible(VkCommandBuffer cmd, uint32_t w, uint32_t h)
 	vkCmdDispatch(cmd, (bx + 7) / 8, (by + 7) / 8, 1);
 }
 
-/* Work-list dispatch: workgroups of 64 invocations = 8 chunks of 8 texels, a 2-D grid within the 65 535 limit. */
+/* Work-list dispatch: workgroups of 64 invocations = 8 chunks of 8 texels, a 2-D grid within the 65 535 limit (as
+ * few rows as fit, the groups spread evenly over them: at most gy - 1 empty workgroups). */
 static void dispatch_chunks(VkCommandBuffer cmd, uint32_t chunks)
 {
-	uint32_t groups = (chunks + 7) / 8, gx = groups < 65535 ? groups : 65535, gy = (groups + gx - 1) / (gx ? gx : 1);
+	uint32_t groups = (chunks + 7) / 8, gy = (groups + 65534) / 65535, gx = gy ? (groups + gy - 1) / gy : 0;
 	if (groups)
 		vkCmdDispatch(cmd, gx, gy, 1);
 }
