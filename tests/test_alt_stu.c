@@ -1,7 +1,7 @@
 /* test_alt_stu.c — spatio-temporal upsampling (BASELINES.md A4; section C "stu") on lavapipe with the validation layer
  * (any message fails), tfr_static (a textured floor, a box, a shadow-casting sun) at 48 x 32 and 49 x 31:
- *  stu/2, stu/4 (BASELINES' N) and stu/8 (at 49 x 31: stu/4), static view: every frame shades exactly the covered phase pixels of the interleaved pattern
- *  (the CPU count of rrc-interleaved/N's refresh set); from frame 2N + 5 on the frames equal vref (display and HDR:
+ *  stu/2, stu/4 (BASELINES' N) and stu/8 (at 49 x 31: stu/4), static view: every frame shades exactly the covered
+ *  phase pixels of the interleaved pattern (the CPU count of rrc-interleaved/N's refresh set); from frame 2N + 5 on the frames equal vref (display and HDR:
  *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); determinism. */
 #include <math.h>
 #include <stdio.h>

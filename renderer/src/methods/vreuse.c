@@ -156,7 +156,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	else if (!warp) /* the others use none */
 		texels = 1;
 	VkDevice d = r->dev->device;
-	if ((rc = render_storage_buffer(r, texels * 16, 0, false, stu ? "stu's positions and normals" : "warp's pull-push pyramid",
+	if ((rc = render_storage_buffer(r, texels * 16, 0, false,
+					stu ? "stu's positions and normals" : "warp's pull-push pyramid",
 					&s->pyr, err, err_size)))
 		return rc;
 	VkResult res;
