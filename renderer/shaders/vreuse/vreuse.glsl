@@ -16,6 +16,7 @@ layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded t
 #define VREUSE_PYR_QUALIFIER
 #endif
 layout(std430, set = 2, binding = 4) VREUSE_PYR_QUALIFIER buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
+layout(std430, set = 2, binding = 11) buffer Normals { vec4 nrm[]; }; // stu: each pixel's normal, object + 1 (w)
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
@@ -98,7 +99,8 @@ bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
 	return vreuse_project(slot, object, p_obj, imageSize(cache_rec), f, dist) && vreuse_lookup_at(object, f, dist, colour);
 }
 
-// Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other.
+// Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other from level 1 on (level 0,
+// the frame itself, is never stored: decide.comp.in pulls levels 1 and 2 from it in registers).
 ivec2 vreuse_level_size(uint l)
 {
 	ivec2 s = imageSize(flags);
@@ -106,10 +108,10 @@ ivec2 vreuse_level_size(uint l)
 		s = (s + 1) / 2;
 	return s;
 }
-uint vreuse_level_base(uint l)
+uint vreuse_level_base(uint l) // l >= 1
 {
 	uint base = 0u;
-	for (uint k = 0u; k < l; k++) {
+	for (uint k = 1u; k < l; k++) {
 		ivec2 s = vreuse_level_size(k);
 		base += uint(s.x * s.y);
 	}

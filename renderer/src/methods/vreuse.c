@@ -13,7 +13,7 @@ const char *const vreuse_rrc_passes[9] = {"shadow", "ids",   "decide",  "shade",
 const char *const vreuse_warp_passes[10] = {"shadow", "depth", "shade", "ids",     "warp",
 					    "fill",   "truth", "blend", "display", "readback"};
 
-enum { VREUSE_BINDINGS = 11 };
+enum { VREUSE_BINDINGS = 12 };
 /* decide's aux[1] flags */
 enum { FLAG_HAVE_CACHE = 1u };
 
@@ -22,7 +22,9 @@ typedef struct vreuse_state {
 	vbuf_pass p;
 	vkdev_image cache_col, cache_rec, rec_new, flag;
 	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
-	vkdev_buffer pyr;  /* pull-push pyramid: vec4 (rgb, weight) per pixel of every level */
+	vkdev_buffer pyr;  /* warp: the pull-push pyramid, vec4 (rgb, weight) per node of levels 1 up; stu: each pixel's
+			    * world position and g (stu.comp.in); one texel for the others */
+	vkdev_buffer nrm;  /* stu: each pixel's normal and object + 1 (one texel for the others) */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
 	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R32_UINT) */
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
@@ -144,26 +146,30 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
 	if (rv)
 		return render_vk_error(err, err_size, "warp visibility", rv);
-	VkDeviceSize texels = 0;
+	VkDeviceSize texels = 0; /* warp: levels 1 up (level 0, the frame, is never stored: vreuse.glsl) */
 	for (s->levels = 1;; s->levels++) {
-		texels += (VkDeviceSize)w * h;
+		if (s->levels > 1)
+			texels += (VkDeviceSize)w * h;
 		if (w == 1 && h == 1)
 			break;
 		w = (w + 1) / 2, h = (h + 1) / 2;
 	}
-	if (stu) /* stu keeps each pixel's world position and normal there (stu.comp.in) */
-		texels = 2 * (VkDeviceSize)r->desc.width * r->desc.height;
+	texels = texels ? texels : 1;
+	VkDeviceSize pixels = (VkDeviceSize)r->desc.width * r->desc.height;
+	if (stu) /* stu keeps each pixel's world position and g there, its normal in nrm (stu.comp.in) */
+		texels = pixels;
 	else if (!warp) /* the others use none */
 		texels = 1;
 	VkDevice d = r->dev->device;
-	if ((rc = render_storage_buffer(r, texels * 16, 0, false,
-					stu ? "stu's positions and normals" : "warp's pull-push pyramid",
-					&s->pyr, err, err_size)))
+	if ((rc = render_storage_buffer(r, texels * 16, 0, false, stu ? "stu's positions" : "warp's pull-push pyramid",
+					&s->pyr, err, err_size)) ||
+	    (rc = render_storage_buffer(r, (stu ? pixels : 1) * 16, 0, false, "stu's normals", &s->nrm, err, err_size)))
 		return rc;
 	VkResult res;
 	VkDescriptorSetLayoutBinding b[VREUSE_BINDINGS];
 	for (uint32_t i = 0; i < VREUSE_BINDINGS; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 || i == 11 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+									    : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 						      1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = VREUSE_BINDINGS, .pBindings = b};
@@ -179,8 +185,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		const vkdev_image *recs[2] = {&s->cache_rec, rrc ? &s->cache_rec2 : &s->cache_rec};
 		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, recs[1 - i], &s->rec_new, &s->flag, NULL,
 							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i],
-							    &s->age[1 - i], &s->age[i]};
-		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL, NULL, NULL, NULL, NULL, NULL};
+							    &s->age[1 - i], &s->age[i], NULL};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL,
+							     NULL, NULL, NULL, NULL, NULL, &s->nrm};
 		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
 	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
@@ -553,6 +560,7 @@ void vreuse_finish(render *r)
 	render_pipeline_destroy(r, &s->vis_pipe);
 	render_pipeline_destroy(r, &s->vis_pipe_mask);
 	vkdev_buffer_destroy(r->dev, &s->pyr);
+	vkdev_buffer_destroy(r->dev, &s->nrm);
 	vbuf_finish(r, &s->p);
 	free(s);
 	r->method_state = NULL;
