@@ -101,6 +101,22 @@ static void test_slurm_scripts(void **state)
 	assert_false(tu_file_exists(p));
 	snprintf(p, sizeof p, "%s/PWNED", dir);
 	assert_false(tu_file_exists(p));
+	/* a backslash: sbatch's --output would not expand %a, so every array task would write one log */
+	snprintf(sw, sizeof sw, "%s/a\\b", dir);
+	st = sh("%s sweep " COMMON " --variants ref --frames 0:1 --out %s --slurm-dry-run", TASLAB_BINARY, q(sw));
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "holds a backslash"))
+		fail_msg("exit %d:\n%s", st, out);
+	assert_false(tu_file_exists(sw));
+	/* --slurm-opts: a word filling the parser's 4096-byte buffer, then an empty quoted word, wrote its terminator one
+	 * byte past the buffer (AddressSanitizer: stack-buffer-overflow); now "too long" */
+	char opts[4200];
+	memset(opts, 'x', 4095);
+	snprintf(opts + 4095, sizeof opts - 4095, " ''");
+	snprintf(sw, sizeof sw, "%s/opts", dir);
+	st = sh("%s sweep " COMMON " --variants ref --frames 0:1 --out %s --slurm-dry-run --slurm-opts \"%s\"",
+		TASLAB_BINARY, q(sw), opts); /* (only x, a space and two quotes: safe inside double quotes) */
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "--slurm-opts: too long"))
+		fail_msg("exit %d:\n%s", st, out);
 
 	/* quotes, $(…), spaces and '%' are fine: the dry run prints scripts that run */
 	snprintf(sw, sizeof sw, "%s/it's $(touch PWNED) %%A 100%%", dir);

@@ -43,6 +43,8 @@ static int split_words(const char *s, char *buf, size_t buf_size, char **words, 
 				return tl_error(err, err_size, TL_ERR_ARG, "--slurm-opts: too long");
 			}
 		}
+		if (o >= buf_size) /* an empty quoted word ('') right at the end of a full buffer */
+			return tl_error(err, err_size, TL_ERR_ARG, "--slurm-opts: too long");
 		buf[o++] = 0;
 		k++;
 	}
@@ -78,6 +80,11 @@ static int script_path_ok(const char *what, const char *path, char *err, size_t 
 					"%s holds a control character (0x%02x at byte %zu): it would be written into the Slurm "
 					"batch scripts; use a path without one",
 					what, *p, (size_t)(p - (const unsigned char *)path));
+		else if (*p == '\\') /* sbatch --output: a backslash turns the %a pattern off, every task one log */
+			return tl_error(err, err_size, TL_ERR_ARG,
+					"%s holds a backslash (byte %zu): Slurm's --output would then not expand the task's "
+					"number, so every task would write one log; use a path without one",
+					what, (size_t)(p - (const unsigned char *)path));
 	return TL_OK;
 }
 
