@@ -466,7 +466,16 @@ static void serve_export(struct sty_server *sv, const sty_request *rq, int pwcmp
 		return;
 	}
 	snprintf(file, sizeof file, "%s/export.csv", dir);
-	int rc = pwcmp ? sty_export_pwcmp(sv->study, file, err, sizeof err) : sty_export_long(sv->study, file, err, sizeof err);
+	/* Only committed answers: the export reads the connection the answers are written on, so it waits, holding the
+	 * lock the writers take, until no batch is open (study_commit.c), and no write can start while it reads. Before
+	 * (found in review, 2026-11-27) it read inside an open batch: rows a failing COMMIT then rolled back could be
+	 * exported, and a request caught between its answer and its telemetry. */
+	sty *st = sv->study;
+	pthread_mutex_lock(&st->lock);
+	while (st->batch.open)
+		pthread_cond_wait(&st->batch.done, &st->lock);
+	int rc = pwcmp ? sty_export_pwcmp(st, file, err, sizeof err) : sty_export_long(st, file, err, sizeof err);
+	pthread_mutex_unlock(&st->lock);
 	int fd = rc ? -1 : open(file, O_RDONLY | O_CLOEXEC);
 	unlink(file);
 	rmdir(dir);
