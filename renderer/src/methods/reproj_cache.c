@@ -58,9 +58,18 @@ static reproj_state *state_of(render *r) { return r->method_state; }
 
 /* The counters' defines for the shaders (reproj.glsl COUNT): one atomic per subgroup where the device allows, as
  * ref counts its shading (render_count_mode_of; TASLAB_COUNT_ATOMICS=1: one per fragment, test_reuse compares). */
-static const char *count_defines(VkPhysicalDevice pd)
+/* compute: for the screen-space reproject pass, which has no helper invocations and needs subgroup operations in
+ * the compute stage. */
+static const char *count_defines(VkPhysicalDevice pd, bool compute)
 {
-	switch (render_count_mode_of(pd)) {
+	render_count_mode mode = render_count_mode_of(pd);
+	if (compute && mode != RENDER_COUNT_ATOMIC) {
+		VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+		VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+		vkGetPhysicalDeviceProperties2(pd, &p2);
+		mode = sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_ATOMIC;
+	}
+	switch (mode) {
 	case RENDER_COUNT_SUBGROUP_NO_HELPERS:
 		return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";
 	case RENDER_COUNT_SUBGROUP:
@@ -68,17 +77,6 @@ static const char *count_defines(VkPhysicalDevice pd)
 	default:
 		return "";
 	}
-}
-
-/* The same for the screen-space reproject pass: there are no helper invocations in compute shaders. */
-static const char *count_defines_compute(VkPhysicalDevice pd)
-{
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-	vkGetPhysicalDeviceProperties2(pd, &p2);
-	if (render_count_mode_of(pd) == RENDER_COUNT_ATOMIC || !(sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
-		return "";
-	return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";
 }
 
 /* The pre-pass pipelines: depth writes, LESS_OR_EQUAL (the same depths as the shared pre-pass's LESS, and the record
@@ -120,7 +118,7 @@ static int make_reproject(render *r, reproj_state *s, const char *defs, char *er
 	if (res)
 		return render_vk_error(err, err_size, "reproject pass: pipeline layout", res);
 	char d[224];
-	snprintf(d, sizeof d, "%s%s", defs, count_defines_compute(r->dev->physical));
+	snprintf(d, sizeof d, "%s%s", defs, count_defines(r->dev->physical, true));
 	return render_compute_defs(r, "reproj/reproject.comp.in", d, s->reproject_layout, &s->reproject, err, err_size);
 }
 
@@ -129,7 +127,7 @@ static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size
 	char defs[192], vdefs[96];
 	snprintf(vdefs, sizeof vdefs, "%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
 		 s->v.nearest ? "#define NEAREST 1\n" : "");
-	snprintf(defs, sizeof defs, "%s%s", vdefs, count_defines(r->dev->physical));
+	snprintf(defs, sizeof defs, "%s%s", vdefs, count_defines(r->dev->physical, false));
 	int rc = make_prepass(r, s, vdefs, err, err_size);
 	if (!rc)
 		rc = make_reproject(r, s, vdefs, err, err_size);
@@ -294,12 +292,7 @@ static void record_prepass(render *r, reproj_state *s, VkCommandBuffer cmd, uint
 			      .pDepthAttachment = &da, .pStencilAttachment = &da};
 	vkCmdBeginRendering(cmd, &ri);
 	render_set_viewport(cmd, r->desc.width, r->desc.height);
-	render_bind_scene(r, cmd, &s->prepass);
-	render_draw_objects(r, cmd, &s->prepass, slot, 0, RENDER_OPAQUE_BIT, NULL, 1);
-	if (s->prepass_mask.pipeline) {
-		render_bind_scene(r, cmd, &s->prepass_mask);
-		render_draw_objects(r, cmd, &s->prepass_mask, slot, 0, RENDER_MASK_BIT, NULL, 1);
-	}
+	render_draw_depth_objects(r, cmd, &s->prepass, &s->prepass_mask, slot, 0, NULL);
 	vkCmdEndRendering(cmd);
 }
 

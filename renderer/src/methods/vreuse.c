@@ -30,7 +30,6 @@ typedef struct vreuse_state {
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
 	render_pipeline vis_pipe, vis_pipe_mask;
 	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
-	uint32_t levels;
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
@@ -117,7 +116,6 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse record", &s->rec_new, err, err_size)) ||
 	    (rc = make_image(r, VK_FORMAT_R32_UINT, "vreuse flags", &s->flag, err, err_size)))
 		return rc;
-	/* pyramid levels down to 1x1 */
 	uint32_t w = r->desc.width, h = r->desc.height;
 	bool amss = v->mode == VREUSE_AMSS, stu = v->mode == VREUSE_STU;
 	uint32_t sw = amss ? 2 * w : stu ? w : 1, sh = amss ? 2 * h : stu ? h : 1;
@@ -146,20 +144,15 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
 	if (rv)
 		return render_vk_error(err, err_size, "warp visibility", rv);
-	VkDeviceSize texels = 0; /* warp: levels 1 up (level 0, the frame, is never stored: vreuse.glsl) */
-	for (s->levels = 1;; s->levels++) {
-		if (s->levels > 1)
+	/* pyr: warp's pull-push pyramid, levels 1 up to 1x1 (level 0, the frame, is never stored: vreuse.glsl); stu's
+	 * world position and g per pixel, its normal in nrm (stu.comp.in); one texel for the others */
+	VkDeviceSize pixels = (VkDeviceSize)w * h, texels = stu ? pixels : 1;
+	if (warp)
+		for (texels = 0; w > 1 || h > 1;) {
+			w = (w + 1) / 2, h = (h + 1) / 2;
 			texels += (VkDeviceSize)w * h;
-		if (w == 1 && h == 1)
-			break;
-		w = (w + 1) / 2, h = (h + 1) / 2;
-	}
+		}
 	texels = texels ? texels : 1;
-	VkDeviceSize pixels = (VkDeviceSize)r->desc.width * r->desc.height;
-	if (stu) /* stu keeps each pixel's world position and g there, its normal in nrm (stu.comp.in) */
-		texels = pixels;
-	else if (!warp) /* the others use none */
-		texels = 1;
 	VkDevice d = r->dev->device;
 	if ((rc = render_storage_buffer(r, texels * 16, 0, false, stu ? "stu's positions" : "warp's pull-push pyramid",
 					&s->pyr, err, err_size)) ||

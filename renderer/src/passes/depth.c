@@ -28,15 +28,21 @@ void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, Vk
 		.pDepthAttachment = &da,
 	};
 	vkCmdBeginRendering(cmd, &ri);
-	render_bind_scene(r, cmd, pipe);
 	render_set_viewport(cmd, w, h);
+	render_draw_depth_objects(r, cmd, pipe, mask_pipe, slot, layer, casters);
+	vkCmdEndRendering(cmd);
+}
+
+void render_draw_depth_objects(render *r, VkCommandBuffer cmd, const render_pipeline *pipe,
+			       const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer, const uint8_t *casters)
+{
 	/* Shadow passes draw the casters reaching into the layer with culling off; the pre-pass culls per material. */
+	render_bind_scene(r, cmd, pipe);
 	render_draw_objects(r, cmd, pipe, slot, layer, RENDER_OPAQUE_BIT, casters, !casters);
 	if (mask_pipe->pipeline) {
 		render_bind_scene(r, cmd, mask_pipe);
 		render_draw_objects(r, cmd, mask_pipe, slot, layer, RENDER_MASK_BIT, casters, !casters);
 	}
-	vkCmdEndRendering(cmd);
 }
 
 void render_depth_discard(render *r, VkCommandBuffer cmd)

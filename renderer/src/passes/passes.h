@@ -22,6 +22,11 @@ void render_shadow_write_sets(render *r);
 void render_depth_only_pass(render *r, VkCommandBuffer cmd, VkImageView view, VkImageLayout layout, uint32_t w,
 			    uint32_t h, const render_pipeline *pipe, const render_pipeline *mask_pipe, uint32_t slot,
 			    uint32_t layer, const uint8_t *casters);
+/* Its draws, inside a rendering the caller began: the opaque objects with `pipe`, then the masked ones with
+ * `mask_pipe` (when it exists), each bound with the scene set; also rrc/tarc's pre-pass (methods/reproj_cache.c),
+ * so that both leave the same depths and the same last-drawn fragment among equal depths. */
+void render_draw_depth_objects(render *r, VkCommandBuffer cmd, const render_pipeline *pipe,
+			       const render_pipeline *mask_pipe, uint32_t slot, uint32_t layer, const uint8_t *casters);
 int render_depth_init(render *r, char *err, size_t err_size);
 /* The depth target, its contents discarded, ready as the depth attachment of a pass that clears it (after the
  * previous frame's depth tests; the depth pre-pass and the ids pass). */
