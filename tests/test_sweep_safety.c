@@ -376,6 +376,66 @@ static void test_changed_inputs(void **state)
 	assert_false(tu_file_exists(man));
 }
 
+/* Review finding (2026-11-27): a sweep resumed by a newer taslab kept the runs the older one made (the manifests held
+ * only the project's version), so one sweep could mix two builds' frames. Now sweep.json and every manifest record
+ * the build's digest (the executable's bytes): another build - here the same binary with one byte appended, which
+ * still runs - is refused on resume, on the same request and for one --task, and a run it made is damaged. */
+static void test_other_build(void **state)
+{
+	(void)state;
+	char dir[4096], sw[4096], args[8192], other[4096], man[4096], spec[4096], run[4096];
+	snprintf(dir, sizeof dir, "%s", tu_tmpdir("sweep_build"));
+	snprintf(sw, sizeof sw, "%s/sw", dir);
+	snprintf(other, sizeof other, "%s/other/taslab", dir); /* named taslab: tests/lsan_pin.c pins its driver */
+	snprintf(args, sizeof args, COMMON " --variants ref,tfr@8 --frames 0:2 --no-report --quiet --out %s", q(sw));
+	int st = sh("%s sweep %s", TASLAB_BINARY, args);
+	if (st)
+		fail_msg("sweep failed (%d):\n%s", st, out);
+	snprintf(man, sizeof man, "%s/runs/turntable/orbit/tfr-T8/manifest.json", sw);
+	snprintf(run, sizeof run, "%s/runs/turntable/orbit/tfr-T8", sw);
+	snprintf(spec, sizeof spec, "%s/sweep.json", sw);
+	/* the build is recorded: sweep.json and the manifest hold the digest --version prints */
+	assert_int_equal(sh("%s --version", TASLAB_BINARY), 0);
+	const char *b = strstr(out, "(build ");
+	assert_non_null(b);
+	char digest[17], want[64];
+	snprintf(digest, sizeof digest, "%.16s", b + 7);
+	char *j = tu_read_file(spec, NULL), *m = tu_read_file(man, NULL);
+	snprintf(want, sizeof want, "\"build_digest\": \"%s\"", digest);
+	assert_non_null(strstr(j, want));
+	snprintf(want, sizeof want, "\"build\": \"%s\"", digest);
+	assert_non_null(strstr(m, want));
+	free(j), free(m);
+	/* another build: one byte more */
+	assert_int_equal(sh("mkdir -p %s/other && cp %s %s && printf 'x' >> %s && %s --version", q(dir), TASLAB_BINARY, q(other),
+			    q(other), q(other)), 0);
+	if (strstr(out, digest))
+		fail_msg("the other binary has the same build digest:\n%s", out);
+	unlink(man);
+	st = sh("%s sweep %s", q(other), q(spec));
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "was started by another taslab build"))
+		fail_msg("resuming with another build: exit %d:\n%s", st, out);
+	st = sh("%s sweep %s --task 1", q(other), q(spec));
+	if (st != 2 || !strstr(out, "was started by another taslab build"))
+		fail_msg("one --task with another build: exit %d:\n%s", st, out);
+	st = sh("%s sweep %s", q(other), args);
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "holds a different sweep (another taslab build"))
+		fail_msg("the same request with another build: exit %d:\n%s", st, out);
+	assert_false(tu_file_exists(man)); /* nothing rendered by the other build into the sweep */
+	/* a run the other build made (by hand, into the sweep's folder) is damaged, not complete */
+	st = sh("%s render --scene turntable --camera orbit --method tfr@8 --size 48x32 --frames 0:2 --device "
+		TASLAB_TEST_DEVICE " --quiet --out %s", q(other), q(run));
+	if (st)
+		fail_msg("render by the other build: exit %d:\n%s", st, out);
+	st = sh("%s sweep %s", TASLAB_BINARY, q(spec));
+	if (st != 1 || !strstr(out, "is damaged") || !strstr(out, "rendered by another taslab build"))
+		fail_msg("a run of the other build: exit %d:\n%s", st, out);
+	/* the build that started it resumes it */
+	st = sh("%s sweep %s --redo-damaged", TASLAB_BINARY, q(spec));
+	if (st || !strstr(out, "2 of 2 runs complete") || !tu_file_exists(man))
+		fail_msg("--redo-damaged by the sweep's build: exit %d:\n%s", st, out);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -383,6 +443,7 @@ int main(void)
 		cmocka_unit_test(test_lock_and_out),
 		cmocka_unit_test(test_damaged_runs),
 		cmocka_unit_test(test_changed_inputs),
+		cmocka_unit_test(test_other_build),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

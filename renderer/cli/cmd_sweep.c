@@ -254,6 +254,9 @@ static int sweep_main(void *opts, cli_ctx *ctx)
 				rc = tl_error(err, err_size, TL_ERR_ARG,
 					      "%s is a resolved sweep: options that change it cannot be added (write a sweep file)",
 					      file);
+			/* resumed (or one --task of it) by the build that started it: another build's runs are not mixed in */
+			if (!rc)
+				rc = sweep_build_check(spec, file, err, err_size);
 		} else if (sweep_file_is_spec(file)) {
 			/* a resolved sweep.json that does not read: its own reason, not the request reader's (issue 31.5) */
 			rc = tl_error(err, err_size, TL_ERR_INPUT, "%s", what);

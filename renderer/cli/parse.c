@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "taslab/tl_fs.h"
 #include "taslab/tl_parse.h"
+#include "taslab/tl_hash.h"
 #include "taslab/version.h"
 #include "taslab/vkdev.h"
 
@@ -512,7 +513,7 @@ static void usage(FILE *out)
 		TASLAB_VERSION_STRING);
 	for (const cli_command *const *c = cli_commands; *c; c++)
 		fprintf(out, "  %-10s %s\n", (*c)->name, (*c)->summary);
-	fprintf(out, "\n  --version  print the version\n  --help     this text\n");
+	fprintf(out, "\n  --version  print the version and the build's digest\n  --help     this text\n");
 }
 
 static int run_command(const cli_command *c, int argc, char **argv)
@@ -556,7 +557,8 @@ int cli_main(int argc, char **argv)
 		return 0;
 	}
 	if (!strcmp(argv[1], "--version")) {
-		printf("taslab %s\n", TASLAB_VERSION_STRING);
+		/* the build digest tells builds of one version apart (sweeps record it: tl_hash.h) */
+		printf("taslab %s (build %s)\n", TASLAB_VERSION_STRING, tl_build_digest()[0] ? tl_build_digest() : "unknown");
 		return 0;
 	}
 	const cli_command *c = cli_find_command(argv[1]);

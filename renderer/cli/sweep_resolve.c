@@ -15,6 +15,7 @@
 #include "taslab/render.h"
 #include "taslab/scene.h"
 #include "taslab/sweep_keys.h"
+#include "taslab/tl_hash.h"
 
 /* ------------------------------------------------------------------ options onto the request */
 
@@ -428,5 +429,6 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	snprintf(s->display_transform, sizeof s->display_transform, "%s", colour_name(col));
 	colour_digest(col, s->colour_digest);
 	colour_destroy(&col);
+	snprintf(s->build_digest, sizeof s->build_digest, "%s", tl_build_digest()); /* the sweep's identity holds the build */
 	return TL_OK;
 }

@@ -46,6 +46,7 @@ int run_manifest_read(const char *dir, run_manifest *m, char *err, size_t err_si
 	copy_str(in, "scene_path", m->scene_path, sizeof m->scene_path);
 	copy_str(in, "scene_digest", m->scene_digest, sizeof m->scene_digest);
 	copy_str(in, "colour_digest", m->colour_digest, sizeof m->colour_digest);
+	copy_str(json_object_get(j, "versions"), "build", m->build_digest, sizeof m->build_digest);
 	copy_str(in, "camera", m->camera, sizeof m->camera);
 	copy_str(in, "camera_motion", m->camera_motion, sizeof m->camera_motion);
 	copy_str(in, "method", m->method, sizeof m->method);

@@ -12,6 +12,7 @@
 #include "taslab/run.h"
 #include "taslab/sweep_keys.h"
 #include "taslab/tl_fs.h"
+#include "taslab/tl_hash.h"
 #include "taslab/tl_json.h"
 #include "taslab/tl_parse.h"
 #include "toml_json.h"
@@ -295,8 +296,9 @@ int sweep_spec_write(const char *path, const sweep_spec *s, char *err, size_t er
 							  "method", v->method, "T", jnum(v->T), "period",
 							  v->period ? json_integer(v->period) : json_null()));
 	}
-	json_t *j = json_pack("{s:i, s:o, s:o, s:s, s:s}", "taslab_sweep", 1, "scenes", scenes, "variants", variants,
-			      "display_transform", s->display_transform, "colour_digest", s->colour_digest);
+	json_t *j = json_pack("{s:i, s:o, s:o, s:s, s:s, s:s}", "taslab_sweep", 1, "scenes", scenes, "variants", variants,
+			      "display_transform", s->display_transform, "colour_digest", s->colour_digest, "build_digest",
+			      s->build_digest);
 	/* the settings kept as given: one entry per SWEEP_KEY_SPEC key of the table (sweep_keys.h) */
 	size_t nkeys;
 	const sweep_key *keys = sweep_keys(&nkeys);
@@ -447,8 +449,8 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 		return rc;
 	ctx c = {path, err, err_size};
 	/* the spec's own keys, then the settings kept as given (the SWEEP_KEY_SPEC keys of sweep_keys.h) */
-	const char *keys[40] = {"taslab_sweep", "scenes", "variants", "display_transform", "colour_digest"};
-	size_t nkeys, n = 5;
+	const char *keys[40] = {"taslab_sweep", "scenes", "variants", "display_transform", "colour_digest", "build_digest"};
+	size_t nkeys, n = 6;
 	const sweep_key *table = sweep_keys(&nkeys);
 	for (size_t i = 0; i < nkeys && n + 1 < sizeof keys / sizeof keys[0]; i++)
 		if (table[i].flags & SWEEP_KEY_SPEC)
@@ -494,6 +496,10 @@ int sweep_spec_read(const char *path, sweep_spec *s, char *err, size_t err_size)
 	if (!rc && json_object_get(j, "colour_digest"))
 		rc = get_string_or_empty(&c, "colour_digest", json_object_get(j, "colour_digest"), s->colour_digest,
 					 sizeof s->colour_digest);
+	/* a sweep.json made before builds were recorded has none: "" (it resumes only as a different sweep) */
+	if (!rc && json_object_get(j, "build_digest"))
+		rc = get_string_or_empty(&c, "build_digest", json_object_get(j, "build_digest"), s->build_digest,
+					 sizeof s->build_digest);
 	json_decref(j);
 	return rc;
 }
@@ -581,7 +587,21 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 	if (strcmp(a->colour_digest, b->colour_digest))
 		return differ(what, n, "the OpenColorIO config or one of its LUTs changed (content digest %s vs %s)",
 			      a->colour_digest[0] ? a->colour_digest : "none", b->colour_digest[0] ? b->colour_digest : "none");
+	if (strcmp(a->build_digest, b->build_digest))
+		return differ(what, n, "another taslab build (build digest %s vs %s)",
+			      a->build_digest[0] ? a->build_digest : "none", b->build_digest[0] ? b->build_digest : "none");
 	return 0;
+}
+
+int sweep_build_check(const sweep_spec *s, const char *path, char *err, size_t err_size)
+{
+	const char *mine = tl_build_digest();
+	if (!strcmp(s->build_digest, mine))
+		return TL_OK;
+	return tl_error(err, err_size, TL_ERR_INPUT,
+			"%s was started by another taslab build (build digest %s, this one's %s): resume it with that build, "
+			"or start the sweep again with another --out",
+			path, s->build_digest[0] ? s->build_digest : "none recorded", mine[0] ? mine : "unknown");
 }
 
 /* ------------------------------------------------------------------ plan */
@@ -681,6 +701,10 @@ void sweep_run_status_checked(const sweep_spec *s, const char *dir, const sweep_
 			      "%s: made from other inputs (scene digest %s, colour digest %s; the sweep's: %s, %s)", p,
 			      m.scene_digest[0] ? m.scene_digest : "none", m.colour_digest[0] ? m.colour_digest : "none",
 			      sc->digest[0] ? sc->digest : "none", s->colour_digest[0] ? s->colour_digest : "none");
+	/* rendered by another build than the sweep's: its frames need not be those this build makes */
+	if (!rc && strcmp(m.build_digest, s->build_digest))
+		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: rendered by another taslab build (build digest %s; the sweep's: %s)",
+			      p, m.build_digest[0] ? m.build_digest : "none", s->build_digest[0] ? s->build_digest : "none");
 	if (!rc && (m.first_frame != sc->first || m.last_frame + 1 != sc->end || m.width != s->width || m.height != s->height))
 		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: frames %u..%u at %ux%u, the sweep's are %u..%u at %ux%u", p,
 			      m.first_frame, m.last_frame, m.width, m.height, sc->first, sc->end - 1, s->width, s->height);

@@ -19,4 +19,12 @@ static inline void tl_fnv1a64(uint64_t *h, const void *data, size_t n)
 	}
 }
 
+/* 16 hex digits and the terminator. */
+#define TL_BUILD_DIGEST_HEX 17
+
+/* The build's digest: FNV-1a 64 of the running executable's bytes as 16 hex digits (computed once per process), or ""
+ * when /proc/self/exe cannot be read. Sweeps and run manifests record it so that a resume by another build is refused
+ * (a change detector, like the input digests). */
+const char *tl_build_digest(void);
+
 #endif

@@ -122,6 +122,7 @@ typedef struct run_manifest {
 	char scene[64], camera[64], camera_motion[16], method[32], variant[64];
 	char scene_path[1024], device[256], display_transform[256];
 	char scene_digest[24], colour_digest[24]; /* "" when the manifest has none (made before they were recorded) */
+	char build_digest[24];     /* versions.build: tl_build_digest() of the taslab that rendered it ("" before) */
 	double threshold;          /* NAN when absent */
 	uint32_t period;           /* 0 when absent */
 	run_method_facts facts;    /* inputs.method_facts; known = false in a manifest made before them */

@@ -124,6 +124,8 @@ typedef struct sweep_spec {
 	char ocio_config[SWEEP_PATH_MAX], display[128], view[128]; /* as given ("" = default) */
 	char display_transform[256];    /* the resolved transform's name (colour_name) */
 	char colour_digest[24];         /* colour_digest: the config and its LUTs, when resolved (issue 31.4) */
+	char build_digest[24];          /* tl_build_digest() of the taslab that resolved it ("" in a sweep.json made
+					 * before builds were recorded): a resume by another build is refused */
 	bool stereo;                    /* every run stereo (--size per eye): part of the sweep's identity */
 	double ipd;                     /* stereo: metres (default 0.063); 0 for mono */
 } sweep_spec;
@@ -137,6 +139,9 @@ bool sweep_file_is_spec(const char *path);
 /* 0 when a and b describe the same sweep (same runs, same rendering and metric settings); otherwise 1 with the
  * first difference in `what` ("variants: tfr@8 vs tfr@16"). */
 int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, size_t what_size);
+/* TL_OK when this taslab build (tl_build_digest) is the one that resolved the sweep; otherwise TL_ERR_INPUT naming
+ * `path` (its sweep.json) and both digests: a resume by another build would mix its runs with the old build's. */
+int sweep_build_check(const sweep_spec *s, const char *path, char *err, size_t err_size);
 
 /* ---- the plan ---- */
 
