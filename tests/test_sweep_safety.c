@@ -5,6 +5,7 @@
  * id that is not digits is refused before the report job is submitted (a fake sbatch on PATH records its calls), one
  * sweep at a time holds a folder, and `--out` naming something that is not a folder is bad input (exit 2). */
 #define _GNU_SOURCE
+#include <errno.h>
 #include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -194,6 +195,18 @@ static void test_lock_and_out(void **state)
 	st = sh("%s sweep " COMMON " --variants ref --frames 0:1 --out %s", TASLAB_BINARY, q(sw));
 	if (st == 0 || tu_count_lines(out) != 1 || !strstr(out, "in use by another 'taslab sweep'"))
 		fail_msg("exit %d:\n%s", st, out);
+	/* a second process for one run (--task I by hand beside the sweep's own, a Slurm task requeued while the first
+	 * still runs) is refused while the first holds the run's lock: nothing rendered */
+	snprintf(p, sizeof p, "%s/.taslab-locks", sw);
+	assert_true(mkdir(p, 0755) == 0 || errno == EEXIST);
+	snprintf(p, sizeof p, "%s/.taslab-locks/0", sw);
+	int tfd = open(p, O_RDWR | O_CREAT, 0644);
+	assert_true(tfd >= 0);
+	assert_int_equal(flock(tfd, LOCK_EX | LOCK_NB), 0);
+	st = sh("%s sweep %s/sweep.json --task 0", TASLAB_BINARY, q(sw));
+	if (st != 1 || tu_count_lines(out) != 1 || !strstr(out, "another process is doing this run"))
+		fail_msg("--task 0 while another holds its lock: exit %d:\n%s", st, out);
+	close(tfd);
 	snprintf(p, sizeof p, "%s/runs", sw);
 	assert_false(tu_file_exists(p));
 	close(fd);

@@ -215,21 +215,13 @@ static int lock_folder(const char *dir, int *fd, char *err, size_t err_size)
 {
 	char p[TL_PATH_MAX + 32];
 	snprintf(p, sizeof p, "%s/.taslab-lock", dir);
-	*fd = open(p, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-	if (*fd < 0)
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", p, strerror(errno));
-	if (flock(*fd, LOCK_EX | LOCK_NB)) {
-		int e = errno;
-		close(*fd);
-		*fd = -1;
-		if (e == EWOULDBLOCK)
-			return tl_error(err, err_size, TL_ERR_CONFLICT,
-					"%s is in use by another 'taslab sweep' (it holds %s): wait for it to finish, or stop it "
-					"and run this again to resume",
-					dir, p);
-		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot lock: %s", p, strerror(e));
-	}
-	return TL_OK;
+	int rc = cli_sweep_flock(p, fd, err, err_size);
+	if (rc == TL_ERR_CONFLICT)
+		return tl_error(err, err_size, TL_ERR_CONFLICT,
+				"%s is in use by another 'taslab sweep' (it holds %s): wait for it to finish, or stop it "
+				"and run this again to resume",
+				dir, p);
+	return rc;
 }
 
 static int sweep_main(void *opts, cli_ctx *ctx)

@@ -38,6 +38,10 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 
 /* The path of the running taslab binary (/proc/self/exe): what the local runner and Slurm scripts execute. */
 int cli_sweep_self(char *out, size_t out_size, char *err, size_t err_size);
+/* Opens `path` (creating it) and takes an exclusive flock on it without waiting: TL_OK and *fd; TL_ERR_CONFLICT with
+ * *fd = -1 (and no message: the caller says what holds it) when another process holds it; TL_ERR_OUTPUT otherwise.
+ * The lock goes when *fd is closed or the process ends, however it ends. */
+int cli_sweep_flock(const char *path, int *fd, char *err, size_t err_size);
 
 /* Runs every incomplete run of the plan, `jobs` at a time, each in its own process (`taslab sweep DIR/sweep.json
  * --task I`, output into its log file), with one progress line. *failed receives the number of runs that did not

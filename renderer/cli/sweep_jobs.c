@@ -15,7 +15,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -124,8 +126,50 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	return rc;
 }
 
+int cli_sweep_flock(const char *path, int *fd, char *err, size_t err_size)
+{
+	*fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+	if (*fd < 0)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", path, strerror(errno));
+	if (flock(*fd, LOCK_EX | LOCK_NB)) {
+		int e = errno;
+		close(*fd);
+		*fd = -1;
+		if (e == EWOULDBLOCK)
+			return TL_ERR_CONFLICT;
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: cannot lock: %s", path, strerror(e));
+	}
+	return TL_OK;
+}
+
+static int task_run(const sweep_spec *s, const char *dir, size_t index, int progress_fd, const char *command_line,
+		    bool *deferred, char *err, size_t err_size);
+
+/* One run, under SWEEP/.taslab-locks/I (review finding, 2026-11-27): the sweep's folder lock keeps a second sweep out,
+ * but not a second process for the same run - `--task I` by hand beside a running sweep, or a Slurm array task requeued
+ * while the first still ran - and two processes rendering one run write the same files. The second is refused. */
 int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progress_fd, const char *command_line,
 		   bool *deferred, char *err, size_t err_size)
+{
+	char p[TL_PATH_MAX + 64];
+	int fd = -1;
+	snprintf(p, sizeof p, "%s/.taslab-locks", dir);
+	if (mkdir(p, 0755) && errno != EEXIST)
+		return tl_error(err, err_size, TL_ERR_OUTPUT, "%s: %s", p, strerror(errno));
+	snprintf(p, sizeof p, "%s/.taslab-locks/%zu", dir, index);
+	int rc = cli_sweep_flock(p, &fd, err, err_size);
+	if (rc == TL_ERR_CONFLICT)
+		return tl_error(err, err_size, TL_ERR_CONFLICT,
+				"--task %zu: another process is doing this run (it holds %s): nothing done", index, p);
+	if (!rc)
+		rc = task_run(s, dir, index, progress_fd, command_line, deferred, err, err_size);
+	if (fd >= 0)
+		close(fd);
+	return rc;
+}
+
+static int task_run(const sweep_spec *s, const char *dir, size_t index, int progress_fd, const char *command_line,
+		    bool *deferred, char *err, size_t err_size)
 {
 	sweep_run r, ref;
 	sweep_status st, ref_st;
