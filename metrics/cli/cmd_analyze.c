@@ -1,5 +1,6 @@
 /* cmd_analyze.c — `taslab analyze coherence|predictors`: TFR analysis of chosen frames (taslab/analyze.h)
- * written through the metrics module (taslab/metrics_tfr.h). DESIGN section 4, paper secs. 4.1 and 5. */
+ * written through the metrics module (taslab/metrics_tfr.h). DESIGN section 4, paper secs. 4.1 and 5.
+ * `taslab analyze reuse-model SWEEP`: the survey's models of reuse (eqs. 5-7) fitted to a sweep (taslab/reuse_model.h). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,6 +9,7 @@
 #include "taslab/analyze.h"
 #include "taslab/colour.h"
 #include "taslab/metrics_tfr.h"
+#include "taslab/reuse_model.h"
 #include "taslab/scene.h"
 #include "taslab/tl_clock.h"
 #include "taslab/tl_fs.h"
@@ -143,11 +145,87 @@ static const cli_command analyze_predictors = {
 	ANALYZE_OPTIONS,
 };
 
-static const cli_command *const analyze_subs[] = {&analyze_coherence, &analyze_predictors, NULL};
+typedef struct reuse_opts {
+	const char *out, *error;
+} reuse_opts;
+
+static const cli_opt reuse_options[] = {
+	{.name = "out", .arg = "DIR", .help = "output folder (default: the sweep's folder)",
+	 .type = CLI_STRING, .offset = offsetof(reuse_opts, out)},
+	{.name = "error", .arg = "KEY", .help = "the error of eq. 5: a number of each run's metrics summary.json "
+						"(default maxrgb_mean; e.g. flip_mean, exceed_8)",
+	 .type = CLI_STRING, .offset = offsetof(reuse_opts, error)},
+	{0},
+};
+
+static void reuse_defaults(void *opts, cli_setup_opts *setup)
+{
+	(void)setup;
+	((reuse_opts *)opts)->error = "maxrgb_mean";
+}
+
+static int reuse_main(void *opts, cli_ctx *ctx)
+{
+	reuse_opts *o = opts;
+	char *err = ctx->err;
+	size_t err_size = sizeof ctx->err;
+	const char *arg = ctx->pos[0];
+	char dir[TL_PATH_MAX], spec_path[TL_PATH_MAX + 16];
+	/* SWEEP or SWEEP/sweep.json */
+	size_t len = strlen(arg);
+	if (len >= 11 && !strcmp(arg + len - 11, "/sweep.json"))
+		snprintf(dir, sizeof dir, "%.*s", (int)(len - 11), arg);
+	else
+		snprintf(dir, sizeof dir, "%s", arg);
+	snprintf(spec_path, sizeof spec_path, "%s/sweep.json", dir);
+	if (!tl_is_file(spec_path))
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: not a sweep (no sweep.json)", arg);
+	sweep_spec *spec = calloc(1, sizeof *spec);
+	if (!spec)
+		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+	const char *out = o->out ? o->out : dir;
+	size_t groups = 0;
+	int rc = sweep_spec_read(spec_path, spec, err, err_size);
+	if (!rc && tl_is_file(out))
+		rc = tl_error(err, err_size, TL_ERR_ARG, "--out %s is a file (give a folder)", out);
+	if (!rc)
+		rc = tl_check_out_dir(out, "--out", err, err_size);
+	if (!rc)
+		rc = mtr_reuse_model(spec, dir, o->error, out, &groups, err, err_size);
+	if (!rc)
+		printf("%s/reuse_model.md\n", out);
+	if (!rc)
+		fprintf(stderr, "taslab analyze: %zu scene / path / method group(s) fitted -> %s/reuse_model.csv\n", groups,
+			out);
+	free(spec);
+	return rc;
+}
+
+static const cli_command analyze_reuse_model = {
+	.name = "analyze reuse-model",
+	.summary = "the survey's error, cost and hit-rate models of reuse (eqs. 5-7) fitted to a sweep",
+	.synopsis = "taslab analyze reuse-model SWEEP [--out DIR] [--error KEY]",
+	.description = "For every scene, camera path and method with a refresh period in SWEEP (rrc/N, rrc-random/N,\n"
+		       "rrc-interleaved/N, sau/N, warp/N; dn = N), fits [S] eq. 5 eps(dn) = alpha (1 - exp(-lambda (dn - 1)))\n"
+		       "to the runs' clip-mean error, eq. 6 H A_hit + M A_miss + c = dt to every frame after the first\n"
+		       "(hits = reused samples, misses = shaded samples, dt = GPU ms), and eq. 7's hit rate\n"
+		       "h(dn) = mu (1 - 1/dn). Writes DIR/reuse_model.csv and reuse_model.md (default DIR: SWEEP) and\n"
+		       "prints the .md's path. Sweep the method at two or more periods > 1 for eq. 5.",
+	.options = reuse_options,
+	.opts_size = sizeof(reuse_opts),
+	.defaults = reuse_defaults,
+	.min_pos = 1,
+	.max_pos = 1,
+	.pos_help = "SWEEP",
+	.run = reuse_main,
+};
+
+static const cli_command *const analyze_subs[] = {&analyze_coherence, &analyze_predictors, &analyze_reuse_model, NULL};
 
 const cli_command cli_cmd_analyze = {
 	.name = "analyze",
-	.summary = "TFR analysis: temporal coherence and gradient predictors (Figs. 4, 7-9)",
-	.synopsis = "taslab analyze coherence|predictors --scene S --frames LIST --out DIR [options]",
+	.summary = "TFR analysis: temporal coherence and gradient predictors (Figs. 4, 7-9); models of reuse ([S] eqs. 5-7)",
+	.synopsis = "taslab analyze coherence|predictors --scene S --frames LIST --out DIR [options]\n"
+		    "taslab analyze reuse-model SWEEP [--out DIR] [--error KEY]",
 	.subcommands = analyze_subs,
 };
