@@ -420,8 +420,8 @@ static void test_other_build(void **state)
 	assert_non_null(strstr(m, want));
 	free(j), free(m);
 	/* another build: one byte more */
-	assert_int_equal(sh("mkdir -p %s/other && cp %s %s && printf 'x' >> %s && %s --version", q(dir), TASLAB_BINARY, q(other),
-			    q(other), q(other)), 0);
+	assert_int_equal(sh("mkdir -p %s/other && cp %s %s && printf 'x' >> %s && %s --version", q(dir), TASLAB_BINARY,
+			    q(other), q(other), q(other)), 0);
 	if (strstr(out, digest))
 		fail_msg("the other binary has the same build digest:\n%s", out);
 	unlink(man);

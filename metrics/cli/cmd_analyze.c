@@ -1,6 +1,7 @@
 /* cmd_analyze.c — `taslab analyze coherence|predictors`: TFR analysis of chosen frames (taslab/analyze.h)
  * written through the metrics module (taslab/metrics_tfr.h). DESIGN section 4, paper secs. 4.1 and 5.
- * `taslab analyze reuse-model SWEEP`: the survey's models of reuse (eqs. 5-7) fitted to a sweep (taslab/reuse_model.h). */
+ * `taslab analyze reuse-model SWEEP`: the survey's models of reuse (eqs. 5-7) fitted to a sweep
+ * (taslab/reuse_model.h). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -289,14 +289,16 @@ int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key,
 				const char *scn = s->scenes[sc].name, *cn = s->scenes[sc].cameras[cam].name;
 				fprintf(md.f, "\n## %s / %s / %s\n\n", scn, cn, name);
 				fprintf(md.f, "eq. 5: α = %.4g, λ = %.4g (RMSE %.3g)%s; eq. 7: μ = %.4f; eq. 6 over %zu frames: ",
-					e5.alpha, e5.lambda, e5.rmse, e5.ok ? "" : " — needs two periods > 1", mu, e6.frames);
+					e5.alpha, e5.lambda, e5.rmse,
+					!e5.ok ? " — needs two periods > 1" : np == 2 ? " — two points: exact" : "", mu,
+					e6.frames);
 				if (!e6.ok)
 					fprintf(md.f, "not determined (fewer than 4 frames, or misses that do not vary)\n");
 				else if (e6.three_terms)
-					fprintf(md.f, "A_hit = %.3g ns, A_miss = %.3g ns per sample, c = %.3g ms (R² %.3f)\n",
+					fprintf(md.f, "A_hit = %.0f ns, A_miss = %.0f ns per sample, c = %.1f ms (R² %.3f)\n",
 						e6.a_hit * 1e6, e6.a_miss * 1e6, e6.c, e6.r2);
 				else
-					fprintf(md.f, "A_miss − A_hit = %.3g ns per sample, c + A_hit·V = %.3g ms (R² %.3f; hits + "
+					fprintf(md.f, "A_miss − A_hit = %.0f ns per sample, c + A_hit·V = %.1f ms (R² %.3f; hits + "
 						      "misses hardly vary, so A_hit and c are not separable)\n",
 						e6.miss_minus_hit * 1e6, e6.c, e6.r2);
 				fprintf(md.f, "\n| Δn | %s | eq. 5 | hit rate | eq. 7 | ms | eqs. 6+7 |\n|---:|---:|---:|---:|---:|---:|---:|\n",
