@@ -4,7 +4,8 @@
  *    them (one period, three frames, misses that do not vary);
  *  - `taslab analyze reuse-model` on a real sweep (rrc/2, /4, /8 at 48x32): the error column is each run's
  *    summary.json value, the hit rate is recomputed here from each run's stats.csv (frames after the first), rrc's
- *    μ is 1 within the misses of a moving path, and bad input is one line and a non-zero exit. */
+ *    μ is 1 within the misses of a moving path, the sweep's report shows the same fits (and a sweep without a method
+ *    with a period none), and bad input is one line and a non-zero exit. */
 #define _GNU_SOURCE
 #include <math.h>
 #include <stdarg.h>
@@ -198,6 +199,21 @@ static void test_cli(void **state)
 		assert_true(isnan(mu) || m == mu);
 		mu = m;
 	}
+	/* the sweep's report shows the same fits (report/data/reuse_model.csv holds the same rows) */
+	st = sh("%s report %s", TASLAB_BINARY, sw);
+	if (st)
+		fail_msg("report: exit %d:\n%s", st, out);
+	snprintf(p, sizeof p, "%s/report/data/reuse_model.csv", sw);
+	char *rcsv = tu_read_file(p, NULL);
+	assert_non_null(rcsv);
+	assert_string_equal(rcsv, csv);
+	free(rcsv);
+	snprintf(p, sizeof p, "%s/report/index.html", sw);
+	char *html = tu_read_file(p, NULL);
+	assert_non_null(html);
+	assert_non_null(strstr(html, "<h3>Models of reuse"));
+	assert_non_null(strstr(html, "<b>rrc</b>: eq. 5"));
+	free(html);
 	free(csv);
 	/* rrc refreshes 1/N of its tiles per frame, and shades the misses of the moving path on top: μ just under 1 */
 	if (!(mu > 0.8 && mu <= 1.0))
@@ -218,6 +234,13 @@ static void test_cli(void **state)
 		fail_msg("no period: exit %d:\n%s", st, out);
 	snprintf(p, sizeof p, "%s/sw2/reuse_model.csv", dir);
 	assert_false(tu_file_exists(p)); /* nothing that looks complete */
+	/* its report has no such section */
+	assert_int_equal(sh("%s report %s/sw2", TASLAB_BINARY, dir), 0);
+	snprintf(p, sizeof p, "%s/sw2/report/index.html", dir);
+	html = tu_read_file(p, NULL);
+	assert_non_null(html);
+	assert_null(strstr(html, "Models of reuse"));
+	free(html);
 }
 
 int main(void)

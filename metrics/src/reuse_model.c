@@ -121,11 +121,6 @@ double mtr_fit_hit_rate(const double *dn, const double *rate, size_t n)
 
 /* ------------------------------------------------------------------ a sweep */
 
-typedef struct point {
-	size_t variant;
-	double dn, eps, hit_rate, ms, visible; /* clip means over frames after the first */
-} point;
-
 typedef struct series {
 	double *h, *m, *t;
 	size_t n, cap;
@@ -163,8 +158,8 @@ static void group_name(const char *variant, char *out, size_t n)
 }
 
 /* One run: its error from summary.json, its frames (after the first) into the group's series. 1: not complete. */
-static int read_run(const sweep_spec *s, const char *dir, const sweep_run *r, const char *key, point *p, series *f,
-		    char *err, size_t err_size)
+static int read_run(const sweep_spec *s, const char *dir, const sweep_run *r, const char *key, mtr_reuse_point *p,
+		    series *f, char *err, size_t err_size)
 {
 	sweep_status st;
 	char why[256], path[TL_PATH_MAX + 16];
@@ -211,25 +206,107 @@ static int read_run(const sweep_spec *s, const char *dir, const sweep_run *r, co
 	return TL_OK;
 }
 
+/* The runs of method `name` on (scene, camera) into g, fitted. */
+static int fit_group(const sweep_spec *s, const char *dir, const char *key, size_t sc, size_t cam, size_t v0,
+		     bool *done, series *f, mtr_reuse_group *g, char *err, size_t err_size)
+{
+	memset(g, 0, sizeof *g);
+	g->scene = sc, g->camera = cam;
+	group_name(s->variants[v0].variant, g->name, sizeof g->name);
+	f->n = 0;
+	for (size_t v = v0; v < s->variant_count; v++) {
+		char other[SWEEP_NAME_MAX];
+		group_name(s->variants[v].variant, other, sizeof other);
+		if (!s->variants[v].period || strcmp(g->name, other))
+			continue;
+		done[v] = true;
+		sweep_run r = {0};
+		bool found = false;
+		for (size_t i = 0; !found && i < sweep_run_count(s); i++) /* the plan index of (scene, camera, variant) */
+			found = !sweep_run_at(s, i, &r) && r.scene == sc && r.camera == cam && r.variant == v;
+		int got = found ? read_run(s, dir, &r, key, &g->pts[g->np], f, err, err_size) : 1;
+		if (got < 0)
+			return got;
+		g->np += got == 0;
+	}
+	double dn[SWEEP_MAX_VARIANTS], eps[SWEEP_MAX_VARIANTS], hr[SWEEP_MAX_VARIANTS];
+	for (size_t i = 0; i < g->np; i++)
+		dn[i] = g->pts[i].dn, eps[i] = g->pts[i].eps, hr[i] = g->pts[i].hit_rate;
+	mtr_fit_eq5(dn, eps, g->np, &g->e5);
+	mtr_fit_eq6(f->h, f->m, f->t, f->n, &g->e6);
+	g->mu = mtr_fit_hit_rate(dn, hr, g->np);
+	return TL_OK;
+}
+
+int mtr_reuse_fit(const sweep_spec *s, const char *dir, const char *error_key, mtr_reuse_group **groups, size_t *n,
+		  char *err, size_t err_size)
+{
+	*groups = NULL, *n = 0;
+	series f = {0};
+	mtr_reuse_group *out = NULL, g;
+	size_t cap = 0;
+	int rc = TL_OK;
+	bool done[SWEEP_MAX_VARIANTS];
+	for (size_t sc = 0; !rc && sc < s->scene_count; sc++)
+		for (size_t cam = 0; !rc && cam < s->scenes[sc].camera_count; cam++) {
+			memset(done, 0, sizeof done);
+			for (size_t v0 = 0; !rc && v0 < s->variant_count; v0++) {
+				if (!s->variants[v0].period || done[v0])
+					continue;
+				if ((rc = fit_group(s, dir, error_key, sc, cam, v0, done, &f, &g, err, err_size)) || !g.np)
+					continue;
+				if (*n == cap) {
+					cap = cap ? 2 * cap : 8;
+					mtr_reuse_group *o2 = realloc(out, cap * sizeof *o2);
+					if (!o2) {
+						rc = tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");
+						break;
+					}
+					out = o2;
+				}
+				out[(*n)++] = g;
+			}
+		}
+	free(f.h), free(f.m), free(f.t);
+	if (rc) {
+		free(out);
+		*n = 0;
+		return rc;
+	}
+	*groups = out;
+	return TL_OK;
+}
+
+double mtr_reuse_eps(const mtr_reuse_group *g, double dn)
+{
+	return g->e5.ok ? g->e5.alpha * (1.0 - exp(-g->e5.lambda * (dn - 1.0))) : NAN;
+}
+
+double mtr_reuse_hit_rate(const mtr_reuse_group *g, double dn)
+{
+	return g->mu * (1.0 - 1.0 / dn);
+}
+
+double mtr_reuse_ms(const mtr_reuse_group *g, double dn, double visible)
+{
+	const mtr_eq6 *c = &g->e6;
+	double h = mtr_reuse_hit_rate(g, dn), misses = visible * (1.0 - h);
+	if (!c->ok || !isfinite(h))
+		return NAN;
+	if (c->three_terms)
+		return c->c + visible * h * c->a_hit + misses * c->a_miss;
+	return c->c + misses * c->miss_minus_hit;
+}
+
 static void cell(FILE *f, double v, const char *fmt)
 {
 	if (isfinite(v))
 		fprintf(f, fmt, v);
 }
 
-/* The frame time eq. 6 and 7 predict at Δn for a frame of `visible` samples. */
-static double model_ms(const mtr_eq6 *c, double mu, double dn, double visible)
+int mtr_reuse_write(const sweep_spec *s, const char *dir, const char *error_key, const mtr_reuse_group *gs, size_t n,
+		    const char *out_dir, char *err, size_t err_size)
 {
-	double h = mu * (1.0 - 1.0 / dn), misses = visible * (1.0 - h);
-	if (c->three_terms)
-		return c->c + visible * h * c->a_hit + misses * c->a_miss;
-	return c->c + misses * c->miss_minus_hit;
-}
-
-int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key, const char *out_dir, size_t *groups,
-		    char *err, size_t err_size)
-{
-	*groups = 0;
 	char csv_path[TL_PATH_MAX + 32], md_path[TL_PATH_MAX + 32];
 	snprintf(csv_path, sizeof csv_path, "%s/reuse_model.csv", out_dir);
 	snprintf(md_path, sizeof md_path, "%s/reuse_model.md", out_dir);
@@ -247,105 +324,71 @@ int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key,
 		      "GPU ms per frame over each run's frames after the first; hits = reused samples, misses = shaded "
 		      "samples.\n",
 		dir, error_key);
-	point pts[SWEEP_MAX_VARIANTS];
-	series f = {0};
-	bool done[SWEEP_MAX_VARIANTS];
-	for (size_t sc = 0; !rc && sc < s->scene_count; sc++)
-		for (size_t cam = 0; !rc && cam < s->scenes[sc].camera_count; cam++) {
-			memset(done, 0, sizeof done);
-			for (size_t v0 = 0; !rc && v0 < s->variant_count; v0++) {
-				if (!s->variants[v0].period || done[v0])
-					continue;
-				char name[SWEEP_NAME_MAX], other[SWEEP_NAME_MAX];
-				group_name(s->variants[v0].variant, name, sizeof name);
-				size_t np = 0;
-				f.n = 0;
-				for (size_t v = v0; !rc && v < s->variant_count; v++) {
-					group_name(s->variants[v].variant, other, sizeof other);
-					if (!s->variants[v].period || strcmp(name, other))
-						continue;
-					done[v] = true;
-					sweep_run r;
-					/* the plan index of (scene, camera, variant): the run whose fields match */
-					for (size_t i = 0; i < sweep_run_count(s); i++)
-						if (!sweep_run_at(s, i, &r) && r.scene == sc && r.camera == cam && r.variant == v)
-							break;
-					int got = read_run(s, dir, &r, error_key, &pts[np], &f, err, err_size);
-					if (got < 0)
-						rc = got;
-					else if (got == 0)
-						np++;
-				}
-				if (rc || !np)
-					continue;
-				double dn[SWEEP_MAX_VARIANTS], eps[SWEEP_MAX_VARIANTS], hr[SWEEP_MAX_VARIANTS];
-				for (size_t i = 0; i < np; i++)
-					dn[i] = pts[i].dn, eps[i] = pts[i].eps, hr[i] = pts[i].hit_rate;
-				mtr_eq5 e5;
-				mtr_eq6 e6;
-				mtr_fit_eq5(dn, eps, np, &e5);
-				mtr_fit_eq6(f.h, f.m, f.t, f.n, &e6);
-				double mu = mtr_fit_hit_rate(dn, hr, np);
-				const char *scn = s->scenes[sc].name, *cn = s->scenes[sc].cameras[cam].name;
-				fprintf(md.f, "\n## %s / %s / %s\n\n", scn, cn, name);
-				fprintf(md.f, "eq. 5: α = %.4g, λ = %.4g (RMSE %.3g)%s; eq. 7: μ = %.4f; eq. 6 over %zu frames: ",
-					e5.alpha, e5.lambda, e5.rmse,
-					!e5.ok ? " — needs two periods > 1" : np == 2 ? " — two points: exact" : "", mu,
-					e6.frames);
-				if (!e6.ok)
-					fprintf(md.f, "not determined (fewer than 4 frames, or misses that do not vary)\n");
-				else if (e6.three_terms)
-					fprintf(md.f, "A_hit = %.0f ns, A_miss = %.0f ns per sample, c = %.1f ms (R² %.3f)\n",
-						e6.a_hit * 1e6, e6.a_miss * 1e6, e6.c, e6.r2);
-				else
-					fprintf(md.f, "A_miss − A_hit = %.0f ns per sample, c + A_hit·V = %.1f ms (R² %.3f; hits + "
-						      "misses hardly vary, so A_hit and c are not separable)\n",
-						e6.miss_minus_hit * 1e6, e6.c, e6.r2);
-				fprintf(md.f, "\n| Δn | %s | eq. 5 | hit rate | eq. 7 | ms | eqs. 6+7 |\n|---:|---:|---:|---:|---:|---:|---:|\n",
-					error_key);
-				for (size_t i = 0; i < np; i++) {
-					const point *p = &pts[i];
-					double em = e5.ok ? e5.alpha * (1.0 - exp(-e5.lambda * (p->dn - 1.0))) : NAN;
-					double hm = mu * (1.0 - 1.0 / p->dn);
-					double mm = e6.ok && isfinite(mu) ? model_ms(&e6, mu, p->dn, p->visible) : NAN;
-					fprintf(csv.f, "%s,%s,%s,%g,%s,%.6g,", scn, cn, name, p->dn, error_key, p->eps);
-					cell(csv.f, em, "%.6g");
-					fprintf(csv.f, ",%.6f,", p->hit_rate);
-					cell(csv.f, hm, "%.6f");
-					fprintf(csv.f, ",%.4f,", p->ms);
-					cell(csv.f, mm, "%.4f");
-					const double vals[] = {e5.alpha, e5.lambda, e5.rmse, mu, e6.a_hit * 1e6, e6.a_miss * 1e6,
-							       e6.miss_minus_hit * 1e6, e6.c, e6.r2};
-					for (size_t k = 0; k < sizeof vals / sizeof vals[0]; k++) {
-						fputc(',', csv.f);
-						cell(csv.f, vals[k], "%.6g");
-					}
-					fprintf(csv.f, ",%zu\n", e6.frames);
-					fprintf(md.f, "| %g | %.4g | ", p->dn, p->eps);
-					cell(md.f, em, "%.4g");
-					fprintf(md.f, " | %.3f | ", p->hit_rate);
-					cell(md.f, hm, "%.3f");
-					fprintf(md.f, " | %.1f | ", p->ms);
-					cell(md.f, mm, "%.1f");
-					fprintf(md.f, " |\n");
-				}
-				(*groups)++;
+	for (size_t k = 0; k < n; k++) {
+		const mtr_reuse_group *g = &gs[k];
+		const mtr_eq5 *e5 = &g->e5;
+		const mtr_eq6 *e6 = &g->e6;
+		const char *scn = s->scenes[g->scene].name, *cn = s->scenes[g->scene].cameras[g->camera].name;
+		fprintf(md.f, "\n## %s / %s / %s\n\n", scn, cn, g->name);
+		fprintf(md.f, "eq. 5: α = %.4g, λ = %.4g (RMSE %.3g)%s; eq. 7: μ = %.4f; eq. 6 over %zu frames: ", e5->alpha,
+			e5->lambda, e5->rmse, !e5->ok ? " — needs two periods > 1" : g->np == 2 ? " — two points: exact" : "",
+			g->mu, e6->frames);
+		if (!e6->ok)
+			fprintf(md.f, "not determined (fewer than 4 frames, or misses that do not vary)\n");
+		else if (e6->three_terms)
+			fprintf(md.f, "A_hit = %.0f ns, A_miss = %.0f ns per sample, c = %.1f ms (R² %.3f)\n", e6->a_hit * 1e6,
+				e6->a_miss * 1e6, e6->c, e6->r2);
+		else
+			fprintf(md.f, "A_miss − A_hit = %.0f ns per sample, c + A_hit·V = %.1f ms (R² %.3f; hits + misses "
+				      "hardly vary, so A_hit and c are not separable)\n",
+				e6->miss_minus_hit * 1e6, e6->c, e6->r2);
+		fprintf(md.f, "\n| Δn | %s | eq. 5 | hit rate | eq. 7 | ms | eqs. 6+7 |\n|---:|---:|---:|---:|---:|---:|---:|\n",
+			error_key);
+		for (size_t i = 0; i < g->np; i++) {
+			const mtr_reuse_point *p = &g->pts[i];
+			double em = mtr_reuse_eps(g, p->dn), hm = mtr_reuse_hit_rate(g, p->dn);
+			double mm = mtr_reuse_ms(g, p->dn, p->visible);
+			fprintf(csv.f, "%s,%s,%s,%g,%s,%.6g,", scn, cn, g->name, p->dn, error_key, p->eps);
+			cell(csv.f, em, "%.6g");
+			fprintf(csv.f, ",%.6f,", p->hit_rate);
+			cell(csv.f, hm, "%.6f");
+			fprintf(csv.f, ",%.4f,", p->ms);
+			cell(csv.f, mm, "%.4f");
+			const double vals[] = {e5->alpha, e5->lambda, e5->rmse, g->mu, e6->a_hit * 1e6, e6->a_miss * 1e6,
+					       e6->miss_minus_hit * 1e6, e6->c, e6->r2};
+			for (size_t q = 0; q < sizeof vals / sizeof vals[0]; q++) {
+				fputc(',', csv.f);
+				cell(csv.f, vals[q], "%.6g");
 			}
+			fprintf(csv.f, ",%zu\n", e6->frames);
+			fprintf(md.f, "| %g | %.4g | ", p->dn, p->eps);
+			cell(md.f, em, "%.4g");
+			fprintf(md.f, " | %.3f | ", p->hit_rate);
+			cell(md.f, hm, "%.3f");
+			fprintf(md.f, " | %.1f | ", p->ms);
+			cell(md.f, mm, "%.1f");
+			fprintf(md.f, " |\n");
 		}
-	free(f.h), free(f.m), free(f.t);
-	if (!rc && !*groups)
-		rc = tl_error(err, err_size, TL_ERR_INPUT,
-			      "%s: no complete run of a method with a period (rrc/N, rrc-random/N, rrc-interleaved/N, sau/N, "
-			      "warp/N) with its metrics: sweep one first",
-			      dir);
-	if (rc) {
-		tl_atomic_abort(&csv);
-		tl_atomic_abort(&md);
-		return rc;
 	}
 	if ((rc = tl_atomic_commit(&csv, err, err_size)))
 		tl_atomic_abort(&md);
 	else
 		rc = tl_atomic_commit(&md, err, err_size);
+	return rc;
+}
+
+int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key, const char *out_dir, size_t *groups,
+		    char *err, size_t err_size)
+{
+	mtr_reuse_group *g = NULL;
+	int rc = mtr_reuse_fit(s, dir, error_key, &g, groups, err, err_size);
+	if (!rc && !*groups)
+		rc = tl_error(err, err_size, TL_ERR_INPUT,
+			      "%s: no complete run of a method with a period (rrc/N, rrc-random/N, rrc-interleaved/N, sau/N, "
+			      "warp/N) with its metrics: sweep one first",
+			      dir);
+	if (!rc)
+		rc = mtr_reuse_write(s, dir, error_key, g, *groups, out_dir, err, err_size);
+	free(g);
 	return rc;
 }

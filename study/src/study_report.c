@@ -142,6 +142,26 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	rc = groups_of(d, &gi, &ng, err, err_size);
 	for (size_t g = 0; g < ng && !rc; g++)
 		rc = group_files(d, rdir, &gi[g], &gnuplot_note, err, err_size);
+	/* the survey's models of reuse of the methods with a period, per group (data/reuse_model.csv, .md) */
+	mtr_reuse_group *reuse = NULL;
+	size_t nreuse = 0;
+	if (!rc) {
+		char note[512];
+		if (mtr_reuse_fit(d->spec, d->dir, "maxrgb_mean", &reuse, &nreuse, note, sizeof note)) {
+			fprintf(stderr, "taslab report: note: no models of reuse: %s\n", note);
+			nreuse = 0;
+		}
+		snprintf(path, sizeof path, "%s/data", rdir);
+		if (nreuse)
+			rc = mtr_reuse_write(d->spec, d->dir, "maxrgb_mean", reuse, nreuse, path, err, err_size);
+		for (size_t g = 0; g < ng; g++)
+			for (size_t k = 0; k < nreuse; k++)
+				if (reuse[k].scene == gi[g].scene && reuse[k].camera == gi[g].cam) {
+					if (!gi[g].nreuse)
+						gi[g].reuse = &reuse[k];
+					gi[g].nreuse++;
+				}
+	}
 	/* the study: joined table and JND against the chosen metric */
 	if (!rc && d->study)
 		rc = sty_rpt_study_files(d, rdir, &study, &jnd_plot, err, err_size);
@@ -162,6 +182,7 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 	if (!rc && index)
 		snprintf(index, index_size, "%s", path);
 	free(gi);
+	free(reuse);
 	sty_rpt_study_free(&study);
 	return rc;
 }

@@ -1,7 +1,8 @@
 /* study_report_budget.c — the sweep report's matched-budget comparison of one scene x camera group (BASELINES.md
  * section 0 "Comparison"; issue 26): the plot of shaded fraction against exceed_8, one curve per method over its
  * settings (report/data/<group>--budget.csv and .gp, plots/<group>--budget.svg), and the table of each TAS variant
- * beside each other method at its nearest clip-mean shaded samples (pairs from mtr_sweep_matched). */
+ * beside each other method at its nearest clip-mean shaded samples (pairs from mtr_sweep_matched); and the survey's
+ * models of reuse fitted to the group's methods with a period ([S] sec. 4.1, eqs. 5-7; metrics/reuse_model.c). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -136,4 +137,59 @@ void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group 
 			   "median frame time.</p>\n");
 	else
 		fprintf(f, "<p class=\"note\">No TAS variant with another method to match here.</p>\n");
+}
+
+static void num_cell(FILE *f, double v, const char *fmt)
+{
+	fputs("<td>", f);
+	if (isfinite(v))
+		fprintf(f, fmt, v);
+	else
+		fputs("—", f);
+	fputs("</td>", f);
+}
+
+void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g)
+{
+	(void)d;
+	if (!g->nreuse)
+		return;
+	fprintf(f, "<h3>Models of reuse <span class=\"note\">([S] sec. 4.1, eqs. 5–7)</span></h3>\n");
+	for (size_t k = 0; k < g->nreuse; k++) {
+		const mtr_reuse_group *m = &g->reuse[k];
+		fprintf(f, "<p class=\"note\"><b>");
+		esc(f, m->name);
+		if (m->e5.ok)
+			fprintf(f, "</b>: eq. 5 ε(Δn) = α (1 − e<sup>−λ(Δn−1)</sup>) with α = %.3g, λ = %.3g (RMSE %.2g)",
+				m->e5.alpha, m->e5.lambda, m->e5.rmse);
+		else
+			fprintf(f, "</b>: eq. 5 needs two periods &gt; 1");
+		fprintf(f, "; eq. 7 hit rate μ (1 − 1/Δn) with μ = %.3f; eq. 6 over %zu frames: ", m->mu, m->e6.frames);
+		if (!m->e6.ok)
+			fprintf(f, "not determined");
+		else if (m->e6.three_terms)
+			fprintf(f, "A<sub>hit</sub> = %.0f ns, A<sub>miss</sub> = %.0f ns per sample, c = %.1f ms (R² %.2f)",
+				m->e6.a_hit * 1e6, m->e6.a_miss * 1e6, m->e6.c, m->e6.r2);
+		else
+			fprintf(f, "A<sub>miss</sub> − A<sub>hit</sub> = %.0f ns per sample, c′ = %.1f ms (R² %.2f; hits + "
+				   "misses constant, so A<sub>hit</sub> and c are one term)",
+				m->e6.miss_minus_hit * 1e6, m->e6.c, m->e6.r2);
+		fprintf(f, "</p>\n<div class=\"scroll\"><table class=\"budget\"><tr><th>Δn</th><th>max-RGB mean</th>"
+			   "<th>eq. 5</th><th>hit rate</th><th>eq. 7</th><th>GPU ms</th><th>eqs. 6+7</th></tr>\n");
+		for (size_t i = 0; i < m->np; i++) {
+			const mtr_reuse_point *p = &m->pts[i];
+			fprintf(f, "<tr><td>%g</td>", p->dn);
+			num_cell(f, p->eps, "%.3f");
+			num_cell(f, mtr_reuse_eps(m, p->dn), "%.3f");
+			num_cell(f, p->hit_rate, "%.3f");
+			num_cell(f, mtr_reuse_hit_rate(m, p->dn), "%.3f");
+			num_cell(f, p->ms, "%.1f");
+			num_cell(f, mtr_reuse_ms(m, p->dn, p->visible), "%.1f");
+			fprintf(f, "</tr>\n");
+		}
+		fprintf(f, "</table></div>\n");
+	}
+	fprintf(f, "<p class=\"note\">Fitted to this sweep's runs of each method at its periods (Δn = N), error = "
+		   "mean max-RGB against ref, frames after each run's first; all groups in data/reuse_model.csv. "
+		   "<code>taslab analyze reuse-model</code> fits another metric.</p>\n");
 }

@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "taslab/reuse_model.h"
 #include "taslab/metrics_sweep.h"
 #include "taslab/study_report.h"
 #include "taslab/study.h"
@@ -44,6 +45,8 @@ typedef struct sty_rpt_group {
 	bool plots_ok;
 	bool coherence;
 	bool budget;    /* plots/<stem>--budget.svg was drawn */
+	const mtr_reuse_group *reuse; /* this group's fits of the survey's models of reuse (reuse_model.h), or NULL */
+	size_t nreuse;
 } sty_rpt_group;
 
 /* One study condition as the tally states it in conditions.csv (6 decimals), with the JND interval. */
@@ -95,6 +98,8 @@ int sty_rpt_budget_plot(const char *rdir, const char *stem, const sty_rpt_group 
 			size_t err_size);
 /* The group's matched-budget section: the plot and the table of the pairs `p` (mtr_sweep_matched over d->rows)
  * whose TAS run is in the group. */
+/* The group's models of reuse ([S] eqs. 5-7): a table per method with a period; nothing when it has none. */
+void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g);
 void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g, const char *stem,
 			 const mtr_match_pair *p, size_t np);
 

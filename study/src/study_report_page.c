@@ -449,6 +449,7 @@ static void page_group(FILE *f, const sty_report_desc *d, const sty_rpt_group *g
 	fprintf(f, " <span class=\"note\">(%s camera, %u frames)</span></h2>\n", cam->motion, sc->end - sc->first);
 	page_group_plots(f, g, stem);
 	sty_rpt_budget_html(f, d, g, stem, pairs, np);
+	sty_rpt_reuse_html(f, d, g);
 	page_group_runs(f, d, g, stem, study);
 	page_group_clips(f, g, sc, cam);
 	fprintf(f, "</section>\n");

@@ -44,6 +44,37 @@ void mtr_fit_eq6(const double *hits, const double *misses, const double *dt, siz
 /* μ of eq. 7's hit-rate model h(Δn) = μ (1 − 1/Δn), least squares over the points with Δn > 1; NAN when none. */
 double mtr_fit_hit_rate(const double *dn, const double *rate, size_t n);
 
+/* One run of a group: its period and clip means over the frames after its first. */
+typedef struct mtr_reuse_point {
+	size_t variant; /* index into the spec's variants */
+	double dn, eps, hit_rate, ms, visible;
+} mtr_reuse_point;
+
+/* One scene, camera path and method (the variant token without its "/N": "rrc-random") with its fits. */
+typedef struct mtr_reuse_group {
+	size_t scene, camera;
+	char name[SWEEP_NAME_MAX];
+	mtr_reuse_point pts[SWEEP_MAX_VARIANTS];
+	size_t np;
+	mtr_eq5 e5;
+	mtr_eq6 e6;
+	double mu;
+} mtr_reuse_group;
+
+/* The groups of the sweep in DIR with complete runs (and metrics) at one or more periods, fitted; *groups is
+ * malloc'ed (NULL and *n = 0 when there are none). ε is the clip mean `error_key` of each run's summary.json;
+ * TL_ERR_INPUT when it is not a number there. */
+int mtr_reuse_fit(const sweep_spec *s, const char *dir, const char *error_key, mtr_reuse_group **groups, size_t *n,
+		  char *err, size_t err_size);
+/* What the fitted models predict at Δn: eq. 5's error, eq. 7's hit rate, eqs. 6 + 7's frame time (ms) for a frame of
+ * `visible` samples; NAN where the group's fit is not determined. */
+double mtr_reuse_eps(const mtr_reuse_group *g, double dn);
+double mtr_reuse_hit_rate(const mtr_reuse_group *g, double dn);
+double mtr_reuse_ms(const mtr_reuse_group *g, double dn, double visible);
+/* OUT/reuse_model.csv and OUT/reuse_model.md of the groups (atomically, both or neither). */
+int mtr_reuse_write(const sweep_spec *s, const char *dir, const char *error_key, const mtr_reuse_group *g, size_t n,
+		    const char *out_dir, char *err, size_t err_size);
+
 /* Fits the three models for every scene, camera path and method of the sweep in DIR that has complete runs at
  * one or more periods, with ε the clip mean `error_key` of each run's metrics summary.json (e.g. "maxrgb_mean",
  * "flip_mean", "exceed_8"); each run's first frame (a full shading, with the first frame's costs) is left out of
