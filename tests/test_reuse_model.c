@@ -8,7 +8,6 @@
  *    with a period none), and bad input is one line and a non-zero exit. */
 #define _GNU_SOURCE
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -99,16 +98,7 @@ static void test_hit_rate(void **state)
 
 static char out[1 << 16];
 
-static int sh(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int sh(const char *fmt, ...)
-{
-	char cmd[8192];
-	va_list ap;
-	va_start(ap, fmt);
-	vsnprintf(cmd, sizeof cmd, fmt, ap);
-	va_end(ap);
-	return tu_run(cmd, out, sizeof out);
-}
+#define sh(...) tu_runf(out, sizeof out, __VA_ARGS__)
 
 /* The value of `key` in a flat JSON file (summary.json). */
 static double json_number(const char *path, const char *key)

@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 
 #include <stdlib.h>
@@ -34,6 +35,16 @@ const char *tu_child_env(void)
 	 * use-after-free checks for our allocations while lavapipe's large per-submission buffers bypass it: with the
 	 * default 256 MB each of them lands on fresh pages, which made the TFR analysis 7x slower. */
 	return "export LD_PRELOAD=" TASLAB_LSAN_PIN " ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0:quarantine_size_mb=8;";
+}
+
+int tu_runf(char *out, size_t out_size, const char *fmt, ...)
+{
+	char cmd[16384];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(cmd, sizeof cmd, fmt, ap);
+	va_end(ap);
+	return tu_run(cmd, out, out_size);
 }
 
 int tu_run(const char *cmd, char *out, size_t out_size)

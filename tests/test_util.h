@@ -16,6 +16,8 @@ const char *tu_tmpdir(const char *name);
 const char *tu_child_env(void);
 /* Runs a shell command (with tu_child_env); returns its exit status; stdout+stderr captured into `out`. */
 int tu_run(const char *cmd, char *out, size_t out_size);
+/* tu_run of a printf-formatted command. */
+int tu_runf(char *out, size_t out_size, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int tu_file_exists(const char *path);
 /* Reads a whole file; caller frees. */
 char *tu_read_file(const char *path, size_t *len);

@@ -139,16 +139,6 @@ void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group 
 		fprintf(f, "<p class=\"note\">No TAS variant with another method to match here.</p>\n");
 }
 
-static void num_cell(FILE *f, double v, const char *fmt)
-{
-	fputs("<td>", f);
-	if (isfinite(v))
-		fprintf(f, fmt, v);
-	else
-		fputs("—", f);
-	fputs("</td>", f);
-}
-
 void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g)
 {
 	(void)d;
@@ -179,12 +169,12 @@ void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *
 		for (size_t i = 0; i < m->np; i++) {
 			const mtr_reuse_point *p = &m->pts[i];
 			fprintf(f, "<tr><td>%g</td>", p->dn);
-			num_cell(f, p->eps, "%.3f");
-			num_cell(f, mtr_reuse_eps(m, p->dn), "%.3f");
-			num_cell(f, p->hit_rate, "%.3f");
-			num_cell(f, mtr_reuse_hit_rate(m, p->dn), "%.3f");
-			num_cell(f, p->ms, "%.1f");
-			num_cell(f, mtr_reuse_ms(m, p->dn, p->visible), "%.1f");
+			sty_rpt_cell(f, p->eps, "%.3f");
+			sty_rpt_cell(f, mtr_reuse_eps(m, p->dn), "%.3f");
+			sty_rpt_cell(f, p->hit_rate, "%.3f");
+			sty_rpt_cell(f, mtr_reuse_hit_rate(m, p->dn), "%.3f");
+			sty_rpt_cell(f, p->ms, "%.1f");
+			sty_rpt_cell(f, mtr_reuse_ms(m, p->dn, p->visible), "%.1f");
 			fprintf(f, "</tr>\n");
 		}
 		fprintf(f, "</table></div>\n");

@@ -76,6 +76,8 @@ typedef struct sty_rpt_study {
 /* ---- study_report.c */
 /* File-name stem of a scene/camera group: SCENE--CAMERA. */
 void sty_rpt_stem(const sweep_spec *s, size_t scene, size_t cam, char *out, size_t n);
+/* A value as a table cell (<td>…</td>, mtr_fprint_shown), "–" when not available. */
+void sty_rpt_cell(FILE *f, double v, const char *fmt);
 
 /* ---- study_report_plots.c */
 /* Orders a group's runs by method, then T (none first), then period (qsort). */

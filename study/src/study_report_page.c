@@ -26,8 +26,7 @@ static void esc(FILE *f, const char *s)
 		}
 }
 
-/* A value for a table cell: "–" when not available. */
-static void cellf(FILE *f, double v, const char *fmt)
+void sty_rpt_cell(FILE *f, double v, const char *fmt)
 {
 	fputs("<td>", f);
 	if (isfinite(v))
@@ -54,7 +53,7 @@ static const cell_def RUN_CELLS[] = {{"reuse_percent", "%.1f %%"}, {"reduction_p
 static void cells(FILE *f, const mtr_sweep_row *r, const cell_def *c)
 {
 	for (; c->column; c++)
-		cellf(f, mtr_sweep_value(r, c->column), c->fmt);
+		sty_rpt_cell(f, mtr_sweep_value(r, c->column), c->fmt);
 }
 
 static const char *CSS =
