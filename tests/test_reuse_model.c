@@ -76,6 +76,14 @@ static void test_eq6(void **state)
 	assert_true(isnan(f.a_hit) && isnan(f.a_miss));
 	assert_true(fabs(f.miss_minus_hit - 0.008) < 1e-9);
 	assert_true(fabs(f.c - (5.0 + 0.002 * 4000.0)) < 1e-6);
+	/* hits in proportion to misses (a single period) while V varies: not determined either way */
+	for (int i = 0; i < 12; i++) {
+		m[i] = 200.0 + 97.0 * (i % 5);
+		h[i] = 0.5 * m[i];
+		t[i] = 0.002 * h[i] + 0.01 * m[i] + 5.0;
+	}
+	mtr_fit_eq6(h, m, t, 12, &f);
+	assert_false(f.ok);
 	/* too few frames; misses that never change */
 	mtr_fit_eq6(h, m, t, 3, &f);
 	assert_false(f.ok);
@@ -208,6 +216,18 @@ static void test_cli(void **state)
 	/* rrc refreshes 1/N of its tiles per frame, and shades the misses of the moving path on top: μ just under 1 */
 	if (!(mu > 0.8 && mu <= 1.0))
 		fail_msg("rrc's μ %g", mu);
+	/* a run whose metric is null (not computed) is left out of eq. 5, not an error; the default --out is SWEEP */
+	snprintf(p, sizeof p, "%s/metrics/turntable/orbit/rrc-N8/summary.json", sw);
+	assert_int_equal(sh("sed -i 's/\"maxrgb_mean\": [0-9.e+-]*/\"maxrgb_mean\": null/' %s && grep -q "
+			    "'\"maxrgb_mean\": null' %s", p, p), 0);
+	st = sh("%s analyze reuse-model %s", TASLAB_BINARY, sw);
+	if (st)
+		fail_msg("a null metric: exit %d:\n%s", st, out);
+	snprintf(p, sizeof p, "%s/reuse_model.csv", sw);
+	csv = tu_read_file(p, NULL);
+	assert_non_null(csv);
+	assert_non_null(strstr(csv, "\nturntable,orbit,rrc,8,maxrgb_mean,,")); /* its error empty */
+	free(csv);
 	/* bad input: not a sweep, an unknown error key, a sweep without a method with a period */
 	st = sh("%s analyze reuse-model %s", TASLAB_BINARY, dir);
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "not a sweep"))

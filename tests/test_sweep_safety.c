@@ -429,7 +429,7 @@ static void test_other_build(void **state)
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "was started by another taslab build"))
 		fail_msg("resuming with another build: exit %d:\n%s", st, out);
 	st = sh("%s sweep %s --task 1", q(other), q(spec));
-	if (st != 2 || !strstr(out, "was started by another taslab build"))
+	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "was started by another taslab build"))
 		fail_msg("one --task with another build: exit %d:\n%s", st, out);
 	st = sh("%s sweep %s", q(other), args);
 	if (st != 2 || tu_count_lines(out) != 1 || !strstr(out, "holds a different sweep (another taslab build"))
@@ -447,6 +447,17 @@ static void test_other_build(void **state)
 	st = sh("%s sweep %s --redo-damaged", TASLAB_BINARY, q(spec));
 	if (st || !strstr(out, "2 of 2 runs complete") || !tu_file_exists(man))
 		fail_msg("--redo-damaged by the sweep's build: exit %d:\n%s", st, out);
+	/* the report by another build reads only: a missing clip is not made by it, but by the sweep's build */
+	char clip[4096];
+	snprintf(clip, sizeof clip, "%s/clips/turntable/orbit/tfr-T8.webm", sw);
+	assert_true(tu_file_exists(clip));
+	unlink(clip);
+	st = sh("%s report %s", q(other), q(sw));
+	if (!strstr(out, "missing clips and comparisons are not made") || tu_file_exists(clip))
+		fail_msg("report by another build: exit %d:\n%s", st, out);
+	st = sh("%s report %s", TASLAB_BINARY, q(sw));
+	if (st || !tu_file_exists(clip))
+		fail_msg("report by the sweep's build: exit %d:\n%s", st, out);
 }
 
 int main(void)

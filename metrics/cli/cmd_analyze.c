@@ -207,9 +207,10 @@ static const cli_command analyze_reuse_model = {
 	.summary = "the survey's error, cost and hit-rate models of reuse (eqs. 5-7) fitted to a sweep",
 	.synopsis = "taslab analyze reuse-model SWEEP [--out DIR] [--error KEY]",
 	.description = "For every scene, camera path and method with a refresh period in SWEEP (rrc/N, rrc-random/N,\n"
-		       "rrc-interleaved/N, sau/N, warp/N; dn = N), fits [S] eq. 5 eps(dn) = alpha (1 - exp(-lambda (dn - 1)))\n"
-		       "to the runs' clip-mean error, eq. 6 H A_hit + M A_miss + c = dt to every frame after the first\n"
-		       "(hits = reused samples, misses = shaded samples, dt = GPU ms), and eq. 7's hit rate\n"
+		       "rrc-interleaved/N, sau/N, stu/N, warp/N; dn = N), fits [S] eq. 5\n"
+		       "eps(dn) = alpha (1 - exp(-lambda (dn - 1))) to the runs' clip-mean error, eq. 6\n"
+		       "H A_hit + M A_miss + c = dt to every frame after the first (hits = reused samples, misses =\n"
+		       "shaded samples, dt = GPU ms), and eq. 7's hit rate\n"
 		       "h(dn) = mu (1 - 1/dn). Writes DIR/reuse_model.csv and reuse_model.md (default DIR: SWEEP) and\n"
 		       "prints the .md's path. Sweep the method at two or more periods > 1 for eq. 5.",
 	.options = reuse_options,
@@ -225,7 +226,7 @@ static const cli_command *const analyze_subs[] = {&analyze_coherence, &analyze_p
 
 const cli_command cli_cmd_analyze = {
 	.name = "analyze",
-	.summary = "TFR analysis: temporal coherence and gradient predictors (Figs. 4, 7-9); models of reuse ([S] eqs. 5-7)",
+	.summary = "TFR analysis: coherence, gradient predictors (Figs. 4, 7-9); models of reuse ([S] eqs. 5-7)",
 	.synopsis = "taslab analyze coherence|predictors --scene S --frames LIST --out DIR [options]\n"
 		    "taslab analyze reuse-model SWEEP [--out DIR] [--error KEY]",
 	.subcommands = analyze_subs,

@@ -52,7 +52,7 @@ void mtr_fit_eq5(const double *dn, const double *eps, size_t n, mtr_eq5 *out)
 		if (e < best)
 			best = e, best_x = x;
 	}
-	double l = best_x - step, r = best_x + step;
+	double l = fmax(lo, best_x - step), r = fmin(lo + STEPS * step, best_x + step);
 	const double phi = 0.6180339887498949;
 	for (int it = 0; it < 80; it++) {
 		double x1 = r - phi * (r - l), x2 = l + phi * (r - l);
@@ -92,7 +92,9 @@ void mtr_fit_eq6(const double *hits, const double *misses, const double *dt, siz
 	double det = shh * smm - shm * shm, mean_v = mh + mm;
 	double cv_v = mean_v > 0 ? sqrt(svv / (double)n) / mean_v : 0;
 	double sse;
-	if (cv_v >= 0.02 && det > 1e-9 * shh * smm) {
+	if (cv_v >= 0.02 && !(det > 1e-6 * shh * smm))
+		return; /* H and M collinear while V varies (one period: H ≈ k M): neither form is determined */
+	if (cv_v >= 0.02) {
 		out->three_terms = true;
 		out->a_hit = (sht * smm - smt * shm) / det;
 		out->a_miss = (smt * shh - sht * shm) / det;
@@ -173,12 +175,12 @@ static int read_run(const sweep_spec *s, const char *dir, const sweep_run *r, co
 	if (rc)
 		return rc;
 	json_t *v = json_object_get(j, key);
-	if (!json_is_number(v)) {
+	if (!json_is_number(v) && !json_is_null(v)) {
 		json_decref(j);
 		return tl_error(err, err_size, TL_ERR_INPUT,
-				"--error %s: not a number in %s (try maxrgb_mean, flip_mean, exceed_8 or psnr)", key, path);
+				"--error %s: not a number in %s (try maxrgb_mean, flip_mean or exceed_8)", key, path);
 	}
-	p->eps = json_number_value(v);
+	p->eps = json_is_number(v) ? json_number_value(v) : NAN; /* null: not computed for this run (left out of eq. 5) */
 	json_decref(j);
 	run_stats rs;
 	sweep_run_path(s, dir, r, SWEEP_PATH_RUN, path, sizeof path);
@@ -330,11 +332,17 @@ int mtr_reuse_write(const sweep_spec *s, const char *dir, const char *error_key,
 		const mtr_eq6 *e6 = &g->e6;
 		const char *scn = s->scenes[g->scene].name, *cn = s->scenes[g->scene].cameras[g->camera].name;
 		fprintf(md.f, "\n## %s / %s / %s\n\n", scn, cn, g->name);
-		fprintf(md.f, "eq. 5: α = %.4g, λ = %.4g (RMSE %.3g)%s; eq. 7: μ = %.4f; eq. 6 over %zu frames: ", e5->alpha,
-			e5->lambda, e5->rmse, !e5->ok ? " — needs two periods > 1" : g->np == 2 ? " — two points: exact" : "",
-			g->mu, e6->frames);
+		if (e5->ok)
+			fprintf(md.f, "eq. 5: α = %.4g, λ = %.4g (RMSE %.3g)%s; ", e5->alpha, e5->lambda, e5->rmse,
+				e5->rmse <= 1e-9 * fabs(e5->alpha) ? ", exact (two periods)" : "");
+		else
+			fprintf(md.f, "eq. 5: not determined (needs two periods > 1); ");
+		fprintf(md.f, "eq. 7: μ = ");
+		cell(md.f, g->mu, "%.4f");
+		fprintf(md.f, "; eq. 6 over %zu frames: ", e6->frames);
 		if (!e6->ok)
-			fprintf(md.f, "not determined (fewer than 4 frames, or misses that do not vary)\n");
+			fprintf(md.f, "not determined (fewer than 4 frames, misses that do not vary, or hits and misses in "
+				      "proportion: one period)\n");
 		else if (e6->three_terms)
 			fprintf(md.f, "A_hit = %.0f ns, A_miss = %.0f ns per sample, c = %.1f ms (R² %.3f)\n", e6->a_hit * 1e6,
 				e6->a_miss * 1e6, e6->c, e6->r2);
@@ -342,17 +350,23 @@ int mtr_reuse_write(const sweep_spec *s, const char *dir, const char *error_key,
 			fprintf(md.f, "A_miss − A_hit = %.0f ns per sample, c + A_hit·V = %.1f ms (R² %.3f; hits + misses "
 				      "hardly vary, so A_hit and c are not separable)\n",
 				e6->miss_minus_hit * 1e6, e6->c, e6->r2);
-		fprintf(md.f, "\n| Δn | %s | eq. 5 | hit rate | eq. 7 | ms | eqs. 6+7 |\n|---:|---:|---:|---:|---:|---:|---:|\n",
-			error_key);
+		fprintf(md.f, "\n| Δn | %s | eq. 5 | hit rate | eq. 7 | ms | eqs. 6+7 |\n", error_key);
+		fprintf(md.f, "|---:|---:|---:|---:|---:|---:|---:|\n");
 		for (size_t i = 0; i < g->np; i++) {
 			const mtr_reuse_point *p = &g->pts[i];
 			double em = mtr_reuse_eps(g, p->dn), hm = mtr_reuse_hit_rate(g, p->dn);
 			double mm = mtr_reuse_ms(g, p->dn, p->visible);
-			fprintf(csv.f, "%s,%s,%s,%g,%s,%.6g,", scn, cn, g->name, p->dn, error_key, p->eps);
+			fprintf(csv.f, "%s,%s,%s,%g,%s,", scn, cn, g->name, p->dn, error_key);
+			cell(csv.f, p->eps, "%.6g");
+			fputc(',', csv.f);
 			cell(csv.f, em, "%.6g");
-			fprintf(csv.f, ",%.6f,", p->hit_rate);
+			fputc(',', csv.f);
+			cell(csv.f, p->hit_rate, "%.6f");
+			fputc(',', csv.f);
 			cell(csv.f, hm, "%.6f");
-			fprintf(csv.f, ",%.4f,", p->ms);
+			fputc(',', csv.f);
+			cell(csv.f, p->ms, "%.4f");
+			fputc(',', csv.f);
 			cell(csv.f, mm, "%.4f");
 			const double vals[] = {e5->alpha, e5->lambda, e5->rmse, g->mu, e6->a_hit * 1e6, e6->a_miss * 1e6,
 					       e6->miss_minus_hit * 1e6, e6->c, e6->r2};
@@ -361,20 +375,19 @@ int mtr_reuse_write(const sweep_spec *s, const char *dir, const char *error_key,
 				cell(csv.f, vals[q], "%.6g");
 			}
 			fprintf(csv.f, ",%zu\n", e6->frames);
-			fprintf(md.f, "| %g | %.4g | ", p->dn, p->eps);
-			cell(md.f, em, "%.4g");
-			fprintf(md.f, " | %.3f | ", p->hit_rate);
-			cell(md.f, hm, "%.3f");
-			fprintf(md.f, " | %.1f | ", p->ms);
-			cell(md.f, mm, "%.1f");
-			fprintf(md.f, " |\n");
+			const double row[] = {p->eps, em, p->hit_rate, hm, p->ms, mm};
+			const char *const fmt[] = {"%.4g", "%.4g", "%.3f", "%.3f", "%.1f", "%.1f"};
+			fprintf(md.f, "| %g |", p->dn);
+			for (size_t q = 0; q < 6; q++) {
+				fputc(' ', md.f);
+				cell(md.f, row[q], fmt[q]);
+				fputs(isfinite(row[q]) ? " |" : "– |", md.f);
+			}
+			fputc('\n', md.f);
 		}
 	}
-	if ((rc = tl_atomic_commit(&csv, err, err_size)))
-		tl_atomic_abort(&md);
-	else
-		rc = tl_atomic_commit(&md, err, err_size);
-	return rc;
+	tl_atomic both[2] = {csv, md};
+	return tl_atomic_commit_set(both, 2, err, err_size);
 }
 
 int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key, const char *out_dir, size_t *groups,
@@ -385,7 +398,7 @@ int mtr_reuse_model(const sweep_spec *s, const char *dir, const char *error_key,
 	if (!rc && !*groups)
 		rc = tl_error(err, err_size, TL_ERR_INPUT,
 			      "%s: no complete run of a method with a period (rrc/N, rrc-random/N, rrc-interleaved/N, sau/N, "
-			      "warp/N) with its metrics: sweep one first",
+			      "stu/N, warp/N) with its metrics: sweep one first",
 			      dir);
 	if (!rc)
 		rc = mtr_reuse_write(s, dir, error_key, g, *groups, out_dir, err, err_size);

@@ -41,6 +41,11 @@ static int mono_rows(const sweep_spec *s, const char *mono_dir, sweep_spec **ms,
 				  : tl_error(err, err_size, TL_ERR_ARG, "--mono %s is not a sweep folder (no sweep.json)", mono_dir);
 	if (!rc && (*ms)->stereo)
 		rc = tl_error(err, err_size, TL_ERR_ARG, "--mono %s is a stereo sweep: give a mono one", mono_dir);
+	if (!rc && strcmp((*ms)->build_digest, s->build_digest))
+		fprintf(stderr, "taslab report: note: --mono %s was made by another taslab build (build digest %s, this "
+				"sweep's %s): its speedups are another build's\n",
+			mono_dir, (*ms)->build_digest[0] ? (*ms)->build_digest : "none",
+			s->build_digest[0] ? s->build_digest : "none");
 	if (!rc)
 		rc = mtr_sweep_collect(*ms, mono_dir, rows, count, err, err_size);
 	return rc;
@@ -54,8 +59,14 @@ int cli_sweep_finish(const sweep_spec *s, const char *dir, const char *study, co
 	int rc = TL_OK;
 	report_path[0] = 0;
 	/* Comparisons (and clips) still missing for complete runs: a Slurm task whose ref run was not done yet, or a
-	 * sweep interrupted between its steps. No device is needed for either. */
-	for (size_t i = 0; i < n && !rc; i++) {
+	 * sweep interrupted between its steps. No device is needed for either. Only by the sweep's own build: another
+	 * build's clips and metrics would sit beside the sweep's with nothing to tell them apart (the report itself only
+	 * reads, so any build may write it). */
+	char why0[1024];
+	bool same_build = sweep_build_check(s, dir, why0, sizeof why0) == TL_OK;
+	if (!same_build)
+		fprintf(stderr, "taslab: note: missing clips and comparisons are not made: %s\n", why0);
+	for (size_t i = 0; same_build && i < n && !rc; i++) {
 		sweep_run r, ref;
 		sweep_status st, ref_st;
 		sweep_run_at(s, i, &r);

@@ -160,7 +160,7 @@ int cli_sweep_task(const sweep_spec *s, const char *dir, size_t index, int progr
 	int rc = cli_sweep_flock(p, &fd, err, err_size);
 	if (rc == TL_ERR_CONFLICT)
 		return tl_error(err, err_size, TL_ERR_CONFLICT,
-				"--task %zu: another process is doing this run (it holds %s): nothing done", index, p);
+				"run %zu: another process is doing this run (it holds %s): nothing done", index, p);
 	if (!rc)
 		rc = task_run(s, dir, index, progress_fd, command_line, deferred, err, err_size);
 	if (fd >= 0)

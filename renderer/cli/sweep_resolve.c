@@ -429,6 +429,7 @@ int cli_sweep_resolve(const sweep_request *r, sweep_spec *s, char *err, size_t e
 	snprintf(s->display_transform, sizeof s->display_transform, "%s", colour_name(col));
 	colour_digest(col, s->colour_digest);
 	colour_destroy(&col);
-	snprintf(s->build_digest, sizeof s->build_digest, "%s", tl_build_digest()); /* the sweep's identity holds the build */
+	/* the sweep's identity holds the build */
+	snprintf(s->build_digest, sizeof s->build_digest, "%s", tl_build_digest());
 	return TL_OK;
 }

@@ -152,8 +152,15 @@ int sty_report_write(const sty_report_desc *d, char *index, size_t index_size, c
 			nreuse = 0;
 		}
 		snprintf(path, sizeof path, "%s/data", rdir);
-		if (nreuse)
+		if (nreuse) {
 			rc = mtr_reuse_write(d->spec, d->dir, "maxrgb_mean", reuse, nreuse, path, err, err_size);
+		} else { /* none now: an earlier report's files go */
+			const char *const names[] = {"reuse_model.csv", "reuse_model.md"};
+			for (int k = 0; k < 2; k++) {
+				snprintf(path, sizeof path, "%s/data/%s", rdir, names[k]);
+				remove(path);
+			}
+		}
 		for (size_t g = 0; g < ng; g++)
 			for (size_t k = 0; k < nreuse; k++)
 				if (reuse[k].scene == gi[g].scene && reuse[k].camera == gi[g].cam) {

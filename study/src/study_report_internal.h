@@ -10,8 +10,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "taslab/reuse_model.h"
 #include "taslab/metrics_sweep.h"
+#include "taslab/reuse_model.h"
 #include "taslab/study_report.h"
 #include "taslab/study.h"
 #include "taslab/study_model.h"
@@ -100,10 +100,10 @@ int sty_rpt_budget_plot(const char *rdir, const char *stem, const sty_rpt_group 
 			size_t err_size);
 /* The group's matched-budget section: the plot and the table of the pairs `p` (mtr_sweep_matched over d->rows)
  * whose TAS run is in the group. */
-/* The group's models of reuse ([S] eqs. 5-7): a table per method with a period; nothing when it has none. */
-void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g);
 void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g, const char *stem,
 			 const mtr_match_pair *p, size_t np);
+/* The group's models of reuse ([S] eqs. 5-7): a table per method with a period; nothing when it has none. */
+void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *g);
 
 /* ---- study_report_study.c */
 /* Checks the study d->study against the sweep (sty_rpt_study_check), tallies it into `out` (the tally's files) and

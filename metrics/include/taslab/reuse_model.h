@@ -1,6 +1,6 @@
 /* reuse_model.h — the survey's empirical models of reuse ([S] = papers/002, sec. 4.1, eqs. 5-7; BASELINES.md A5),
  * fitted to a sweep's runs of the methods with a refresh period Δn (`rrc/N`, `rrc-random/N`, `rrc-interleaved/N`,
- * `sau/N`, `warp/N`: Δn = N):
+ * `sau/N`, `stu/N`, `warp/N`: any method with a /N period; Δn = N):
  *   eq. 5  ε(Δn) = α (1 − e^(−λ (Δn − 1)))     the error of reusing a value over Δn frames (a clip's mean of a metric)
  *   eq. 6  H_i A_hit + M_i A_miss + c = Δt_i   per frame i: hits (reused samples), misses (shaded samples), GPU time
  *   eq. 7  r(Δn) = h(Δn) A_hit + (1 − h(Δn)) A_miss,  h(Δn) = μ (1 − 1/Δn)   the cost of a sample, the hit rate
@@ -33,7 +33,8 @@ typedef struct mtr_eq6 {
 	double c;             /* ms per frame (with !three_terms: c + A_hit·mean(H + M), the cost of a frame of hits) */
 	double r2;            /* of the fit */
 	size_t frames;
-	bool ok;              /* at least 4 frames and misses that vary */
+	bool ok;              /* at least 4 frames, misses that vary, and (where V varies) hits not in proportion to
+			       * misses, as they are at a single period */
 	/* false when H + M (the visible samples) hardly varies over the frames (coefficient of variation < 2 %): then
 	 * H = V − M and eq. 6 has two unknowns, not three; the fit is Δt = c' + M (A_miss − A_hit) */
 	bool three_terms;

@@ -2,8 +2,8 @@
  * by another taslab build (another commit, other flags, another compiler) is told apart from the build that made its
  * runs. The shaders are embedded in the executable (renderer/shaders.cmake), so they count too; the shared libraries
  * (Vulkan driver, OpenColorIO) do not: the manifests record their versions. */
-#include <pthread.h>
 #include <stdio.h>
+#include <threads.h> /* call_once: C11, in glibc's libc */
 
 #include "taslab/tl_hash.h"
 
@@ -26,7 +26,7 @@ static void compute(void)
 
 const char *tl_build_digest(void)
 {
-	static pthread_once_t once = PTHREAD_ONCE_INIT;
-	pthread_once(&once, compute);
+	static once_flag once = ONCE_FLAG_INIT;
+	call_once(&once, compute);
 	return digest;
 }

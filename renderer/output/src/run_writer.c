@@ -418,8 +418,8 @@ int run_writer_finish(run_writer *w, double wall_s, char *err, size_t err_size)
 	char created[32];
 	tl_clock_utc(created, sizeof created);
 	const run_info *in = &w->info;
-	json_t *m = json_pack("{s:s, s:{s:s, s:s, s:s?, s:s?, s:s?}, s:s, s:O, s:{s:s, s:s, s:b}, s:{s:b, s:b, s:b, s:b, s:s}, "
-			      "s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
+	json_t *m = json_pack("{s:s, s:{s:s, s:s, s:s?, s:s?, s:s?}, s:s, s:O, s:{s:s, s:s, s:b}, "
+			      "s:{s:b, s:b, s:b, s:b, s:s}, s:{s:I, s:I, s:I, s:I, s:f, s:f}, s:s}",
 			      "taslab_version", TASLAB_VERSION_STRING, "versions", "taslab", TASLAB_VERSION_STRING, "build",
 			      tl_build_digest(),
 			      "opencolorio", in->ocio_version, "vulkan_api", in->vulkan_api, "vulkan_driver", in->driver,

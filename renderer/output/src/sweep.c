@@ -596,12 +596,21 @@ int sweep_spec_compare(const sweep_spec *a, const sweep_spec *b, char *what, siz
 int sweep_build_check(const sweep_spec *s, const char *path, char *err, size_t err_size)
 {
 	const char *mine = tl_build_digest();
+	if (!mine[0]) /* no digest of this build: it cannot be told apart from any other */
+		return tl_error(err, err_size, TL_ERR_INPUT,
+				"%s: this taslab's build digest is unknown (/proc/self/exe unreadable), so it cannot resume a sweep",
+				path);
 	if (!strcmp(s->build_digest, mine))
 		return TL_OK;
+	if (!s->build_digest[0])
+		return tl_error(err, err_size, TL_ERR_INPUT,
+				"%s was made before taslab recorded builds: rebuild its report with 'taslab report', or sweep again "
+				"with another --out",
+				path);
 	return tl_error(err, err_size, TL_ERR_INPUT,
 			"%s was started by another taslab build (build digest %s, this one's %s): resume it with that build, "
 			"or start the sweep again with another --out",
-			path, s->build_digest[0] ? s->build_digest : "none recorded", mine[0] ? mine : "unknown");
+			path, s->build_digest, mine);
 }
 
 /* ------------------------------------------------------------------ plan */
@@ -703,8 +712,9 @@ void sweep_run_status_checked(const sweep_spec *s, const char *dir, const sweep_
 			      sc->digest[0] ? sc->digest : "none", s->colour_digest[0] ? s->colour_digest : "none");
 	/* rendered by another build than the sweep's: its frames need not be those this build makes */
 	if (!rc && strcmp(m.build_digest, s->build_digest))
-		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: rendered by another taslab build (build digest %s; the sweep's: %s)",
-			      p, m.build_digest[0] ? m.build_digest : "none", s->build_digest[0] ? s->build_digest : "none");
+		rc = tl_error(why, why_size, TL_ERR_INPUT,
+			      "%s: rendered by another taslab build (build digest %s; the sweep's: %s)", p,
+			      m.build_digest[0] ? m.build_digest : "none", s->build_digest[0] ? s->build_digest : "none");
 	if (!rc && (m.first_frame != sc->first || m.last_frame + 1 != sc->end || m.width != s->width || m.height != s->height))
 		rc = tl_error(why, why_size, TL_ERR_INPUT, "%s: frames %u..%u at %ux%u, the sweep's are %u..%u at %ux%u", p,
 			      m.first_frame, m.last_frame, m.width, m.height, sc->first, sc->end - 1, s->width, s->height);

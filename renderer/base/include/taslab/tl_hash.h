@@ -7,6 +7,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define TL_FNV1A64_INIT 0xcbf29ce484222325ull
 
 /* Folds `n` bytes of `data` into the running hash *h (start from TL_FNV1A64_INIT). */
@@ -27,4 +31,7 @@ static inline void tl_fnv1a64(uint64_t *h, const void *data, size_t n)
  * (a change detector, like the input digests). */
 const char *tl_build_digest(void);
 
+#ifdef __cplusplus
+}
+#endif
 #endif
