@@ -145,8 +145,13 @@ void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *
 	if (!g->nreuse)
 		return;
 	fprintf(f, "<h3>Models of reuse <span class=\"note\">([S] sec. 4.1, eqs. 5–7)</span></h3>\n");
+	size_t single = 0;
 	for (size_t k = 0; k < g->nreuse; k++) {
 		const mtr_reuse_group *m = &g->reuse[k];
+		if (!m->e5.ok) { /* one period (the demo's): nothing to fit against Δn; named below */
+			single++;
+			continue;
+		}
 		fprintf(f, "<p class=\"note\"><b>");
 		esc(f, m->name);
 		if (m->e5.ok)
@@ -178,6 +183,15 @@ void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *
 			fprintf(f, "</tr>\n");
 		}
 		fprintf(f, "</table></div>\n");
+	}
+	if (single) {
+		fprintf(f, "<p class=\"note\">Swept at fewer than two periods &gt; 1, so not fitted here:");
+		for (size_t k = 0, n = 0; k < g->nreuse; k++)
+			if (!g->reuse[k].e5.ok) {
+				fprintf(f, "%s ", n++ ? "," : "");
+				esc(f, g->reuse[k].name);
+			}
+		fprintf(f, " (sweep them at --periods 2,4,8 for these models).</p>\n");
 	}
 	fprintf(f, "<p class=\"note\">Fitted to this sweep's runs of each method at its periods (Δn = N), error = "
 		   "mean max-RGB against ref, frames after each run's first; all groups in data/reuse_model.csv. "
