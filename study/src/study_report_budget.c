@@ -193,7 +193,8 @@ void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *
 			}
 		fprintf(f, " (sweep them at --periods 2,4,8 for these models).</p>\n");
 	}
-	fprintf(f, "<p class=\"note\">Fitted to this sweep's runs of each method at its periods (Δn = N), error = "
-		   "mean max-RGB against ref, frames after each run's first; all groups in data/reuse_model.csv. "
-		   "<code>taslab analyze reuse-model</code> fits another metric.</p>\n");
+	if (single < g->nreuse)
+		fprintf(f, "<p class=\"note\">Fitted to this sweep's runs of each method at its periods (Δn = N), error = "
+			   "mean max-RGB against ref, frames after each run's first; all groups in data/reuse_model.csv. "
+			   "<code>taslab analyze reuse-model</code> fits another metric.</p>\n");
 }
