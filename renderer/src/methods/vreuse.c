@@ -33,7 +33,7 @@ typedef struct vreuse_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu;
+	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu_g, stu;
 	VkPipeline hshade; /* rrc: the path's shade writing the HDR target (shade.comp.in VBUF_TO_HDR) */
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
@@ -205,6 +205,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					     err_size))))
 		return rc;
 	if (stu && ((rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_GRAD 1\n", &s->stu_grad, err, err_size)) ||
+		    (rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_G 1\n", &s->stu_g, err, err_size)) ||
 		    (rc = make_compute(r, s, "vreuse/stu.comp.in", &s->stu, err, err_size))))
 		return rc;
 	/* the cache starts empty (object 0) in GENERAL layout */
@@ -479,6 +480,11 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	bind(r, s, cmd, s->stu_grad, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
+	/* g at the phase pixels only: the shaded list, dispatched as the shade was (two display transforms a sample, which
+	 * a branch in the per-pixel pass made every pixel pay on a SIMD CPU driver) */
+	bind(r, s, cmd, s->stu_g, aux);
+	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
+	vbuf_barrier(cmd);
 	bind(r, s, cmd, s->stu, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
@@ -537,9 +543,9 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[10] = {s->decide,  s->resolve, s->pull,     s->push, s->fill_args,
-			     s->amss,    s->jshade,  s->stu_grad, s->stu,  s->hshade};
-	for (int i = 0; i < 10; i++)
+	VkPipeline pp[11] = {s->decide,  s->resolve, s->pull,     s->push, s->fill_args, s->amss,
+			     s->jshade,  s->stu_grad, s->stu_g, s->stu,  s->hshade};
+	for (int i = 0; i < 11; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
