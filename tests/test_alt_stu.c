@@ -2,7 +2,12 @@
  * (any message fails), tfr_static (a textured floor, a box, a shadow-casting sun) at 48 x 32 and 49 x 31:
  *  stu/2, stu/4 (BASELINES' N) and stu/8 (at 49 x 31: stu/4), static view: every frame shades exactly the covered
  *  phase pixels of the interleaved pattern (the CPU count of rrc-interleaved/N's refresh set); from frame 2N + 5 on the frames equal vref (display and HDR:
- *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); determinism. */
+ *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); determinism.
+ *  The first frame equal to vref is exactly 2N + 1, which checks the temporal smoothing of g: in frames 0..N-1 every
+ *  phase sample is a first one (g = 8), so D = 8; from frame N on g = 0 (a static view), so D = 4, 2, 1, 1/2 in
+ *  frames N..N+3 and c = clamp((8 - D) / 7.5, 0, 1) reaches 1 at N+3; a pixel equals vref from its first phase frame
+ *  at or after N+2 (shows s, then keeps it), the last of which is 2N+1. With g lost (always 0) D would start at 4 and
+ *  the frames would equal vref from N+1. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -41,6 +46,7 @@ static void stu_static(vkdev *dev, const scene *s, uint32_t W, uint32_t H, uint3
 			if (f >= 2 * n + 5)
 				assert_true(same);
 		}
+		assert_int_equal(first_equal, 2 * n + 1);
 		printf("stu/%u at %ux%u: shaded %lld of %lld per frame, frames equal vref from frame %d (asserted from %u)\n",
 		       n, W, H, (long long)c.st[1].shaded_samples, (long long)c.st[1].visible_samples, first_equal, 2 * n + 5);
 		tu_clip_free(&c);
