@@ -137,6 +137,29 @@ void vbuf_append(bool want, ivec2 p, uvec2 r)
 		list[vbuf_wg_base + slot] = uvec2(uint(p.x) | uint(p.y) << 16, r.x | r.y << 8);
 }
 
+#ifdef ADS
+// ads: the pixels a select step interpolated, appended from the list's top end down (entry W H - 1 - i) and counted
+// in count[10], so that their display values are made by a pass over them alone (ads_display.comp.in) instead of in a
+// branch of the select, which a SIMD CPU driver runs for every pixel of the step. A step's shaded and interpolated
+// pixels together are at most its lattice's, fewer than W H: the two ends never meet. Uniform control flow.
+void vbuf_append_interp(bool want, ivec2 p)
+{
+	if (gl_LocalInvocationIndex == 0u)
+		vbuf_wg_count = 0u;
+	barrier();
+	uint slot = 0u;
+	if (want)
+		slot = atomicAdd(vbuf_wg_count, 1u);
+	barrier();
+	if (gl_LocalInvocationIndex == 0u && vbuf_wg_count > 0u)
+		vbuf_wg_base = atomicAdd(count[10], vbuf_wg_count);
+	barrier();
+	ivec2 size = imageSize(ids);
+	if (want)
+		list[uint(size.x * size.y) - 1u - (vbuf_wg_base + slot)] = uvec2(uint(p.x) | uint(p.y) << 16, 0x101u);
+}
+#endif
+
 // Adds a per-invocation 0/1 to counter k with one atomic per workgroup (uniform control flow).
 shared uint vbuf_wg_sum;
 void vbuf_count(bool yes, uint k)

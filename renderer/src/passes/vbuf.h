@@ -42,7 +42,7 @@ typedef struct vbuf_pass {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set;
 	VkPipelineLayout layout;     /* sets 0 (scene) and 1 (this), push constants gpu_push */
-	VkPipeline select, args, shade, resolve, ads_select, truth_pipe;
+	VkPipeline select, args, shade, resolve, ads_select, ads_display, truth_pipe;
 } vbuf_pass;
 
 /* `ads`: the ads select pass instead of the rate select; `shade_defs`: extra #defines of the shade pass. */
