@@ -128,7 +128,7 @@ typedef struct series {
 	size_t n, cap;
 } series;
 
-static int push(series *s, double h, double m, double t)
+static int push(series *s, double h, double m, double t) /* TL_ERR_NOMEM when it cannot grow */
 {
 	if (s->n == s->cap) {
 		size_t cap = s->cap ? 2 * s->cap : 256;
@@ -142,15 +142,15 @@ static int push(series *s, double h, double m, double t)
 		if (t2)
 			s->t = t2;
 		if (!h2 || !m2 || !t2)
-			return -1;
+			return TL_ERR_NOMEM;
 		s->cap = cap;
 	}
 	s->h[s->n] = h, s->m[s->n] = m, s->t[s->n] = t;
 	s->n++;
-	return 0;
+	return TL_OK;
 }
 
-/* "rrc-random/4" -> "rrc-random": the variant without its period, the group's name */
+/* The variant token without its "/N" period (rrc-random/4 -> rrc-random): the group's name. */
 static void group_name(const char *variant, char *out, size_t n)
 {
 	const char *slash = strchr(variant, '/');

@@ -51,7 +51,7 @@ typedef struct mtr_reuse_point {
 	double dn, eps, hit_rate, ms, visible;
 } mtr_reuse_point;
 
-/* One scene, camera path and method (the variant token without its "/N": "rrc-random") with its fits. */
+/* One scene, camera path and method (the variant token without its "/N" period) with its fits. */
 typedef struct mtr_reuse_group {
 	size_t scene, camera;
 	char name[SWEEP_NAME_MAX];
