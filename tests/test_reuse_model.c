@@ -197,6 +197,14 @@ static void test_cli(void **state)
 		assert_true(isnan(mu) || m == mu);
 		mu = m;
 	}
+	/* the .md: one section per group, with the parameters and a row per period */
+	snprintf(p, sizeof p, "%s/model/reuse_model.md", dir);
+	char *md = tu_read_file(p, NULL);
+	assert_non_null(md);
+	if (!strstr(md, "## turntable / orbit / rrc\n") || !strstr(md, "eq. 5: α = ") || !strstr(md, "eq. 7: μ = ") ||
+	    !strstr(md, "\n| 2 | ") || !strstr(md, "\n| 4 | ") || !strstr(md, "\n| 8 | "))
+		fail_msg("reuse_model.md:\n%s", md);
+	free(md);
 	/* the sweep's report shows the same fits (report/data/reuse_model.csv holds the same rows) */
 	st = sh("%s report %s", TASLAB_BINARY, sw);
 	if (st)
