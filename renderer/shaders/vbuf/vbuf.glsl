@@ -116,10 +116,10 @@ vec2 vbuf_centroid(ivec2 p, uvec2 id, ivec2 size, uvec2 r)
 	return n > 0.0 ? sum / n : vec2(p) + 0.5;
 }
 
-// Appends sample (p, footprint r) to the list; every invocation of the workgroup calls it (uniform control flow),
-// `want` says whether it has a sample. One global atomic per workgroup.
+// The workgroup's wanting invocations each get one of consecutive indices counted in count[k] (and, with `listed`,
+// also in count[9]), with one global atomic per workgroup; every invocation calls it (uniform control flow).
 shared uint vbuf_wg_count, vbuf_wg_base;
-void vbuf_append(bool want, ivec2 p, uvec2 r)
+uint vbuf_wg_reserve(bool want, uint k, bool listed)
 {
 	if (gl_LocalInvocationIndex == 0u)
 		vbuf_wg_count = 0u;
@@ -129,12 +129,35 @@ void vbuf_append(bool want, ivec2 p, uvec2 r)
 		slot = atomicAdd(vbuf_wg_count, 1u);
 	barrier();
 	if (gl_LocalInvocationIndex == 0u && vbuf_wg_count > 0u) {
-		vbuf_wg_base = atomicAdd(count[0], vbuf_wg_count);
-		atomicAdd(count[9], vbuf_wg_count);
+		vbuf_wg_base = atomicAdd(count[k], vbuf_wg_count);
+		if (listed)
+			atomicAdd(count[9], vbuf_wg_count);
 	}
 	barrier();
+	return vbuf_wg_base + slot;
+}
+
+// Appends sample (p, footprint r) to the list; every invocation of the workgroup calls it (uniform control flow),
+// `want` says whether it has a sample.
+void vbuf_append(bool want, ivec2 p, uvec2 r)
+{
+	uint i = vbuf_wg_reserve(want, 0u, true);
 	if (want)
-		list[vbuf_wg_base + slot] = uvec2(uint(p.x) | uint(p.y) << 16, r.x | r.y << 8);
+		list[i] = uvec2(uint(p.x) | uint(p.y) << 16, r.x | r.y << 8);
+}
+
+// The list entry of this invocation of an indirect dispatch over a list (64 a workgroup, the 2-D grid of vbuf_grid).
+uint vbuf_list_index()
+{
+	return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
+}
+
+// The 2-D grid of `groups` workgroups within the 65 535 a dimension may count: as few rows as fit, the groups spread
+// evenly over them, so that no more than y - 1 empty workgroups are launched.
+uvec2 vbuf_grid(uint groups)
+{
+	uint gy = max((groups + 65534u) / 65535u, 1u);
+	return uvec2((groups + gy - 1u) / gy, gy);
 }
 
 #ifdef ADS
@@ -144,19 +167,10 @@ void vbuf_append(bool want, ivec2 p, uvec2 r)
 // pixels together are at most its lattice's, fewer than W H: the two ends never meet. Uniform control flow.
 void vbuf_append_interp(bool want, ivec2 p)
 {
-	if (gl_LocalInvocationIndex == 0u)
-		vbuf_wg_count = 0u;
-	barrier();
-	uint slot = 0u;
-	if (want)
-		slot = atomicAdd(vbuf_wg_count, 1u);
-	barrier();
-	if (gl_LocalInvocationIndex == 0u && vbuf_wg_count > 0u)
-		vbuf_wg_base = atomicAdd(count[10], vbuf_wg_count);
-	barrier();
+	uint i = vbuf_wg_reserve(want, 10u, false);
 	ivec2 size = imageSize(ids);
 	if (want)
-		list[uint(size.x * size.y) - 1u - (vbuf_wg_base + slot)] = uvec2(uint(p.x) | uint(p.y) << 16, 0x101u);
+		list[uint(size.x * size.y) - 1u - i] = uvec2(uint(p.x) | uint(p.y) << 16, 0x101u);
 }
 #endif
 
