@@ -222,11 +222,9 @@ static int fit_group(const sweep_spec *s, const char *dir, const char *key, size
 		if (!s->variants[v].period || strcmp(g->name, other))
 			continue;
 		done[v] = true;
-		sweep_run r = {0};
-		bool found = false;
-		for (size_t i = 0; !found && i < sweep_run_count(s); i++) /* the plan index of (scene, camera, variant) */
-			found = !sweep_run_at(s, i, &r) && r.scene == sc && r.camera == cam && r.variant == v;
-		int got = found ? read_run(s, dir, &r, key, &g->pts[g->np], f, err, err_size) : 1;
+		/* the run's folders and status need its scene, camera and variant only (a variant with a period is no ref) */
+		const sweep_run r = {.scene = sc, .camera = cam, .variant = v};
+		int got = read_run(s, dir, &r, key, &g->pts[g->np], f, err, err_size);
 		if (got < 0)
 			return got;
 		g->np += got == 0;
