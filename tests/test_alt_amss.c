@@ -90,8 +90,12 @@ static void test_static(void **state)
 {
 	(void)state;
 	vkdev *dev = tu_lavapipe();
-	check_static(dev, "amss_pan", 0, 0.99, 0, 48, 32); /* one plane: exact */
-	check_static(dev, "amss_pan", 0, 0.99, 0, 49, 31); /* a size no 8x8 workgroup divides */
+	/* one plane: exact on lavapipe; elsewhere amss's compute resolve and ssaa2's box filter are two pipelines whose
+	 * arithmetic a GPU's compiler contracts differently (README "Tests": On a GPU): 1 code value (an H200 gave max 1
+	 * at 49x31, 2026-11-27) */
+	int frozen = TU_ON_LAVAPIPE ? 0 : 1;
+	check_static(dev, "amss_pan", 0, 0.99, frozen, 48, 32);
+	check_static(dev, "amss_pan", 0, 0.99, frozen, 49, 31); /* a size no 8x8 workgroup divides */
 	vkdev_destroy(&dev);
 }
 
