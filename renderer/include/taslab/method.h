@@ -47,7 +47,8 @@ typedef struct method_option {
 	double def, min, max;
 	const char *const *choices;  /* CHOICE: NULL-terminated names */
 	const uint32_t *allowed;     /* UINT: the only values allowed, terminated by 0 (NULL: any in range) */
-	char variant;        /* '@' or '/': the value's sigil in variants; '-': a flag written as a -NAME suffix */
+	char variant;        /* '@' or '/': the value's sigil in variants; '-': a -NAME suffix (a flag), -NAMEvalue
+	                      * (a whole number: ref-ssaa2) or -VALUE (a choice other than the default: rrc-shadow) */
 	bool variant_required; /* the variant token must carry it (tfr@8, not tfr) */
 } method_option;
 

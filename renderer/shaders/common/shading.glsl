@@ -15,6 +15,13 @@
 
 #include "common/common.glsl"
 
+// TL_BRDF_PART (rrc --payload diffuse, [S] sec. 4.1): 1 the diffuse term only (Lambert per light, shadowed, and the
+// ambient term: the payload the cache keeps), 2 the rest (the specular term per light and the emission: what is
+// shaded every frame); 0, the default, both.
+#ifndef TL_BRDF_PART
+#define TL_BRDF_PART 0
+#endif
+
 const float PI = 3.14159265358979;
 
 const vec2 POISSON16[16] = vec2[](
@@ -111,7 +118,13 @@ vec3 brdf_ggx(Surface s, vec3 v, vec3 l, vec3 radiance)
 	vec3 f0 = mix(vec3(0.04), s.base_color, s.metallic);
 	vec3 F = f0 + (1.0 - f0) * pow(1.0 - vdh, 5.0);
 	vec3 diffuse = (1.0 - F) * (1.0 - s.metallic) * s.base_color / PI;
+#if TL_BRDF_PART == 1
+	return diffuse * radiance * ndl;
+#elif TL_BRDF_PART == 2
+	return F * D * V * radiance * ndl;
+#else
 	return (diffuse + F * D * V) * radiance * ndl;
+#endif
 }
 
 // Direction, attenuation and shadow lookup point of light i at surface s (KHR_lights_punctual falloff, spot
@@ -146,6 +159,41 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 	return !(atten <= 0.0 || dot(s.normal, l) <= 0.0);
 }
 
+// The shadow factor vis_ of light L_ with shadow code SH (a constant) at the lookup point p_: the 16-tap PCF.
+#define TL_SHADOW_PCF(SH, L_, p_, vis_)                                                                         \
+	{                                                                                                       \
+		int layer_ = int(L_.cone_shadow.z);                                                             \
+		int face_ = uint(L_.direction_type.w) == GPU_LIGHT_POINT ? cube_face(p_ - L_.position_range.xyz) : 0; \
+		vec2 uv_;                                                                                       \
+		float d_, r_, pl_, lit_ = 0.0;                                                                  \
+		bool in_ = shadow_coords(slot, layer_ + face_, p_, uv_, d_, r_, pl_);                            \
+		TL_PCF((SH) & 255, uv_, d_, r_, pl_, lit_)                                                      \
+		if ((((SH) >> 8) & 255) != ((SH) & 255)) {                                                      \
+			float lit2_ = 0.0;                                                                      \
+			TL_PCF(((SH) >> 8) & 255, uv_, d_, r_, pl_, lit2_)                                      \
+			lit_ = face_ < (((SH) >> 16) & 255) ? lit_ : lit2_;                                     \
+		}                                                                                               \
+		vis_ = in_ ? lit_ * (1.0 / 16.0) : 1.0;                                                         \
+	}
+
+// TL_CACHED_VIS (rrc --payload shadow, [S] sec. 4.1: reproj/compose.frag.in): the shadow factors of lights 0..7 come
+// from the payload cache through tl_cached_vis(i), which the including shader defines; lights from 8 on filter theirs
+// every frame. (i) is a constant, so the choice is made by the compiler, not at run time.
+#ifdef TL_CACHED_VIS
+float tl_cached_vis(int i);
+#define TL_SHADOW_VIS(i, SH, L_, p_, vis_)                                                                      \
+	if ((SH) >= 0) {                                                                                        \
+		if ((i) < 8)                                                                                    \
+			vis_ = tl_cached_vis(i);                                                                \
+		else                                                                                            \
+			TL_SHADOW_PCF(SH, L_, p_, vis_)                                                         \
+	}
+#else
+#define TL_SHADOW_VIS(i, SH, L_, p_, vis_)                                                                      \
+	if ((SH) >= 0)                                                                                          \
+		TL_SHADOW_PCF(SH, L_, p_, vis_)
+#endif
+
 // Light i with shadow code SH (LIGHT_SHADOW_i): accumulates its contribution into `sum`. Unrolled per light so
 // that the chunks sampled are constants.
 #define TL_LIGHT(i, SH)                                                                                         \
@@ -155,24 +203,33 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 		if (light_setup(slot, s, (i), l_, atten_, p_)) {                                                \
 			GpuLight L_ = states[slot].lights[(i)];                                                 \
 			float vis_ = 1.0;                                                                       \
-			if ((SH) >= 0) {                                                                        \
-				int layer_ = int(L_.cone_shadow.z);                                             \
-				int face_ = uint(L_.direction_type.w) == GPU_LIGHT_POINT ? cube_face(p_ - L_.position_range.xyz) : 0; \
-				vec2 uv_;                                                                       \
-				float d_, r_, pl_, lit_ = 0.0;                                                  \
-				bool in_ = shadow_coords(slot, layer_ + face_, p_, uv_, d_, r_, pl_);            \
-				TL_PCF((SH) & 255, uv_, d_, r_, pl_, lit_)                                      \
-				if ((((SH) >> 8) & 255) != ((SH) & 255)) {                                      \
-					float lit2_ = 0.0;                                                      \
-					TL_PCF(((SH) >> 8) & 255, uv_, d_, r_, pl_, lit2_)                      \
-					lit_ = face_ < (((SH) >> 16) & 255) ? lit_ : lit2_;                     \
-				}                                                                               \
-				vis_ = in_ ? lit_ * (1.0 / 16.0) : 1.0;                                         \
-			}                                                                                       \
+			TL_SHADOW_VIS(i, SH, L_, p_, vis_)                                                      \
 			if (vis_ > 0.0)                                                                         \
 				sum += brdf_ggx(s, v, l_, L_.color.rgb * (atten_ * vis_));                      \
 		}                                                                                               \
 	}
+
+#ifdef TL_SHADOW_FACTORS
+// rrc --payload shadow ([S] sec. 4.1: "per-light shadow factors"; reproj/payload.frag.in): the shadow factors of
+// lights 0..7 at surface s, f[i] = 1 where light i casts no shadow or does not reach s (its factor is then unused).
+#define TL_FACTOR(i, SH)                                                                                        \
+	if ((i) < LIGHT_COUNT) {                                                                                \
+		vec3 l_, p_;                                                                                    \
+		float atten_;                                                                                   \
+		if (light_setup(slot, s, (i), l_, atten_, p_) && (SH) >= 0) {                                   \
+			GpuLight L_ = states[slot].lights[(i)];                                                 \
+			TL_SHADOW_PCF(SH, L_, p_, f[(i)])                                                       \
+		}                                                                                               \
+	}
+
+void shadow_factors(uint slot, Surface s, out float f[8])
+{
+	for (int i = 0; i < 8; i++)
+		f[i] = 1.0;
+	TL_FACTOR(0, LIGHT_SHADOW_0) TL_FACTOR(1, LIGHT_SHADOW_1) TL_FACTOR(2, LIGHT_SHADOW_2) TL_FACTOR(3, LIGHT_SHADOW_3)
+	TL_FACTOR(4, LIGHT_SHADOW_4) TL_FACTOR(5, LIGHT_SHADOW_5) TL_FACTOR(6, LIGHT_SHADOW_6) TL_FACTOR(7, LIGHT_SHADOW_7)
+}
+#endif
 
 vec3 shade_lights(uint slot, Surface s)
 {
@@ -186,7 +243,13 @@ vec3 shade_lights(uint slot, Surface s)
 	TL_LIGHT(15, LIGHT_SHADOW_15)
 	vec3 ambient = states[slot].ambient_exposure.rgb * s.occlusion * s.base_color *
 		       (1.0 - 0.5 * s.metallic) * (0.75 + 0.25 * s.normal.y);
+#if TL_BRDF_PART == 1
+	return sum + ambient;
+#elif TL_BRDF_PART == 2
+	return sum + s.emissive;
+#else
 	return sum + ambient + s.emissive;
+#endif
 }
 
 // Texture lookups of the material: implicit derivatives in fragment shaders; compute shaders (the shading atlas)

@@ -15,9 +15,48 @@
 #define KEEP_DISP 1 // the oracle compares exact display values of C' (its bound), rrc compares none
 #endif
 
+#ifdef PAYLOAD
+// rrc --payload ([S] sec. 4.1, BASELINES A5): the cache keeps a payload, part of the shading, instead of the colour,
+// 32 bits per channel: PAYLOAD_SHADOW the shadow factors of lights 0..7, two unorm16 per channel (packUnorm2x16);
+// PAYLOAD_DIFFUSE the diffuse term's RGB (float bits). Decoded into two vec4 (a: factors 0-3 or the RGB, b: factors
+// 4-7), resampled like the colour.
+layout(set = 1, binding = 0, rgba32ui) uniform readonly uimage2D prev_colour;
+layout(set = 1, binding = 2, rgba32ui) uniform uimage2D next_colour;
+struct CacheValue {
+	vec4 a, b;
+};
+CacheValue cache_decode(uvec4 u)
+{
+#ifdef PAYLOAD_SHADOW
+	return CacheValue(vec4(unpackUnorm2x16(u.x), unpackUnorm2x16(u.y)), vec4(unpackUnorm2x16(u.z), unpackUnorm2x16(u.w)));
+#else
+	return CacheValue(vec4(uintBitsToFloat(u.xyz), 0.0), vec4(0.0));
+#endif
+}
+uvec4 cache_encode(CacheValue v)
+{
+#ifdef PAYLOAD_SHADOW
+	return uvec4(packUnorm2x16(v.a.xy), packUnorm2x16(v.a.zw), packUnorm2x16(v.b.xy), packUnorm2x16(v.b.zw));
+#else
+	return uvec4(floatBitsToUint(v.a.xyz), 0u);
+#endif
+}
+CacheValue cache_zero() { return CacheValue(vec4(0.0), vec4(0.0)); }
+CacheValue cache_load(ivec2 q) { return cache_decode(imageLoad(prev_colour, q)); }
+CacheValue cache_mad(CacheValue acc, float w, CacheValue v) { return CacheValue(acc.a + w * v.a, acc.b + w * v.b); }
+CacheValue cache_div(CacheValue v, float k) { return CacheValue(v.a / k, v.b / k); }
+void cache_store(ivec2 px, CacheValue v) { imageStore(next_colour, px, cache_encode(v)); }
+#else
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D prev_colour;
-layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 2, rgba16f) uniform image2D next_colour;
+#define CacheValue vec3
+vec3 cache_zero() { return vec3(0.0); }
+vec3 cache_load(ivec2 q) { return imageLoad(prev_colour, q).rgb; }
+vec3 cache_mad(vec3 acc, float w, vec3 v) { return acc + w * v; }
+vec3 cache_div(vec3 v, float k) { return v / k; }
+void cache_store(ivec2 px, vec3 v) { imageStore(next_colour, px, vec4(v, 1.0)); }
+#endif
+layout(set = 1, binding = 1, rgba32ui) uniform readonly uimage2D prev_state;
 layout(set = 1, binding = 3, rgba32ui) uniform uimage2D next_state;
 // binding 4: none; binding 9: the pre-pass record (only in reproj/reproject.comp.in)
 layout(set = 1, binding = 5, rgba32f) uniform readonly image2DArray filt_img; // F: 8x8 max + 9x9 max of G
@@ -27,7 +66,8 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint fresh;   // samples without a valid cache entry (new_units)
 	uint late;    // --truth: reused samples more than T from their true shading
 	uint forced;  // tarc: reshaded because new or in their second frame (not by the gradient)
-	uint pad0, pad1, pad2;
+	uint composed; // rrc --payload: samples whose shading the compose pass completed with the cached payload
+	uint pad1, pad2;
 } counters;
 layout(set = 1, binding = 7, rgba32f) uniform readonly image2D prev_disp; // KEEP_DISP: disp of prev_colour
 layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEEP_DISP: disp of next_colour
@@ -134,10 +174,10 @@ uvec2 record_position(uvec4 m) { return uvec2(m.w & POS_NONE, (m.w >> 21) | (m.x
 // KEEP_DISP: disp = the cached display values of the tap the discrete state comes from (one tap, not four: on
 // lavapipe every image load costs the same whatever its weight). Under a static view (weights 0 and 1) exactly
 // disp(C'); under motion the display values of the last shading the state travelled with, not of the blend C'.
-bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 disp, out uvec4 state)
+bool cache_lookup(uint object, uvec2 p, float dist, out CacheValue colour, out vec3 disp, out uvec4 state)
 {
 	ivec2 size = imageSize(prev_state);
-	colour = vec3(0.0);
+	colour = cache_zero();
 	disp = vec3(0.0);
 	state = uvec4(0u);
 	if (p.x == POS_NONE)
@@ -147,7 +187,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 di
 	uvec4 rec = imageLoad(prev_state, q);
 	if (!cached_here(rec, object, dist))
 		return false;
-	colour = imageLoad(prev_colour, q).rgb;
+	colour = cache_load(q);
 #ifdef KEEP_DISP
 	disp = imageLoad(prev_disp, q).rgb;
 #endif
@@ -157,7 +197,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 di
 	ivec2 x0 = ivec2(p >> 6u) - 1;
 	vec2 fr = vec2(p & 63u) / 64.0;
 	float wsum = 0.0, wbest = -1.0;
-	vec3 acc = vec3(0.0);
+	CacheValue acc = cache_zero();
 	ivec2 qbest = ivec2(0);
 	for (int k = 0; k < 4; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);
@@ -168,7 +208,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 di
 		uvec4 rec = imageLoad(prev_state, q);
 		if (!cached_here(rec, object, dist))
 			continue;
-		acc += w * imageLoad(prev_colour, q).rgb;
+		acc = cache_mad(acc, w, cache_load(q));
 		wsum += w;
 		if (w > wbest) {
 			wbest = w;
@@ -178,7 +218,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out vec3 colour, out vec3 di
 	}
 	if (wsum <= 0.0)
 		return false;
-	colour = wsum == 1.0 ? acc : acc / wsum;
+	colour = wsum == 1.0 ? acc : cache_div(acc, wsum);
 #ifdef KEEP_DISP
 	disp = imageLoad(prev_disp, qbest).rgb;
 #endif

@@ -278,8 +278,15 @@ int method_config_parse_variant(method_config *c, const char *variant, char *err
 			*next = 0;
 		size_t oi = 0;
 		const method_option *o = find_option(m, f + 1, &oi);
-		/* a whole-number option written as -NAMEvalue ("ref-ssaa2") */
+		/* a whole-number option written as -NAMEvalue ("ref-ssaa2"), a choice as -VALUE ("rrc-shadow") */
 		char oname[64], *digits = NULL;
+		const char *choice = NULL;
+		for (size_t i = 0; !o && i < m->option_count; i++)
+			for (size_t k = 0; m->options[i].type == METHOD_OPT_CHOICE && m->options[i].variant == '-' &&
+					   m->options[i].choices[k];
+			     k++)
+				if (!strcmp(m->options[i].choices[k], f + 1))
+					o = &m->options[i], oi = i, choice = f + 1;
 		if (!o) {
 			snprintf(oname, sizeof oname, "%s", f + 1);
 			size_t len = strlen(oname);
@@ -292,16 +299,16 @@ int method_config_parse_variant(method_config *c, const char *variant, char *err
 				if (o && o->type != METHOD_OPT_UINT)
 					o = NULL;
 			}
-		} else if (o->type != METHOD_OPT_BOOL) {
+		} else if (o->type != METHOD_OPT_BOOL && !choice) {
 			o = NULL; /* "ref-ssaa": the value is part of the token */
 		}
 		if (!o || o->variant != '-')
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s has no '-%s' form", variant, m->name, f + 1);
 		if (c->given & (1u << oi)) /* "tasa-oracle-oracle": one spelling per variant (issue 31.9) */
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': '-%s' is given twice", variant, f + 1);
-		if (digits) {
+		if (digits || choice) {
 			char why[256];
-			if (method_config_set(c, o->name, digits, why, sizeof why))
+			if (method_config_set(c, o->name, digits ? digits : choice, why, sizeof why))
 				return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s", variant, why);
 		} else if ((rc = method_config_set(c, o->name, NULL, err, err_size))) {
 			return rc;
@@ -343,6 +350,8 @@ void method_config_name(const method_config *c, char *out, size_t out_size)
 			len += (size_t)snprintf(out + len, out_size - len, "-%s", o->name);
 		else if (o->variant == '-' && o->type == METHOD_OPT_UINT && get_number(c, o) != o->def)
 			len += (size_t)snprintf(out + len, out_size - len, "-%s%g", o->name, get_number(c, o));
+		else if (o->variant == '-' && o->type == METHOD_OPT_CHOICE && get_number(c, o) != o->def)
+			len += (size_t)snprintf(out + len, out_size - len, "-%s", o->choices[(size_t)get_number(c, o)]);
 	}
 }
 
@@ -414,7 +423,12 @@ void method_option_describe(const method_option *o, char *out, size_t out_size)
 	if (o->variant == '@' || o->variant == '/')
 		PUT("as %c%s", o->variant, o->arg ? o->arg : "");
 	else if (o->variant == '-')
-		PUT("as -%s%s", o->name, o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "");
+	{
+		if (o->type == METHOD_OPT_CHOICE)
+			PUT("as -VALUE");
+		else
+			PUT("as -%s%s", o->name, o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "");
+	}
 	if (o->type != METHOD_OPT_BOOL) { /* a flag has no default or range to tell */
 		const char *sep = len ? "; " : "";
 		if (isnan(o->def))

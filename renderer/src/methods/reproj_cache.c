@@ -13,6 +13,9 @@
  *   shade      scene geometry, depth EQUAL + stencil EQUAL 1: the reference shading into the next cache only
  *              (oracle: every sample, no stencil test); then the next cache colour, now the opaque frame, is
  *              copied into the HDR target (copy_colour_to_hdr)
+ *   compose    rrc --payload (BASELINES A5): the shading pass above computes the payload only (reproj/payload.frag.in),
+ *              into the next cache, whose colour channels then hold it; this pass shades every sample with it into the
+ *              HDR target (reproj/compose.frag.in, depth EQUAL, no stencil test), in place of the copy
  *   truth      --truth: stencil EQUAL 0, counts reused samples more than T from the truth
  *   blend      glTF BLEND objects with the reference shading on top (excluded from the counters)
  *   display, readback
@@ -44,7 +47,7 @@ typedef struct reproj_state {
 	uint8_t *decision_codes;   /* frame_decision per pixel, unpacked from decision_buf */
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet sets[2]; /* sets[p]: read cache p, write cache 1 - p */
-	render_pipeline prepass, prepass_mask, mark, shade, truth;
+	render_pipeline prepass, prepass_mask, mark, shade, truth, compose;
 	VkPipelineLayout reproject_layout; /* set 0 the scene set, set 1 set_layout; compute push constants */
 	VkPipeline reproject;
 	tas_filter filter;
@@ -124,18 +127,24 @@ static int make_reproject(render *r, reproj_state *s, const char *defs, char *er
 
 static int make_pipelines(render *r, reproj_state *s, char *err, size_t err_size)
 {
-	char defs[192], vdefs[96];
-	snprintf(vdefs, sizeof vdefs, "%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
-		 s->v.nearest ? "#define NEAREST 1\n" : "");
+	char defs[256], vdefs[160];
+	static const char *const payload_defs[] = {"", "#define PAYLOAD 1\n#define PAYLOAD_SHADOW 1\n",
+						   "#define PAYLOAD 1\n#define PAYLOAD_DIFFUSE 1\n"};
+	snprintf(vdefs, sizeof vdefs, "%s%s%s%s", s->v.tarc ? "#define TARC 1\n" : "", s->v.oracle ? "#define ORACLE 1\n" : "",
+		 s->v.nearest ? "#define NEAREST 1\n" : "", payload_defs[s->v.payload]);
 	snprintf(defs, sizeof defs, "%s%s", vdefs, count_defines(r->dev->physical, false));
 	int rc = make_prepass(r, s, vdefs, err, err_size);
 	if (!rc)
 		rc = make_reproject(r, s, vdefs, err, err_size);
 	if (rc)
 		return rc;
-	if ((rc = render_make_template_pipeline(r, "reproj/shade.frag.in", defs, s->set_layout,
+	const char *shade = s->v.payload ? "reproj/payload.frag.in" : "reproj/shade.frag.in";
+	if ((rc = render_make_template_pipeline(r, shade, defs, s->set_layout,
 						s->v.oracle ? RENDER_STENCIL_ATTACHED : RENDER_STENCIL_EQUAL_ONE, 0, 0, &s->shade,
 						err, err_size)))
+		return rc;
+	if (s->v.payload && (rc = render_make_template_pipeline(r, "reproj/compose.frag.in", defs, s->set_layout,
+								RENDER_STENCIL_NONE, 1, 0, &s->compose, err, err_size)))
 		return rc;
 	if (!s->v.oracle && (rc = render_make_template_pipeline(r, "reproj/mark.frag.in", defs, s->set_layout,
 								RENDER_STENCIL_WRITE_ONE, 0, 1, &s->mark, err, err_size)))
@@ -210,7 +219,8 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 	VkResult res;
 	for (int i = 0; i < IMG_COUNT; i++) {
 		int low = i == IMG_L1 || i == IMG_F, arr = low, disp = i >= IMG_DISP0;
-		VkFormat f = i <= IMG_COLOUR1 ? VK_FORMAT_R16G16B16A16_SFLOAT
+		/* --payload: the colour images hold the payload, 32 bits per channel (reproj.glsl PAYLOAD) */
+		VkFormat f = i <= IMG_COLOUR1 ? (v->payload ? VK_FORMAT_R32G32B32A32_UINT : VK_FORMAT_R16G16B16A16_SFLOAT)
 			     : i <= IMG_RECORD ? VK_FORMAT_R32G32B32A32_UINT
 					       : VK_FORMAT_R32G32B32A32_SFLOAT;
 		/* rrc never reads F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
@@ -303,6 +313,8 @@ static void record_reproject(render *r, reproj_state *s, VkCommandBuffer cmd, ui
 	const scene *sc = r->scene;
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
 	VkClearColorValue sky = {{sc->sky[0] * sc->exposure, sc->sky[1] * sc->exposure, sc->sky[2] * sc->exposure, 0.0f}};
+	if (s->v.payload) /* a payload, not a colour: the compose pass clears the HDR target to the sky */
+		sky = (VkClearColorValue){.uint32 = {0, 0, 0, 0}};
 	vkCmdClearColorImage(cmd, s->img[IMG_COLOUR0 + 1 - s->parity].image, VK_IMAGE_LAYOUT_GENERAL, &sky, 1, &range);
 	barrier_all(cmd);
 	vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, s->reproject);
@@ -377,8 +389,15 @@ void reproj_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	render_pass_scene(r, cmd, slot,
 			  &(render_scene_pass){.pipe = &s->shade, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD, .query = 1});
 	barrier_all(cmd);
-	copy_colour_to_hdr(r, s, cmd);
+	if (!s->v.payload)
+		copy_colour_to_hdr(r, s, cmd);
 	render_ts(r, cmd);
+	if (s->v.payload) {
+		render_pass_scene(r, cmd, slot, &(render_scene_pass){.pipe = &s->compose, .set = set, .hdr = RENDER_HDR_CLEAR});
+		barrier_all(cmd);
+	}
+	if (!s->v.tarc) /* rrc's passes have "compose" (empty without --payload) */
+		render_ts(r, cmd);
 	if (s->truth.pipeline) {
 		render_pass_scene(r, cmd, slot,
 				  &(render_scene_pass){.pipe = &s->truth, .set = set, .stencil = RENDER_STENCIL_PASS_LOAD});
@@ -427,6 +446,10 @@ void reproj_collect(render *r, frame_stats *st)
 	st->shaded_units = c[1];
 	st->new_units = c[2];
 	st->late_samples = s->v.truth ? (int64_t)c[3] : -1;
+	if (s->v.payload) { /* shaded_samples counts the payload's evaluations, this the shadings completed with it */
+		st->extra_names[st->extra_count] = "composed_samples";
+		st->extra[st->extra_count++] = c[5];
+	}
 	if (s->v.tarc && !s->v.oracle) {
 		st->extra_names[st->extra_count] = "forced_samples";
 		st->extra[st->extra_count++] = c[4];
@@ -455,8 +478,8 @@ void reproj_finish(render *r)
 		return;
 	vkdev_buffer_destroy(r->dev, &s->decision_buf);
 	free(s->decision_codes);
-	render_pipeline *pipes[5] = {&s->prepass, &s->prepass_mask, &s->mark, &s->shade, &s->truth};
-	for (int i = 0; i < 5; i++)
+	render_pipeline *pipes[6] = {&s->prepass, &s->prepass_mask, &s->mark, &s->shade, &s->truth, &s->compose};
+	for (int i = 0; i < 6; i++)
 		render_pipeline_destroy(r, pipes[i]);
 	if (s->reproject)
 		vkDestroyPipeline(r->dev->device, s->reproject, NULL);

@@ -15,7 +15,12 @@ typedef struct reproj_variant {
 	uint32_t period;  /* rrc N */
 	uint32_t max_age; /* tarc K (0: none) */
 	float threshold;  /* tarc T; rrc: the T late samples are counted against with --truth */
+	uint32_t payload; /* rrc --payload: REPROJ_PAYLOAD_* */
 } reproj_variant;
+
+/* rrc --payload ([S] sec. 4.1, BASELINES A5): what the cache keeps. COLOUR: the shaded colour (rrc as the paper has it).
+ * SHADOW: the shadow factors of lights 0..7; DIFFUSE: the diffuse term. The rest of the shading runs every frame. */
+enum { REPROJ_PAYLOAD_COLOUR = 0, REPROJ_PAYLOAD_SHADOW, REPROJ_PAYLOAD_DIFFUSE };
 
 int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size);
 int reproj_prepare(render *r, uint32_t frame, char *err, size_t err_size);

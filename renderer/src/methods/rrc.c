@@ -3,7 +3,10 @@
  * survey, papers/002 sec. 3.4). A pixel is shaded when it misses the cache (not visible in the previous
  * frame: object or 2% view-distance mismatch), on the first frame, or when its tile is due:
  * (t + tile) mod N == 0; otherwise it shows the previous frame's value, resampled at the reprojected position
- * (bilinear by default, as the paper did; nearest for the ablation). TAS-METHODS section 2. */
+ * (bilinear by default, as the paper did; nearest for the ablation). TAS-METHODS section 2.
+ * --payload shadow|diffuse (rrc-shadow/N, rrc-diffuse/N; [S] sec. 4.1 and 5.1, BASELINES A5): the cache keeps part
+ * of the shading, the per-light shadow factors or the diffuse term, refreshed as above; the rest is shaded every frame
+ * (reproj_cache.c, "compose"). */
 #include "reproj_cache.h"
 
 #include <stddef.h>
@@ -13,9 +16,11 @@ typedef struct rrc_options {
 	uint32_t resample; /* 0 bilinear, 1 nearest */
 	bool truth;
 	float truth_threshold;
+	uint32_t payload; /* REPROJ_PAYLOAD_* */
 } rrc_options;
 
 static const char *const resample_names[] = {"bilinear", "nearest", NULL};
+static const char *const payload_names[] = {"colour", "shadow", "diffuse", NULL}; /* REPROJ_PAYLOAD_* */
 static const uint32_t periods[] = {1, 2, 4, 8, 0};
 
 static const method_option rrc_option_table[] = {
@@ -29,16 +34,25 @@ static const method_option rrc_option_table[] = {
 	 .type = METHOD_OPT_BOOL, .offset = offsetof(rrc_options, truth)},
 	{.name = "truth-threshold", .arg = "T", .help = "with --truth: the T of late_samples, in code values",
 	 .type = METHOD_OPT_FLOAT, .offset = offsetof(rrc_options, truth_threshold), .def = 8, .min = 0, .max = 255},
+	{.name = "payload", .arg = "P", .help = "what the cache keeps ([S] 4.1): colour (the shading), shadow (the shadow "
+						"factors of lights 0-7) or diffuse (the diffuse term); the rest is shaded every frame",
+	 .type = METHOD_OPT_CHOICE, .offset = offsetof(rrc_options, payload), .def = 0, .choices = payload_names,
+	 .variant = '-'},
 };
 
-static const char *const rrc_passes[] = {"shadow", "depth", "reproject", "filter", "mark", "shade", "truth", "blend",
-					 "display", "readback"};
+/* "shade": with --payload the payload's evaluation, "compose" the shading completed with it (empty without) */
+static const char *const rrc_passes[] = {"shadow", "depth", "reproject", "filter", "mark", "shade", "compose", "truth",
+					 "blend", "display", "readback"};
 
 static int rrc_init(render *r, char *err, size_t err_size)
 {
 	const rrc_options *o = (const rrc_options *)r->config.values.bytes;
+	if (o->truth && o->payload != REPROJ_PAYLOAD_COLOUR)
+		return tl_error(err, err_size, TL_ERR_ARG,
+				"rrc: --truth counts late colours, and with --payload %s the cache keeps no colour: drop one of them",
+				payload_names[o->payload]);
 	reproj_variant v = {.nearest = o->resample == 1, .truth = o->truth, .period = o->period,
-			    .threshold = o->truth_threshold};
+			    .threshold = o->truth_threshold, .payload = o->payload};
 	return reproj_init(r, &v, err, err_size);
 }
 
