@@ -217,6 +217,10 @@ static void test_study_options(void **state)
 	PARSE_BAD("study design", "--training", "design", "--db", "s.db", "--stimuli", "st", "--participants", "2",
 		  "--training", "1e9");
 	PARSE_BAD("study design", "--db", "design", "--stimuli", "st", "--participants", "2");
+	PARSE_OK("study design", "design", "--db", "s.db", "--stimuli", "st", "--participants", "2", "--seed", "4294967295");
+	/* GSL's mt19937 keeps 32 bits of a seed: 2^32 would repeat seed 0 */
+	PARSE_BAD("study design", "--seed", "design", "--db", "s.db", "--stimuli", "st", "--participants", "2", "--seed",
+		  "4294967296");
 	PARSE_OK("study serve", "serve", "--db", "s.db", "--port", "0");
 	assert_int_equal(o->port, 0);
 	PARSE_BAD("study serve", "--port", "serve", "--db", "s.db", "--port", "18080.7");

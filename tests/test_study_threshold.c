@@ -227,6 +227,13 @@ static void test_simulate(void **state)
 	tu_expect_cli_error("study simulate --t-levels 2,4,x", "--t-levels");
 	tu_expect_cli_error("study simulate --design half", "--design");
 	tu_expect_cli_error("study simulate --t-levels 8", "two levels");
+	/* seeds: GSL's mt19937 keeps 32 bits, so study k's seed + k must stay below 2^32 (else it repeats a small seed) */
+	d.trials = 8;
+	d.seed = STY_SEED_MAX;
+	d.studies = 2;
+	assert_int_equal(sty_simulate(&d, &again, err, sizeof err), TL_ERR_ARG);
+	assert_non_null(strstr(err, "--seed 4294967295 with 2 --studies"));
+	tu_expect_cli_error("study simulate --seed 4294967296", "--seed");
 }
 
 int main(void)

@@ -28,8 +28,8 @@ static const cli_opt design_options[] = {
 	 .help = "participants to plan for (1..10000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, participants), .lo = 1, .hi = 10000},
 	{.name = "seed", .arg = "S",
-	 .help = "seed of the randomisation (default 1)",
-	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = 1e18},
+	 .help = "seed of the randomisation (0..4294967295, default 1)",
+	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = STY_SEED_MAX},
 	{.name = "training", .arg = "K",
 	 .help = "training trials at the start, not analysed (0..100)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, training), .lo = 0, .hi = 100},
@@ -126,8 +126,8 @@ static const cli_opt tally_options[] = {
 	 .help = "bootstrap resamples for the JOD intervals (1..100000, default 2000)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, bootstrap), .lo = 1, .hi = 100000},
 	{.name = "seed", .arg = "S",
-	 .help = "seed of the bootstrap (default 1)",
-	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = 1e18},
+	 .help = "seed of the bootstrap (0..4294967295, default 1)",
+	 .type = CLI_U64, .offset = offsetof(study_opts, seed), .lo = 0, .hi = STY_SEED_MAX},
 	{0},
 };
 

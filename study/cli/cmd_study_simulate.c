@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "taslab/study.h"
 #include "taslab/study_threshold.h"
 
 typedef struct simulate_opts {
@@ -37,8 +38,8 @@ static const cli_opt simulate_options[] = {
 	 .type = CLI_DOUBLE, .offset = offsetof(simulate_opts, ties), .lo = 0, .hi = 1},
 	{.name = "studies", .arg = "M", .help = "simulated studies (default 100)",
 	 .type = CLI_UINT, .offset = offsetof(simulate_opts, studies), .lo = 1, .hi = 1000000},
-	{.name = "seed", .arg = "K", .help = "seed (study k uses K + k; default 1)",
-	 .type = CLI_U64, .offset = offsetof(simulate_opts, seed), .lo = 0, .hi = 1e18},
+	{.name = "seed", .arg = "K", .help = "seed (study k uses K + k, at most 4294967295; default 1)",
+	 .type = CLI_U64, .offset = offsetof(simulate_opts, seed), .lo = 0, .hi = STY_SEED_MAX},
 	{.name = "jobs", .arg = "N", .help = "studies fitted at a time (default: one per CPU; the output is the same for any N)",
 	 .type = CLI_UINT, .offset = offsetof(simulate_opts, jobs), .lo = 1, .hi = 256},
 	{.name = "out", .arg = "DIR", .help = "folder for simulation.csv (one row per study)",

@@ -218,6 +218,9 @@ int sty_design(sty *s, const sty_design_desc *d, sty_design_summary *out, char *
 		snprintf(err, err_size, "need --stimuli DIR and 1..100000 --participants");
 		return TL_ERR_ARG;
 	}
+	if (d->seed > STY_SEED_MAX)
+		return tl_error(err, err_size, TL_ERR_ARG, "--seed %llu: at most %u (GSL's mt19937 keeps 32 bits of a seed)",
+				(unsigned long long)d->seed, STY_SEED_MAX);
 	if (d->adaptive != (d->trials > 0))
 		return tl_error(err, err_size, TL_ERR_ARG, d->adaptive ? "--adaptive needs --trials N (test trials per participant)"
 									: "--trials N goes with --adaptive (a full design rates every condition)");

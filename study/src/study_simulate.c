@@ -23,6 +23,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "taslab/study.h"
 #include "taslab/study_threshold.h"
 #include "taslab/tl_error.h"
 #include "taslab/tl_fs.h"
@@ -136,6 +137,10 @@ int sty_simulate(const sty_sim_desc *d, sty_sim_summary *sum, char *err, size_t 
 	}
 	if (d->participants < 1 || d->trials < 1 || d->studies < 1)
 		return tl_error(err, err_size, TL_ERR_ARG, "--participants, --trials and --studies must be at least 1");
+	if (d->seed > STY_SEED_MAX - (d->studies - 1)) /* study k is seeded with seed + k */
+		return tl_error(err, err_size, TL_ERR_ARG,
+				"--seed %llu with %u --studies: the last study's seed would pass %u (GSL's mt19937 keeps 32 bits "
+				"of a seed); use a smaller --seed", (unsigned long long)d->seed, d->studies, STY_SEED_MAX);
 	if (!d->adaptive && d->trials % d->nlevels)
 		return tl_error(err, err_size, TL_ERR_ARG, "--design full: --trials %u is not a multiple of the %zu levels (every "
 				"participant rates every level equally often)", d->trials, d->nlevels);

@@ -665,6 +665,9 @@ static int thresholds_of(const data *d, sty_result *res, char *err, size_t err_s
 int sty_tally_compute(sty *s, const sty_tally_desc *td, sty_result **out, char *err, size_t err_size)
 {
 	*out = NULL;
+	if (td->seed > STY_SEED_MAX)
+		return tl_error(err, err_size, TL_ERR_ARG, "--seed %llu: at most %u (GSL's mt19937 keeps 32 bits of a seed)",
+				(unsigned long long)td->seed, STY_SEED_MAX);
 	sty_result *res = calloc(1, sizeof *res);
 	if (!res)
 		return tl_error(err, err_size, TL_ERR_NOMEM, "out of memory");

@@ -82,6 +82,10 @@ const char *sty_reference_method(const sty *s);
 /* A period is 1, 2, 4 or 8 (`--period`, variants rrc/4, sau/8). */
 bool sty_period_valid(long period);
 
+/* The largest seed (study design, tally's bootstrap, study simulate): GSL's mt19937 keeps the low 32 bits of its seed,
+ * so a larger seed would silently repeat a smaller one's draws. */
+#define STY_SEED_MAX 4294967295u
+
 typedef struct sty_design_desc {
 	const char *stimuli;      /* folder with pairs.json sets (DIR/pairs.json and DIR/<set>/pairs.json) */
 	uint32_t participants;
