@@ -75,6 +75,10 @@ static void test_variants(void **state)
 	expect_variant("ads@-1", "ads@-1", "ads", "ads-T-1", -1, 0);
 	expect_variant("casedge", "casedge", "casedge", "casedge", NAN, 0);
 	expect_variant("taas", "taas", "taas", "taas", NAN, 0);
+	/* a choice written as -VALUE (rrc --payload, BASELINES.md A5); the default is not written */
+	expect_variant("rrc-shadow/4", "rrc-shadow/4", "rrc-shadow", "rrc-shadow-N4", NAN, 4);
+	expect_variant("rrc-diffuse/2", "rrc-diffuse/2", "rrc-diffuse", "rrc-diffuse-N2", NAN, 2);
+	expect_variant("rrc-colour/4", "rrc/4", "rrc", "rrc-N4", NAN, 4);
 	char err[256];
 	method_config c;
 	struct {
@@ -95,6 +99,8 @@ static void test_variants(void **state)
 		{"ads@300", "out of range"},	  {"ads@-2", "out of range"},
 		{"casedge@8", "takes no '@'"},	  {"fovea/4", "takes no '/'"},
 		{"vref-oracle", "no '-oracle' form"}, {"mas-oracle", "no '-oracle' form"},
+		{"rrc-random-shadow/4", "it has none"}, {"rrc-specular/4", "its '-' forms: -shadow, -diffuse"},
+		{"rrc-diffuse-shadow/4", "sets --payload, which the variant sets already"},
 	};
 	for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		int rc = method_config_parse_variant(&c, bad[i].token, err, sizeof err);
@@ -103,6 +109,38 @@ static void test_variants(void **state)
 		if (!strstr(err, bad[i].needle))
 			fail_msg("'%s': '%s' lacks '%s'", bad[i].token, err, bad[i].needle);
 	}
+}
+
+/* Every '-' form of every method reads back as itself: a -VALUE choice (rrc-shadow) must not be an option name, another
+ * choice's value or, joined to the method, another method's name (rrc-random), which the parser would take first. */
+static void test_dash_forms_unambiguous(void **state)
+{
+	(void)state;
+	size_t n;
+	const method_info *const *m = method_list(&n);
+	int choices = 0;
+	for (size_t i = 0; i < n; i++)
+		for (size_t k = 0; k < m[i]->option_count; k++) {
+			const method_option *o = &m[i]->options[k];
+			if (o->variant != '-' || o->type != METHOD_OPT_CHOICE)
+				continue;
+			for (size_t v = 0; o->choices[v]; v++) {
+				char joined[96];
+				snprintf(joined, sizeof joined, "%s-%s", m[i]->name, o->choices[v]);
+				if (method_find(joined))
+					fail_msg("%s: '-%s' reads as the method %s", m[i]->name, o->choices[v], joined);
+				for (size_t j = 0; j < m[i]->option_count; j++) {
+					const method_option *q = &m[i]->options[j];
+					if (!strcmp(q->name, o->choices[v]))
+						fail_msg("%s: the choice '%s' is also an option's name", m[i]->name, q->name);
+					for (size_t w = 0; q->type == METHOD_OPT_CHOICE && q->variant == '-' && q->choices[w]; w++)
+						if ((j != k || w != v) && !strcmp(q->choices[w], o->choices[v]))
+							fail_msg("%s: '-%s' belongs to two choices", m[i]->name, o->choices[v]);
+				}
+				choices++;
+			}
+		}
+	assert_true(choices >= 3); /* rrc's payloads at least */
 }
 
 static void test_options(void **state)
@@ -161,6 +199,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_registry),
 		cmocka_unit_test(test_variants),
+		cmocka_unit_test(test_dash_forms_unambiguous),
 		cmocka_unit_test(test_options),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -66,9 +66,14 @@ static int render_one(const sweep_spec *s, const sweep_run *r, const char *run_d
 	method_config mc;
 	int rc = method_config_parse_variant(&mc, v->variant, err, err_size);
 	/* --truth: every variant whose method can count late samples does (the oracles too: their count is 0 by
-	 * construction, and so is tfr's) */
-	if (!rc && s->truth && method_has_option(mc.method, "truth"))
-		rc = method_config_set(&mc, "truth", NULL, err, err_size);
+	 * construction, and so is tfr's); a variant whose options exclude it (rrc --payload: no colour cached) renders
+	 * without, its late column empty */
+	if (!rc && s->truth && method_has_option(mc.method, "truth")) {
+		method_config t = mc;
+		char why[256];
+		if (!method_config_set(&t, "truth", NULL, why, sizeof why) && !method_config_check(&t, why, sizeof why))
+			mc = t;
+	}
 	if (!rc)
 		rc = scene_load(sc->path, &scn, err, err_size);
 	int cam = scn ? scene_find_camera(scn, sc->cameras[r->camera].name) : -1;

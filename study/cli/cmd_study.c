@@ -171,8 +171,8 @@ static volatile sig_atomic_t stop_flag;
 static void on_signal(int sig) { (void)sig; stop_flag = 1; }
 
 /* The methods of taslab's registry, described to the study (issue 30.1: the study module knows no method by name):
- * every method and every "-FLAG" form of it (tarc-oracle), the variant method names a ratings file or pairs.json
- * carries. */
+ * every method and every "-FLAG", "-NAMEvalue" and "-VALUE" form of it (tarc-oracle, ref-ssaa2, rrc-shadow), the
+ * variant method names a ratings file or pairs.json carries. */
 static int describe_methods(sty *s, char *err, size_t err_size)
 {
 	size_t n;
@@ -195,6 +195,16 @@ static int describe_methods(sty *s, char *err, size_t err_size)
 					if ((double)o->allowed[v] == o->def)
 						continue;
 					snprintf(name, sizeof name, "%s-%s%u", m[i]->name, o->name, o->allowed[v]);
+					rc = sty_describe_method(s, name, &f, err, err_size);
+				}
+			} else if (m[i]->options[k].variant == '-' && m[i]->options[k].type == METHOD_OPT_CHOICE) {
+				/* a choice: one method name per value but the default (rrc-shadow, rrc-diffuse) */
+				const method_option *o = &m[i]->options[k];
+				for (size_t v = 0; o->choices[v] && !rc; v++) {
+					char name[64];
+					if ((double)v == o->def)
+						continue;
+					snprintf(name, sizeof name, "%s-%s", m[i]->name, o->choices[v]);
 					rc = sty_describe_method(s, name, &f, err, err_size);
 				}
 			}

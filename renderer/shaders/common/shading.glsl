@@ -178,7 +178,8 @@ bool light_setup(uint slot, Surface s, uint i, out vec3 l, out float atten, out 
 
 // TL_CACHED_VIS (rrc --payload shadow, [S] sec. 4.1: reproj/compose.frag.in): the shadow factors of lights 0..7 come
 // from the payload cache through tl_cached_vis(i), which the including shader defines; lights from 8 on filter theirs
-// every frame. (i) is a constant, so the choice is made by the compiler, not at run time.
+// every frame. (i) is a constant, so the choice is made by the compiler, not at run time; tl_cached_vis(i) is compiled
+// for i >= 8 too, in the branch it drops, so it must stay well-formed there (the cache holds 8 factors: never read them).
 #ifdef TL_CACHED_VIS
 float tl_cached_vis(int i);
 #define TL_SHADOW_VIS(i, SH, L_, p_, vis_)                                                                      \
@@ -211,15 +212,17 @@ float tl_cached_vis(int i);
 
 #ifdef TL_SHADOW_FACTORS
 // rrc --payload shadow ([S] sec. 4.1: "per-light shadow factors"; reproj/payload.frag.in): the shadow factors of
-// lights 0..7 at surface s, f[i] = 1 where light i casts no shadow or does not reach s (its factor is then unused).
+// lights 0..7 at surface s, f[i] = 1 where light i casts no shadow. A shadowed light's factor is filtered even where
+// the light does not reach s now (outside a spot's cone, n.l <= 0): a moving light may reach it before the sample is
+// refreshed, and a 1 kept there would show it lit inside a shadow. light_setup's lookup point p_ does not depend on
+// whether the light reaches s.
 #define TL_FACTOR(i, SH)                                                                                        \
-	if ((i) < LIGHT_COUNT) {                                                                                \
+	if ((i) < LIGHT_COUNT && (SH) >= 0) {                                                                   \
 		vec3 l_, p_;                                                                                    \
 		float atten_;                                                                                   \
-		if (light_setup(slot, s, (i), l_, atten_, p_) && (SH) >= 0) {                                   \
-			GpuLight L_ = states[slot].lights[(i)];                                                 \
-			TL_SHADOW_PCF(SH, L_, p_, f[(i)])                                                       \
-		}                                                                                               \
+		light_setup(slot, s, (i), l_, atten_, p_);                                                      \
+		GpuLight L_ = states[slot].lights[(i)];                                                         \
+		TL_SHADOW_PCF(SH, L_, p_, f[(i)])                                                               \
 	}
 
 void shadow_factors(uint slot, Surface s, out float f[8])

@@ -238,6 +238,28 @@ int method_config_check(const method_config *c, char *err, size_t err_size)
 	return c->method->check ? c->method->check(c->values.bytes, err, err_size) : TL_OK;
 }
 
+/* "its '-' forms: -oracle, -ssaaK, -shadow, -diffuse" (the suffixes a variant of m may carry), or "it has none". */
+static void dash_forms(const method_info *m, char *out, size_t n)
+{
+	size_t len = (size_t)snprintf(out, n, "its '-' forms:");
+	int any = 0;
+	for (size_t i = 0; i < m->option_count && len < n; i++) {
+		const method_option *o = &m->options[i];
+		if (o->variant != '-')
+			continue;
+		if (o->type == METHOD_OPT_CHOICE) {
+			for (size_t k = 0; o->choices[k] && len < n; k++)
+				if ((double)k != o->def)
+					len += (size_t)snprintf(out + len, n - len, "%s -%s", any++ ? "," : "", o->choices[k]);
+		} else {
+			len += (size_t)snprintf(out + len, n - len, "%s -%s%s", any++ ? "," : "", o->name,
+						o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "N");
+		}
+	}
+	if (!any)
+		snprintf(out, n, "it has none");
+}
+
 int method_config_parse_variant(method_config *c, const char *variant, char *err, size_t err_size)
 {
 	char buf[128], *sig[2] = {NULL, NULL};
@@ -302,10 +324,18 @@ int method_config_parse_variant(method_config *c, const char *variant, char *err
 		} else if (o->type != METHOD_OPT_BOOL && !choice) {
 			o = NULL; /* "ref-ssaa": the value is part of the token */
 		}
-		if (!o || o->variant != '-')
-			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s has no '-%s' form", variant, m->name, f + 1);
-		if (c->given & (1u << oi)) /* "tasa-oracle-oracle": one spelling per variant (issue 31.9) */
+		if (!o || o->variant != '-') {
+			char forms[160];
+			dash_forms(m, forms, sizeof forms);
+			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': %s has no '-%s' form (%s)", variant, m->name,
+					f + 1, forms);
+		}
+		if (c->given & (1u << oi)) { /* "tasa-oracle-oracle": one spelling per variant (issue 31.9) */
+			if (choice)
+				return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': '-%s' sets --%s, which the variant sets "
+						"already: give one", variant, f + 1, o->name);
 			return tl_error(err, err_size, TL_ERR_ARG, "variant '%s': '-%s' is given twice", variant, f + 1);
+		}
 		if (digits || choice) {
 			char why[256];
 			if (method_config_set(c, o->name, digits ? digits : choice, why, sizeof why))
@@ -422,13 +452,10 @@ void method_option_describe(const method_option *o, char *out, size_t out_size)
 	} while (0)
 	if (o->variant == '@' || o->variant == '/')
 		PUT("as %c%s", o->variant, o->arg ? o->arg : "");
+	else if (o->variant == '-' && o->type == METHOD_OPT_CHOICE)
+		PUT("as -VALUE");
 	else if (o->variant == '-')
-	{
-		if (o->type == METHOD_OPT_CHOICE)
-			PUT("as -VALUE");
-		else
-			PUT("as -%s%s", o->name, o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "");
-	}
+		PUT("as -%s%s", o->name, o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "");
 	if (o->type != METHOD_OPT_BOOL) { /* a flag has no default or range to tell */
 		const char *sep = len ? "; " : "";
 		if (isnan(o->def))

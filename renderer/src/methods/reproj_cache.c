@@ -446,11 +446,12 @@ void reproj_collect(render *r, frame_stats *st)
 	st->shaded_units = c[1];
 	st->new_units = c[2];
 	st->late_samples = s->v.truth ? (int64_t)c[3] : -1;
-	if (s->v.payload) { /* shaded_samples counts the payload's evaluations, this the shadings completed with it */
+	if (s->v.payload && st->extra_count < FRAME_MAX_EXTRA) {
+		/* shaded_samples counts the payload's evaluations, this the shadings completed with it */
 		st->extra_names[st->extra_count] = "composed_samples";
 		st->extra[st->extra_count++] = c[5];
 	}
-	if (s->v.tarc && !s->v.oracle) {
+	if (s->v.tarc && !s->v.oracle && st->extra_count < FRAME_MAX_EXTRA) {
 		st->extra_names[st->extra_count] = "forced_samples";
 		st->extra[st->extra_count++] = c[4];
 	}

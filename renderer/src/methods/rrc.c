@@ -44,13 +44,19 @@ static const method_option rrc_option_table[] = {
 static const char *const rrc_passes[] = {"shadow", "depth", "reproject", "filter", "mark", "shade", "compose", "truth",
 					 "blend", "display", "readback"};
 
-static int rrc_init(render *r, char *err, size_t err_size)
+static int rrc_check(const void *options, char *err, size_t err_size)
 {
-	const rrc_options *o = (const rrc_options *)r->config.values.bytes;
+	const rrc_options *o = options;
 	if (o->truth && o->payload != REPROJ_PAYLOAD_COLOUR)
 		return tl_error(err, err_size, TL_ERR_ARG,
 				"rrc: --truth counts late colours, and with --payload %s the cache keeps no colour: drop one of them",
 				payload_names[o->payload]);
+	return TL_OK;
+}
+
+static int rrc_init(render *r, char *err, size_t err_size)
+{
+	const rrc_options *o = (const rrc_options *)r->config.values.bytes;
 	reproj_variant v = {.nearest = o->resample == 1, .truth = o->truth, .period = o->period,
 			    .threshold = o->truth_threshold, .payload = o->payload};
 	return reproj_init(r, &v, err, err_size);
@@ -64,7 +70,8 @@ const render_method render_method_rrc = {
 		 .options = rrc_option_table,
 		 .option_count = sizeof rrc_option_table / sizeof rrc_option_table[0],
 		 .decisions = true,
-		 .options_size = sizeof(rrc_options)},
+		 .options_size = sizeof(rrc_options),
+		 .check = rrc_check},
 	.pass_names = rrc_passes,
 	.pass_count = sizeof rrc_passes / sizeof rrc_passes[0],
 	.state_ring = 2,
