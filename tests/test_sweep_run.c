@@ -366,8 +366,8 @@ static void test_sweep_resume(void **state)
 }
 
 /* --truth: the variants whose method can count late samples are rendered with --truth (their manifests say so),
- * summary.csv carries late_samples and late_percent for them (ref has neither), and the report plots the late share
- * against T and lists it per run. */
+ * summary.csv carries late_samples and late_percent for them (ref has neither, nor rrc-shadow/2, whose options exclude
+ * --truth), and the report plots the late share against T and lists it per run. */
 static void test_truth(void **state)
 {
 	(void)state;
@@ -376,7 +376,7 @@ static void test_truth(void **state)
 	snprintf(sw, sizeof sw, "%s/sw", dir);
 	/* tfr reuses most samples from frame 1 on (tarc at 48x32 reshades everything: its 72x72-pixel filter footprint
 	 * covers the frame) */
-#define TRUTH_SWEEP COMMON " --variants ref,tfr@8 --frames 0:6 --out %s"
+#define TRUTH_SWEEP COMMON " --variants ref,tfr@8,rrc-shadow/2 --frames 0:6 --out %s"
 	snprintf(args, sizeof args, TRUTH_SWEEP " --truth", sw);
 	int st = sweep(args);
 	if (st)
@@ -405,7 +405,14 @@ static void test_truth(void **state)
 	assert_true(stop == c && stop2 == end && stop2 > c + 1); /* both cells filled */
 	assert_true(late >= 0 && pct >= 0 && pct <= 100);
 	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/ref\n")); /* ref counts nothing */
+	/* rrc --payload keeps no colour to count late ones against: rendered without --truth, not failed (its check) */
+	assert_non_null(strstr(csv, ",,,runs/turntable/orbit/rrc-shadow-N2\n"));
 	free(csv);
+	snprintf(p, sizeof p, "%s/runs/turntable/orbit/rrc-shadow-N2/manifest.json", sw);
+	man = tu_read_file(p, NULL);
+	assert_non_null(man);
+	assert_non_null(strstr(man, "\"truth\": false"));
+	free(man);
 	assert_true(check_summary_numbers(sw) > 0); /* late_samples and late_percent recomputed too */
 	snprintf(p, sizeof p, "%s/report/plots/turntable--orbit--late.svg", sw);
 	assert_true(tu_file_exists(p));
