@@ -39,6 +39,25 @@ static void test_cli(void **state)
 		fail_msg("%s", out);
 	snprintf(cmd, sizeof cmd, "%s/t/anova.csv", dir);
 	assert_true(tu_file_exists(cmd));
+	/* the CLI describes every variant method name of the registry to the study, the -VALUE choices too (rrc-shadow,
+	 * rrc-diffuse: rrc --payload), so ratings of them import; a method it does not know is refused */
+	snprintf(cmd, sizeof cmd, "%s/payload.csv", dir);
+	FILE *f = fopen(cmd, "w");
+	assert_non_null(f);
+	fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n"
+		   "P01,0,calm,still,stationary,rrc-shadow,,4,1,0,0,2000\nP01,1,calm,still,stationary,rrc-diffuse,,8,0,1,1,2100\n");
+	fclose(f);
+	snprintf(cmd, sizeof cmd, "%s study import --db %s/p.db %s/payload.csv", TASLAB_BINARY, dir, dir);
+	if (tu_run(cmd, out, sizeof out))
+		fail_msg("%s", out);
+	snprintf(cmd, sizeof cmd, "%s/bogus.csv", dir);
+	f = fopen(cmd, "w");
+	assert_non_null(f);
+	fprintf(f, "participant,trial,scene,camera,camera_motion,method,T,period,ref_first,answer,rating,rt_ms\n"
+		   "P01,0,calm,still,stationary,rrc-specular,,4,1,0,0,2000\n");
+	fclose(f);
+	snprintf(cmd, sizeof cmd, "study import --db %s/q.db %s/bogus.csv", dir, dir);
+	tu_expect_cli_error(cmd, "rrc-specular");
 }
 
 /* Issue 12, data loss: no study command writes over the study (export --out S, --pwcmp S, the journal, a symlink or
