@@ -283,7 +283,9 @@ static int write_matched(const sweep_spec *s, const char *path, const mtr_sweep_
 	fwrite(text, 1, len, a.f);
 	fprintf(a.f, "\n## Matched budget\n\nFor each TAS variant, each other method at the setting with the nearest "
 		     "clip-mean shaded samples per frame (same scene and camera path; BASELINES.md section 0). Differences "
-		     "are against ref.\n\n");
+		     "are against ref. Shaded samples are each method's own count; a cache of a partial payload counts the "
+		     "payloads it evaluates and completes the shading of every sample each frame besides (its "
+		     "composed_samples): compare its GPU ms.\n\n");
 	if (!np)
 		fprintf(a.f, "No TAS variant with another method to match in this sweep.\n");
 	else

@@ -116,7 +116,8 @@ void sty_rpt_budget_html(FILE *f, const sty_report_desc *d, const sty_rpt_group 
 		fprintf(f, "<div class=\"plots\"><figure><img src=\"plots/");
 		esc(f, stem);
 		fprintf(f, "--budget.svg\" alt=\"exceed_8 against shaded fraction\"><figcaption>exceed_8 against shaded "
-			   "fraction, one curve per method over its settings</figcaption></figure></div>\n");
+			   "fraction, one curve per method over its settings (a cache of a partial payload counts the payloads "
+			   "it evaluates, and shades every sample besides: compare its GPU ms)</figcaption></figure></div>\n");
 	}
 	size_t shown = 0;
 	for (size_t k = 0; k < np; k++) {
