@@ -206,8 +206,8 @@ static const cli_command analyze_reuse_model = {
 	.name = "analyze reuse-model",
 	.summary = "the survey's error, cost and hit-rate models of reuse (eqs. 5-7) fitted to a sweep",
 	.synopsis = "taslab analyze reuse-model SWEEP [--out DIR] [--error KEY]",
-	.description = "For every scene, camera path and method with a refresh period in SWEEP (rrc/N, rrc-random/N,\n"
-		       "rrc-interleaved/N, sau/N, stu/N, warp/N; dn = N), fits [S] eq. 5\n"
+	.description = "For every scene, camera path and method with a refresh period in SWEEP (rrc/N, rrc-shadow/N,\n"
+		       "rrc-diffuse/N, rrc-random/N, rrc-interleaved/N, sau/N, stu/N, warp/N; dn = N), fits [S] eq. 5\n"
 		       "eps(dn) = alpha (1 - exp(-lambda (dn - 1))) to the runs' clip-mean error, eq. 6\n"
 		       "H A_hit + M A_miss + c = dt to every frame after the first (hits = reused samples, misses =\n"
 		       "shaded samples, dt = GPU ms), and eq. 7's hit rate\n"

@@ -155,11 +155,8 @@ void sty_rpt_reuse_html(FILE *f, const sty_report_desc *d, const sty_rpt_group *
 		}
 		fprintf(f, "<p class=\"note\"><b>");
 		esc(f, m->name);
-		if (m->e5.ok)
-			fprintf(f, "</b>: eq. 5 ε(Δn) = α (1 − e<sup>−λ(Δn−1)</sup>) with α = %.3g, λ = %.3g (RMSE %.2g)",
-				m->e5.alpha, m->e5.lambda, m->e5.rmse);
-		else
-			fprintf(f, "</b>: eq. 5 needs two periods &gt; 1");
+		fprintf(f, "</b>: eq. 5 ε(Δn) = α (1 − e<sup>−λ(Δn−1)</sup>) with α = %.3g, λ = %.3g (RMSE %.2g)",
+			m->e5.alpha, m->e5.lambda, m->e5.rmse);
 		fprintf(f, "; eq. 7 hit rate μ (1 − 1/Δn) with μ = %.3f; eq. 6 over %zu frames: ", m->mu, m->e6.frames);
 		if (!m->e6.ok)
 			fprintf(f, "not determined");
