@@ -73,7 +73,9 @@ bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 	fr = fr - step(1.0, fr);
 	float wsum = 0.0;
 	vec3 acc = vec3(0.0);
-	for (int k = 0; k < 4; k++) {
+	// only the taps of positive weight, which come first (reproj.glsl cache_lookup: a loop lavapipe leaves early)
+	int taps = fr.y > 0.0 ? 4 : (fr.x > 0.0 ? 2 : 1);
+	for (int k = 0; k < taps; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);
 		ivec2 q = ivec2(x0) + o;
 		float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
