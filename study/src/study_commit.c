@@ -69,7 +69,12 @@ static void batch_commit(sty *s)
 
 int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 {
-	if (rc || !wrote) { /* nothing of this request stays: undo it, and close a batch nobody else is in */
+	/* A request that stored nothing may still have read the open batch's writes of other requests, which wait for
+	 * its commit (a trial's clip names made by a concurrent GET /api/CODE/trial of the same participant, an answer
+	 * not yet on disk). It replies only once that commit is done, and fails with it: a reply never carries what a
+	 * failed commit then took back (a clip name that no longer exists, a trial counted as answered). */
+	bool saw_batch = !rc && !wrote && s->batch.open && s->batch.members > 0;
+	if (rc || (!wrote && !saw_batch)) { /* nothing of this request stays: undo it, and close a batch nobody else is in */
 		if (rc)
 			sqlite3_exec(s->db, "ROLLBACK TO request", NULL, NULL, NULL);
 		sqlite3_exec(s->db, "RELEASE request", NULL, NULL, NULL);

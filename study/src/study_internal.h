@@ -44,7 +44,9 @@ struct sty {
  *   if (!rc) rc = ...its reads and writes...;
  *   rc = sty_batch_leave(s, rc, wrote, err, n); // undone on error; else returns once committed (fsync) with others
  *   pthread_mutex_unlock(&s->lock);
- * sty_batch_leave returns rc, or TL_ERR_DB when the commit failed (then nothing of the batch was stored). */
+ * sty_batch_leave returns rc, or TL_ERR_DB when the commit failed (then nothing of the batch was stored). A request
+ * with wrote = false also waits for (and fails with) the open batch's commit when other requests' writes are in it:
+ * it may have read them. */
 void sty_batch_init(sty *s);
 void sty_batch_destroy(sty *s);
 void sty_batch_lock(sty *s);

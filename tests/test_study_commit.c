@@ -1,0 +1,154 @@
+/* test_study_commit.c — the study server's group commit (study/src/study_commit.c, issue 32.3), white-box: a reply
+ * never carries what a failed commit takes back.
+ *
+ * A trial's opaque clip names are made by the first GET /api/CODE/trial that shows it and committed with other
+ * requests' writes. A second request for the same participant that arrives while that batch waits for its commit
+ * finds the names and stores nothing itself; it used to reply at once, so when the commit then failed the page held
+ * clip names that no longer existed. The test holds the study's lock as a writing request does, lets a concurrent
+ * sty_next_trial queue behind it, stores the trial's clip names in the open batch, and makes SQLite's COMMIT fail
+ * (sqlite3_commit_hook: a non-zero return turns the commit into a rollback, SQLite's documented behaviour). The
+ * reader must then fail too, or return names that exist. With the commit succeeding, both succeed and the reader's
+ * names are the stored ones. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "study_internal.h"
+#include "test_study_util.h"
+
+static int fail_commit; /* the commit hook's verdict */
+
+static int commit_hook(void *arg)
+{
+	(void)arg;
+	return fail_commit;
+}
+
+typedef struct reader {
+	sty *s;
+	const char *code;
+	sty_trial t;
+	int rc;
+	char err[1024];
+} reader;
+
+static void *read_trial(void *arg)
+{
+	reader *r = arg;
+	r->rc = sty_next_trial(r->s, r->code, &r->t, r->err, sizeof r->err);
+	return NULL;
+}
+
+/* The participant's id and its first unanswered trial (the one sty_next_trial shows). */
+static void current_trial(sty *s, const char *code, long long *pid, long long *idx)
+{
+	sqlite3_stmt *st;
+	assert_int_equal(sqlite3_prepare_v2(s->db,
+					    "SELECT p.id, min(t.idx) FROM participants p JOIN trials t ON t.participant = p.id"
+					    " WHERE p.code = ? AND NOT EXISTS (SELECT 1 FROM answers a"
+					    " WHERE a.participant = t.participant AND a.idx = t.idx)",
+					    -1, &st, NULL),
+			 SQLITE_OK);
+	sqlite3_bind_text(st, 1, code, -1, SQLITE_STATIC);
+	assert_int_equal(sqlite3_step(st), SQLITE_ROW);
+	*pid = sqlite3_column_int64(st, 0);
+	*idx = sqlite3_column_int64(st, 1);
+	sqlite3_finalize(st);
+}
+
+/* The clip name the test stores for slot `slot` in the round that fails (`fail`) or not: 32 hex digits, as the
+ * server's, distinct from each other and from the server's random ones. */
+static void name_of(int fail, int slot, char out[40])
+{
+	memset(out, fail ? 'f' : 'e', 31);
+	snprintf(out + 31, 9, "%d.webm", slot);
+}
+
+/* One round: this thread, as a writing request, stores the clip names of `code`'s current trial in the open batch
+ * while a concurrent sty_next_trial for `code` waits for the lock; then commits (failing when `fail`). */
+static void round_trip(sty *s, const char *code, int fail)
+{
+	char err[1024];
+	long long pid, idx;
+	current_trial(s, code, &pid, &idx);
+	reader r = {.s = s, .code = code};
+	pthread_t th;
+	sty_batch_lock(s);
+	assert_int_equal(pthread_create(&th, NULL, read_trial, &r), 0);
+	/* until the reader waits for the lock (it announces itself first: the leader below gathers it into the batch) */
+	for (int i = 0; i < 2000 && !__atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST); i++)
+		nanosleep(&(struct timespec){.tv_nsec = 1000 * 1000}, NULL);
+	assert_int_not_equal(__atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST), 0);
+	nanosleep(&(struct timespec){.tv_nsec = 20 * 1000 * 1000}, NULL); /* ... and is blocked on it */
+	assert_int_equal(sty_batch_join(s, err, sizeof err), TL_OK);
+	char sql[256], a[40], b[40];
+	name_of(fail, 0, a);
+	name_of(fail, 1, b);
+	snprintf(sql, sizeof sql,
+		 "INSERT INTO clip_names(name, participant, idx, slot) VALUES('%s', %lld, %lld, 0), ('%s', %lld, %lld, 1)",
+		 a, pid, idx, b, pid, idx);
+	assert_int_equal(sqlite3_exec(s->db, sql, NULL, NULL, NULL), SQLITE_OK);
+	fail_commit = fail;
+	/* this request leads the batch: it lets the reader in (it is coming), then commits for both */
+	int rc = sty_batch_leave(s, TL_OK, true, err, sizeof err);
+	pthread_mutex_unlock(&s->lock);
+	assert_int_equal(pthread_join(th, NULL), 0);
+	fail_commit = 0;
+	assert_int_equal(rc, fail ? TL_ERR_DB : TL_OK);
+	if (fail) {
+		/* the names were taken back: the reader must not have replied with them */
+		char rel[4096];
+		if (r.rc == TL_OK && sty_clip_file(s, r.t.clip_a, rel, sizeof rel, err, sizeof err) != TL_OK)
+			fail_msg("GET trial replied with clip name %s, which the failed commit took back", r.t.clip_a);
+		assert_int_equal(r.rc, TL_ERR_DB);
+	} else {
+		if (r.rc != TL_OK)
+			fail_msg("%s", r.err);
+		assert_int_equal(r.t.index, (uint32_t)idx);
+		char want[40];
+		name_of(0, 0, want);
+		assert_true(!strcmp(r.t.clip_a, want) || !strcmp(r.t.clip_b, want)); /* the names the batch stored */
+	}
+}
+
+static void test_reader_waits_for_the_batch(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_commit");
+	char stim[4096], err[1024];
+	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	make_stimuli(stim);
+	sty_design_summary sm;
+	sty *s = designed(dir, "s.db", 3, 2, &sm);
+	char **codes;
+	size_t n;
+	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), TL_OK);
+	sqlite3_commit_hook(s->db, commit_hook, NULL);
+	round_trip(s, codes[0], 1); /* the commit fails: the reader fails with it */
+	round_trip(s, codes[1], 0); /* it succeeds: the reader shows the names the batch stored */
+	/* after the failure nothing of it stayed: the first participant's trial gets fresh names, once */
+	sty_trial t;
+	assert_int_equal(sty_next_trial(s, codes[0], &t, err, sizeof err), TL_OK);
+	char rel[4096];
+	assert_int_equal(sty_clip_file(s, t.clip_a, rel, sizeof rel, err, sizeof err), TL_OK);
+	char gone[40];
+	name_of(1, 0, gone);
+	assert_int_not_equal(sty_clip_file(s, gone, rel, sizeof rel, err, sizeof err), TL_OK);
+	sqlite3_commit_hook(s->db, NULL, NULL);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_reader_waits_for_the_batch),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
