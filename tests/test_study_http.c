@@ -300,6 +300,67 @@ static void test_slow_clients(void **state)
 	sty_close(&s);
 }
 
+/* A reply read a few bytes at a time (a clip, issue 32.3's "slow /clips readers"): every read resets libmicrohttpd's
+ * idle timeout, so such a client held its connection for as long as it liked. With a send deadline of 2 s the server
+ * closes it between 2 and 4 s after the request (the watchdog looks four times a second), long before the 64 MiB
+ * clip is through, and counts it; an ordinary request is still answered. With the deadline left out (the code
+ * before), the client reads on for the whole 6 s the test waits. */
+static void test_slow_reader(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_slow_reader");
+	char code[64], req[512], resp[8192], err[1024], p[4096];
+	sty *s = study_of_one(dir, code, sizeof code);
+	const char *clips[2] = {"ref", "tfr-T8"};
+	for (int c = 0; c < 2; c++) { /* 64 MiB each (sparse): far more than the socket buffers hold */
+		snprintf(p, sizeof p, "%s/stimuli/calm-walk/clips/%s.webm", dir, clips[c]);
+		assert_int_equal(truncate(p, 64 << 20), 0);
+	}
+	sty_server *sv = NULL;
+	sty_server_desc d = {.threads = 2, .send_timeout_s = 2, .log = log_quiet};
+	if (sty_server_start(s, &d, &sv, err, sizeof err))
+		fail_msg("%s", err);
+	int port = sty_server_port(sv);
+	int len = snprintf(req, sizeof req, "GET /api/%s/trial HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n", code);
+	assert_int_equal(request_within(port, req, (size_t)len, 5.0, resp, sizeof resp), 200);
+	char clip[128];
+	const char *at = strstr(resp, "\"clip_a\":");
+	assert_non_null(at);
+	assert_int_equal(sscanf(at, "\"clip_a\":\"%127[^\"]\"", clip), 1);
+	int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+	int small = 4096; /* a small receive window, set before connecting */
+	setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	assert_int_equal(connect(fd, (struct sockaddr *)&sa, sizeof sa), 0);
+	char get[256];
+	int glen = snprintf(get, sizeof get, "GET %s HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n", clip);
+	double t0 = now_s(), closed = 0;
+	assert_int_equal(send(fd, get, (size_t)glen, MSG_NOSIGNAL), glen);
+	size_t got = 0;
+	while (!closed && now_s() - t0 < 6.0) { /* 256 bytes every 50 ms: 5 KiB/s, a 64 MiB clip in 3.6 hours */
+		char buf[256];
+		ssize_t r = read(fd, buf, sizeof buf);
+		if (r <= 0)
+			closed = now_s() - t0;
+		else
+			got += (size_t)r;
+		usleep(50 * 1000);
+	}
+	close(fd);
+	sty_server_stats st = sty_server_get_stats(sv);
+	fprintf(stderr, "send deadline of 2 s: a reader of 5 KiB/s closed after %.2f s (%zu bytes read); server: %llu send "
+			"timeouts\n", closed, got, (unsigned long long)st.send_timeouts);
+	if (!closed)
+		fail_msg("a clip read at 5 KiB/s kept its connection for 6 s (%zu bytes read) with a send deadline of 2 s", got);
+	assert_true(closed >= 1.9 && closed < 4.5);
+	assert_true(got > 0 && got < (size_t)(64 << 20));
+	assert_int_equal(st.send_timeouts, 1);
+	assert_int_equal(request_within(port, req, (size_t)len, 1.0, resp, sizeof resp), 200);
+	sty_server_stop(&sv);
+	sty_close(&s);
+}
+
 /* ------------------------------------------------------------------ one address (issue 32.3) */
 
 /* A lab behind one NAT or reverse proxy is one client address: 120 participants' connections from 127.0.0.1, each
@@ -428,6 +489,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_slow_clients),
+		cmocka_unit_test(test_slow_reader),
 		cmocka_unit_test(test_one_address),
 		cmocka_unit_test(test_hostile_framing),
 	};

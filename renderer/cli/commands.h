@@ -77,7 +77,7 @@ typedef struct study_opts {
 	uint64_t seed;
 	bool keep_flagged, adaptive, p910;
 	/* serve's connection limits (0: the server's default; sty_server_desc) */
-	uint32_t max_connections, max_per_client, max_reading, idle_timeout, head_timeout, body_timeout;
+	uint32_t max_connections, max_per_client, max_reading, idle_timeout, head_timeout, body_timeout, send_timeout;
 } study_opts;
 
 /* A sweep setting as the command line gave it: the option parser's own types (CLI_STRING for lists and strings,

@@ -103,6 +103,9 @@ static const cli_opt serve_options[] = {
 	{.name = "body-timeout", .arg = "S",
 	 .help = "seconds a request body may take after its head (1..3600, default 10)",
 	 .type = CLI_UINT, .offset = offsetof(study_opts, body_timeout), .lo = 1, .hi = 3600},
+	{.name = "send-timeout", .arg = "S",
+	 .help = "seconds a reply (a clip) may take to send, however slowly it is read (1..3600, default 120, the page's own limit per clip)",
+	 .type = CLI_UINT, .offset = offsetof(study_opts, send_timeout), .lo = 1, .hi = 3600},
 	{0},
 };
 
@@ -278,7 +281,8 @@ static int study_main(void *opts, cli_ctx *ctx)
 		sty_server_desc sd = {.bind = ov.bind, .port = (uint16_t)ov.port, .threads = ov.threads,
 				      .max_connections = ov.max_connections, .max_per_client = ov.max_per_client,
 				      .max_reading = ov.max_reading, .timeout_s = ov.idle_timeout,
-				      .head_timeout_s = ov.head_timeout, .body_timeout_s = ov.body_timeout};
+				      .head_timeout_s = ov.head_timeout, .body_timeout_s = ov.body_timeout,
+				      .send_timeout_s = ov.send_timeout};
 		if (!(rc = sty_server_start(s, &sd, &sv, err, err_size))) {
 			printf("listening on %s\nadmin token %s (send it as the header 'Authorization: Bearer TOKEN' to "
 			       "/admin/status, /admin/export.csv and /admin/export-pwcmp.csv)\nstatus page %s/status#%s\n",

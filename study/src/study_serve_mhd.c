@@ -133,7 +133,8 @@ static enum MHD_Result queue(struct MHD_Connection *c, sty_response *r)
  * sending a header byte a second keeps its connection for ever, and a few hundred such connections (under the
  * per-address cap, from a few addresses) filled every slot while real participants waited. Version 0.9.75 has no
  * deadline of its own, so each connection is tracked here (MHD_OPTION_NOTIFY_CONNECTION) through its phases:
- * reading a head, reading a body, answering. A watchdog thread closes those whose head or body is overdue, and a
+ * reading a head, reading a body, answering. A watchdog thread closes those whose head, body or reply is overdue
+ * (a reply read a few bytes at a time holds a connection as long as a trickled head would), and a
  * new connection beyond max_reading closes the one that has been reading longest (a participant's browser sends its
  * head at once, so it is never the oldest for long). Closing is shutdown(2) on the socket, which libmicrohttpd's
  * own loop then sees as the client going away; the entry leaves the list in the CLOSED notification, which
@@ -155,6 +156,7 @@ static double elapsed_s(const struct timespec *since, const struct timespec *now
 
 static unsigned head_timeout_s(const struct sty_server *sv) { return sv->desc.head_timeout_s ? sv->desc.head_timeout_s : 10u; }
 static unsigned body_timeout_s(const struct sty_server *sv) { return sv->desc.body_timeout_s ? sv->desc.body_timeout_s : 10u; }
+static unsigned send_timeout_s(const struct sty_server *sv) { return sv->desc.send_timeout_s ? sv->desc.send_timeout_s : 120u; }
 static unsigned max_reading(const struct sty_server *sv)
 {
 	unsigned all = sv->desc.max_connections ? sv->desc.max_connections : 1024u;
@@ -249,23 +251,33 @@ static void *watchdog_main(void *arg)
 	while (!sv->stopping) {
 		struct timespec now, wake;
 		clock_gettime(CLOCK_MONOTONIC, &now);
-		unsigned heads = 0, bodies = 0;
+		unsigned heads = 0, bodies = 0, sends = 0;
 		for (conn_track *t = sv->conns; t; t = t->next) {
 			double age = elapsed_s(&t->since, &now);
 			if (t->phase == CONN_HEAD && age > head_timeout_s(sv))
 				conn_close(sv, t), heads++;
 			else if (t->phase == CONN_BODY && age > body_timeout_s(sv))
 				conn_close(sv, t), bodies++;
+			else if (t->phase == CONN_ANSWER && age > send_timeout_s(sv)) {
+				/* and what the kernel still holds of the reply is dropped (a reset when libmicrohttpd closes
+				 * the socket) rather than trickled out after the deadline */
+				setsockopt(t->fd, SOL_SOCKET, SO_LINGER, &(struct linger){.l_onoff = 1, .l_linger = 0},
+					   sizeof(struct linger));
+				conn_close(sv, t), sends++;
+			}
 		}
 		sv->stats.head_timeouts += heads;
 		sv->stats.body_timeouts += bodies;
+		sv->stats.send_timeouts += sends;
 		uint64_t evicted = sv->stats.evicted - evicted_logged;
 		evicted_logged = sv->stats.evicted;
-		if (heads || bodies || evicted) {
+		if (heads || bodies || sends || evicted) {
 			pthread_mutex_unlock(&sv->conn_lock);
 			sty_serve_log(sv, "slow clients: closed %u connection(s) without a complete request head within %u s, %u without "
-				   "a complete body within %u s, %llu reading longest when more than %u were reading",
-			       heads, head_timeout_s(sv), bodies, body_timeout_s(sv), (unsigned long long)evicted, max_reading(sv));
+				   "a complete body within %u s, %u whose reply was still being read after %u s, %llu reading longest "
+				   "when more than %u were reading",
+			       heads, head_timeout_s(sv), bodies, body_timeout_s(sv), sends, send_timeout_s(sv),
+			       (unsigned long long)evicted, max_reading(sv));
 			pthread_mutex_lock(&sv->conn_lock);
 		}
 		clock_gettime(CLOCK_MONOTONIC, &wake);

@@ -60,8 +60,10 @@ typedef struct sty_server_desc {
 	 * request head must be complete head_timeout_s after the connection opened or its previous reply was sent
 	 * [10], a body body_timeout_s after its head [10]; else the connection is closed. At most max_reading
 	 * connections may be reading a request at once: a new connection beyond that closes the one that has been
-	 * reading longest [max_connections / 2], so slow clients cannot hold every slot (issue 31.3). */
-	unsigned head_timeout_s, body_timeout_s, max_reading;
+	 * reading longest [max_connections / 2], so slow clients cannot hold every slot (issue 31.3). A reply must be
+	 * sent within send_timeout_s of the request's completion [120, the participant page's own limit per clip]:
+	 * a client reading a clip a few bytes at a time keeps its connection no longer than that. */
+	unsigned head_timeout_s, body_timeout_s, max_reading, send_timeout_s;
 	/* One line per event worth a look (500 details, libmicrohttpd's messages), without a newline;
 	 * NULL: "taslab study serve: LINE" on stderr. */
 	void (*log)(void *cls, const char *line);
@@ -79,6 +81,7 @@ typedef struct sty_server_stats {
 	uint64_t head_timeouts; /* closed: no complete request head within head_timeout_s */
 	uint64_t body_timeouts; /* closed: no complete body within body_timeout_s of its head */
 	uint64_t evicted;       /* closed: the longest-reading connection, to make room under max_reading */
+	uint64_t send_timeouts; /* closed: a reply not sent within send_timeout_s */
 } sty_server_stats;
 sty_server_stats sty_server_get_stats(sty_server *sv);
 /* Stops listening, waits for the threads, frees. Accepts NULL, nulls the pointer. */
