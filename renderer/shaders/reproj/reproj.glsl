@@ -5,7 +5,10 @@
 // buffers", paper sec. 6.1): colour = the value shown for the opaque surface (half float, what the HDR target
 // stores), state = (object + 1, view distance bits, age | flags, gradient bits), and for tarc (KEEP_DISP) disp =
 // the display code values of the colour, disp(h(s)) as the last shading computed them, so that reshading takes
-// one display transform per sample instead of two (as tasa keeps them in its `shown` image).
+// one display transform per sample instead of two (as tasa keeps them in its `shown` image), in fixed point in two
+// 32-bit channels (disp_pack: R and G in 1/8192, B in 1/16384 code value, so d is within 6.2e-5 code values of the
+// float's; an RGBA32F texel cost lavapipe four channel accesses per load and store, ~4 ms of the reproject pass and
+// as much of the shading pass at 960x540, issue 32.1).
 // Variants (compiled in with #define, never branched on at run time): TARC (else rrc), ORACLE (tarc's ideal
 // variant), NEAREST (nearest-pixel lookup, else bilinear with per-tap validity).
 #ifndef TASLAB_REPROJ_GLSL
@@ -69,8 +72,19 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 	uint composed; // rrc --payload: samples whose shading the compose pass completed with the cached payload
 	uint pad1, pad2;
 } counters;
-layout(set = 1, binding = 7, rgba32f) uniform readonly image2D prev_disp; // KEEP_DISP: disp of prev_colour
-layout(set = 1, binding = 8, rgba32f) uniform image2D next_disp;          // KEEP_DISP: disp of next_colour
+layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_disp; // KEEP_DISP: disp of prev_colour
+layout(set = 1, binding = 8, rg32ui) uniform uimage2D next_disp;          // KEEP_DISP: disp of next_colour
+// display code values in [0, 255] <-> RG32UI: x = R (21 bits) | B's low 11 bits << 21, y = G | B's high 11 bits << 21
+uvec2 disp_pack(vec3 cv)
+{
+	uvec3 q = uvec3(round(cv * vec3(8192.0, 8192.0, 16384.0)));
+	return uvec2(q.r | (q.b & 0x7FFu) << 21, q.g | (q.b >> 11) << 21);
+}
+vec3 disp_unpack(uvec2 u)
+{
+	return vec3(float(u.x & 0x1FFFFFu) / 8192.0, float(u.y & 0x1FFFFFu) / 8192.0,
+		    float((u.x >> 21) | (u.y >> 21) << 11) / 16384.0);
+}
 
 // COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
 // subgroup operations in fragment shaders; lavapipe: subgroups of 8) the subgroup's active invocations are counted
@@ -189,7 +203,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out CacheValue colour, out v
 		return false;
 	colour = cache_load(q);
 #ifdef KEEP_DISP
-	disp = imageLoad(prev_disp, q).rgb;
+	disp = disp_unpack(imageLoad(prev_disp, q).xy);
 #endif
 	state = rec;
 	return true;
@@ -225,7 +239,7 @@ bool cache_lookup(uint object, uvec2 p, float dist, out CacheValue colour, out v
 		return false;
 	colour = wsum == 1.0 ? acc : cache_div(acc, wsum);
 #ifdef KEEP_DISP
-	disp = imageLoad(prev_disp, qbest).rgb;
+	disp = disp_unpack(imageLoad(prev_disp, qbest).xy);
 #endif
 	return true;
 #endif

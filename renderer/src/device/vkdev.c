@@ -348,6 +348,8 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 			.depthClamp = have.depthClamp,
 			.fragmentStoresAndAtomics = have.fragmentStoresAndAtomics,
 			.shaderStorageImageWriteWithoutFormat = have.shaderStorageImageWriteWithoutFormat,
+			/* rg32ui storage images (tarc's kept display values, reproj.glsl) */
+			.shaderStorageImageExtendedFormats = have.shaderStorageImageExtendedFormats,
 		},
 	};
 	float prio = 1.0f;

@@ -32,7 +32,8 @@
 #include "shaders/reproj/reproject_mask_vert.h"
 #include "shaders/reproj/reproject_vert.h"
 
-/* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP); one texel each for rrc and the oracle.
+/* DISP0/1: tarc's display values of the cached colour (reproj.glsl KEEP_DISP, fixed point in RG32UI: disp_pack); one
+ * texel each for rrc and the oracle.
  * RECORD: the pre-pass record (reproj.glsl prepass_record), a colour attachment of the pre-pass. */
 enum { IMG_COLOUR0, IMG_COLOUR1, IMG_STATE0, IMG_STATE1, IMG_RECORD, IMG_L1, IMG_F, IMG_DISP0, IMG_DISP1, IMG_COUNT };
 /* reproj.glsl prepass_record: 22 bits of object + 1, 21 bits per axis of the lookup position (< 64 * (size + 1)) */
@@ -222,7 +223,7 @@ int reproj_init(render *r, const reproj_variant *v, char *err, size_t err_size)
 		/* --payload: the colour images hold the payload, 32 bits per channel (reproj.glsl PAYLOAD) */
 		VkFormat f = i <= IMG_COLOUR1 ? (v->payload ? VK_FORMAT_R32G32B32A32_UINT : VK_FORMAT_R16G16B16A16_SFLOAT)
 			     : i <= IMG_RECORD ? VK_FORMAT_R32G32B32A32_UINT
-					       : VK_FORMAT_R32G32B32A32_SFLOAT;
+			     : disp ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32G32B32A32_SFLOAT;
 		/* rrc never reads F, rrc and the oracle no disp: one texel each keeps the descriptor set uniform */
 		bool tiny = (arr && !v->tarc) || (disp && (!v->tarc || v->oracle));
 		uint32_t iw = tiny ? 1 : low ? lw : w, ih = tiny ? 1 : low ? lh : h;
