@@ -74,17 +74,6 @@ layout(std430, set = 1, binding = 6) buffer Counters {
 } counters;
 layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_disp; // KEEP_DISP: disp of prev_colour
 layout(set = 1, binding = 8, rg32ui) uniform uimage2D next_disp;          // KEEP_DISP: disp of next_colour
-// display code values in [0, 255] <-> RG32UI: x = R (21 bits) | B's low 11 bits << 21, y = G | B's high 11 bits << 21
-uvec2 disp_pack(vec3 cv)
-{
-	uvec3 q = uvec3(round(cv * vec3(8192.0, 8192.0, 16384.0)));
-	return uvec2(q.r | (q.b & 0x7FFu) << 21, q.g | (q.b >> 11) << 21);
-}
-vec3 disp_unpack(uvec2 u)
-{
-	return vec3(float(u.x & 0x1FFFFFu) / 8192.0, float(u.y & 0x1FFFFFu) / 8192.0,
-		    float((u.x >> 21) | (u.y >> 21) << 11) / 16384.0);
-}
 
 // COUNT(field): counters.field += 1 for this invocation. With TL_SUBGROUP (set when the device has ballot
 // subgroup operations in fragment shaders; lavapipe: subgroups of 8) the subgroup's active invocations are counted
@@ -111,6 +100,7 @@ vec3 disp_unpack(uvec2 u)
 #define COUNT(field) atomicAdd(counters.field, 1u)
 #endif
 
+#include "tas/disp.glsl" // disp_pack, disp_unpack (KEEP_DISP)
 #include "reproj/state_bits.glsl" // state.z: age, flags, decision
 
 // Push constants: aux[0] previous slot; aux[1] flags; aux[2] frame number (in the pre-pass: the frame size, width |

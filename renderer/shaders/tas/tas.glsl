@@ -19,6 +19,8 @@ vec3 display_cv(vec3 c)
 	return clamp(ocio_display(vec4(c, 1.0)).rgb, 0.0, 1.0) * 255.0;
 }
 
+#include "tas/disp.glsl" // disp_pack, disp_unpack
+
 // d(a, b) = max(|a.r-b.r|, |a.g-b.g|, |a.b-b.b|) on display values (DESIGN section 3).
 float maxrgb(vec3 a, vec3 b)
 {

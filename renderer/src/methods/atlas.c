@@ -57,7 +57,7 @@ typedef struct atlas_state {
 	vkdev_buffer buf[B_COUNT];
 	ids_pass ids[RENDER_MAX_VIEWS]; /* the visibility pass and its image, per eye (stereo: STEREO.md) */
 	ids_multiview mv;          /* render.multiview: both eyes' visibility in one pass (ids[v] views of its layers) */
-	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RGBA32F) */
+	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RG32UI, tas.glsl disp_pack) */
 	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
 	uint32_t shade_chunks, truth_chunks;
@@ -182,7 +182,7 @@ static int make_buffers(render *r, atlas_state *s, char *err, size_t err_size)
 				      VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas scratch", &s->scratch)) ||
 	    (res = vkdev_image_create(r->dev, tasa_gradients(s) ? s->atlas_w : 1, tasa_gradients(s) ? s->atlas_h : 1, 1, 1,
-				      VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+				      VK_FORMAT_R32G32_UINT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 				      VK_IMAGE_ASPECT_COLOR_BIT, false, "atlas shown", &s->shown)))
 		return render_vk_error(err, err_size, "atlas images", res);
 	return TL_OK;
