@@ -34,8 +34,10 @@ const uint VBUF_TILE = 16u;
 // of each covered pixel's value in svals, stored once where the value is made - by the shade pass for a shaded pixel,
 // by the select for an interpolated one - and read by the later selects' variance of a candidate's neighbours,
 // instead of transforming four neighbours per candidate in each of the five rounds. They are computed from the value
-// read back from svals (its half rounding, as the neighbours' svals were read before), in RGBA32F (exact).
-layout(set = 1, binding = 9, rgba32f) uniform image2D sdisp;
+// read back from svals (its half rounding, as the neighbours' svals were read before), in fixed point in RG32UI
+// (tas/disp.glsl: within 6.2e-5 code values; an RGBA32F texel cost four channel accesses on lavapipe).
+#include "tas/disp.glsl"
+layout(set = 1, binding = 9, rg32ui) uniform uimage2D sdisp;
 
 vec3 vbuf_display_cv(vec3 c)
 {
@@ -45,7 +47,7 @@ vec3 vbuf_display_cv(vec3 c)
 // After svals[p] is written by this invocation (its own write is visible to its read).
 void vbuf_store_display(ivec2 p)
 {
-	imageStore(sdisp, p, vec4(vbuf_display_cv(imageLoad(svals, p).rgb), 0.0));
+	imageStore(sdisp, p, uvec4(disp_pack(vbuf_display_cv(imageLoad(svals, p).rgb)), 0u, 0u));
 }
 #endif
 

@@ -81,7 +81,7 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 					  false, "vbuf samples", &v->svals);
 	if (res)
 		return render_vk_error(err, err_size, "vbuf samples image", res);
-	if (ads && (res = vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT,
+	if (ads && (res = vkdev_image_create(r->dev, w, h, 1, 1, VK_FORMAT_R32G32_UINT, VK_IMAGE_USAGE_STORAGE_BIT,
 					     VK_IMAGE_ASPECT_COLOR_BIT, false, "vbuf display values", &v->sdisp)))
 		return render_vk_error(err, err_size, "vbuf display values image", res);
 	int rc = ids_pass_init(r, &v->ids, NULL, err, err_size);
