@@ -28,7 +28,7 @@ layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D ids;          
 layout(set = 1, binding = 13, rgba16f) uniform image2D atlas;
 layout(set = 1, binding = 14, rgba16f) uniform image2D scratch;                    // oracle
 layout(set = 1, binding = 15, rgba16f) uniform image2D hdr;
-layout(set = 1, binding = 17, rg32ui) uniform uimage2D shown;                      // tasa: display code values of the atlas (disp_pack)
+layout(set = 1, binding = 17, rg32ui) uniform uimage2D shown; // tasa: display code values of the atlas (disp_pack)
 layout(std430, set = 1, binding = 10) readonly buffer Vertices { float vtx[]; };    // common/vertex_pull.glsl
 layout(std430, set = 1, binding = 16) readonly buffer Indices { uint indices[]; }; // unused since the ids pass moved (issue 30.4)
 
