@@ -24,7 +24,8 @@ struct sty {
 	pthread_mutex_t lock; /* serialises read-check-write sequences of concurrent server threads */
 	struct sty_batch {    /* group commit of the server's writes (study_commit.c), under lock */
 		bool open, leading;   /* a transaction is open; a request is gathering it before its commit */
-		unsigned members;     /* requests whose change is in the open batch, waiting for its commit */
+		unsigned members;     /* requests waiting for the open batch's commit: those whose change is in it, and those that
+				 * read it (sty_batch_leave) */
 		unsigned coming;      /* requests waiting for the lock (atomic) */
 		uint64_t epoch;       /* batches committed (or failed) so far */
 		int results[STY_BATCH_RESULTS];

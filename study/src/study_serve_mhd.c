@@ -172,7 +172,7 @@ static void conn_phase(struct sty_server *sv, conn_track *t, int phase)
 	clock_gettime(CLOCK_MONOTONIC, &t->since);
 }
 
-/* Closes a reading connection (conn_lock held): libmicrohttpd sees the end of its stream and cleans it up. */
+/* Closes an overdue connection (conn_lock held): libmicrohttpd sees the end of its stream and cleans it up. */
 static void conn_close(struct sty_server *sv, conn_track *t)
 {
 	shutdown(t->fd, SHUT_RDWR);
@@ -242,7 +242,7 @@ static void track_phase(struct sty_server *sv, struct MHD_Connection *c, int pha
 	pthread_mutex_unlock(&sv->conn_lock);
 }
 
-/* Closes the connections whose head or body is overdue, four times a second, until the server stops. */
+/* Closes the connections whose head, body or reply is overdue, four times a second, until the server stops. */
 static void *watchdog_main(void *arg)
 {
 	struct sty_server *sv = arg;

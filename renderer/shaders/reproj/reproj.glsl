@@ -203,10 +203,11 @@ bool cache_lookup(uint object, uvec2 p, float dist, out CacheValue colour, out v
 	float wsum = 0.0, wbest = -1.0;
 	CacheValue acc = cache_zero();
 	ivec2 qbest = ivec2(0);
-	// Only taps of positive weight can count, and they come first: with both fractions 0 (a static view) tap 0
-	// alone, with fr.y = 0 taps 0 and 1. The loop runs to that bound, not to 4, so that SIMD groups whose lanes
-	// all lie on pixel centres skip the zero-weight taps' loads (lavapipe runs an if's body for every lane, but
-	// leaves a loop once every lane has); the taps it visits and their order are unchanged, so are the results.
+	// Only taps of positive weight count: with both fractions 0 (a static view) tap 0 alone, with fr.y = 0 taps 0
+	// and 1 (with fr.x = 0 < fr.y taps 0 and 2: all four are visited). The loop runs to that bound, not to 4, so
+	// that SIMD groups whose lanes all lie on pixel centres skip the zero-weight taps' loads (lavapipe runs an if's
+	// body for every lane, but leaves a loop once every lane has); the taps it visits and their order are
+	// unchanged, so are the results.
 	int taps = fr.y > 0.0 ? 4 : (fr.x > 0.0 ? 2 : 1);
 	for (int k = 0; k < taps; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);

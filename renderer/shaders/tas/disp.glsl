@@ -8,7 +8,8 @@
 // [0, 255] <-> RG32UI: x = R (21 bits) | B's low 11 bits << 21, y = G | B's high 11 bits << 21
 uvec2 disp_pack(vec3 cv)
 {
-	uvec3 q = uvec3(round(cv * vec3(8192.0, 8192.0, 16384.0)));
+	// masked to their fields, so that nothing (a value past 255, a NaN's undefined conversion) spills into another
+	uvec3 q = uvec3(round(clamp(cv, 0.0, 255.0) * vec3(8192.0, 8192.0, 16384.0))) & uvec3(0x1FFFFFu, 0x1FFFFFu, 0x3FFFFFu);
 	return uvec2(q.r | (q.b & 0x7FFu) << 21, q.g | (q.b >> 11) << 21);
 }
 vec3 disp_unpack(uvec2 u)

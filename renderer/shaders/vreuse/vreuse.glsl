@@ -73,7 +73,7 @@ bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 	fr = fr - step(1.0, fr);
 	float wsum = 0.0;
 	vec3 acc = vec3(0.0);
-	// only the taps of positive weight, which come first (reproj.glsl cache_lookup: a loop lavapipe leaves early)
+	// the taps of positive weight lie among the first 1 or 2 when fr.y = 0 (reproj.glsl cache_lookup)
 	int taps = fr.y > 0.0 ? 4 : (fr.x > 0.0 ? 2 : 1);
 	for (int k = 0; k < taps; k++) {
 		ivec2 o = ivec2(k & 1, k >> 1);

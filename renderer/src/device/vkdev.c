@@ -348,7 +348,7 @@ VkResult vkdev_create(const vkdev_desc *desc, vkdev **out, char *err, size_t err
 			.depthClamp = have.depthClamp,
 			.fragmentStoresAndAtomics = have.fragmentStoresAndAtomics,
 			.shaderStorageImageWriteWithoutFormat = have.shaderStorageImageWriteWithoutFormat,
-			/* rg32ui storage images (tarc's kept display values, reproj.glsl) */
+			/* rg32ui storage images (display values kept by tarc, tasa and ads: tas/disp.glsl) */
 			.shaderStorageImageExtendedFormats = have.shaderStorageImageExtendedFormats,
 		},
 	};

@@ -57,7 +57,7 @@ typedef struct atlas_state {
 	vkdev_buffer buf[B_COUNT];
 	ids_pass ids[RENDER_MAX_VIEWS]; /* the visibility pass and its image, per eye (stereo: STEREO.md) */
 	ids_multiview mv;          /* render.multiview: both eyes' visibility in one pass (ids[v] views of its layers) */
-	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RG32UI, tas.glsl disp_pack) */
+	vkdev_image atlas, scratch, shown; /* shown: tasa, display code values of the atlas (RG32UI, tas/disp.glsl) */
 	bool subgroup;             /* tasa: per-chunk gradient maxima in the subgroup (TL_SUBGROUP) */
 	size_t work_cap;           /* chunks */
 	uint32_t shade_chunks, truth_chunks;

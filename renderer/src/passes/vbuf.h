@@ -37,7 +37,7 @@ typedef struct vbuf_pass {
 	ids_pass ids;
 	vkdev_buffer objinfo, list, counters, rates;
 	vkdev_image svals;           /* RGBA16F: shaded values at leader pixels (ads: and the interpolated ones) */
-	vkdev_image sdisp;           /* ads: RGBA32F, the display code values of svals' pixels (vbuf.glsl) */
+	vkdev_image sdisp;           /* ads: the display code values of svals' pixels (RG32UI, tas/disp.glsl) */
 	uint32_t tiles_x, tiles_y;
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set;
