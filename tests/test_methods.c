@@ -141,6 +141,19 @@ static void test_dash_forms_unambiguous(void **state)
 			}
 		}
 	assert_true(choices >= 3); /* rrc's payloads at least */
+	/* the list the parser's hint and the study's method names come from (method_dash_forms) */
+	static const struct {
+		const char *method, *forms;
+	} want[] = {{"ref", "ssaa2 ssaa3 ssaa4"}, {"rrc", "shadow diffuse"}, {"tarc", "oracle"}, {"tasa", "oracle"},
+		    {"sa", ""}};
+	for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+		char forms[8][METHOD_DASH_FORM_B], joined[256] = "";
+		size_t k = method_dash_forms(method_find(want[i].method), forms, 8);
+		for (size_t j = 0; j < k && j < 8; j++)
+			snprintf(joined + strlen(joined), sizeof joined - strlen(joined), "%s%s", j ? " " : "", forms[j]);
+		if (strcmp(joined, want[i].forms))
+			fail_msg("%s's '-' forms: '%s', expected '%s'", want[i].method, joined, want[i].forms);
+	}
 }
 
 static void test_options(void **state)

@@ -174,8 +174,8 @@ static volatile sig_atomic_t stop_flag;
 static void on_signal(int sig) { (void)sig; stop_flag = 1; }
 
 /* The methods of taslab's registry, described to the study (issue 30.1: the study module knows no method by name):
- * every method and every "-FLAG", "-NAMEvalue" and "-VALUE" form of it (tarc-oracle, ref-ssaa2, rrc-shadow), the
- * variant method names a ratings file or pairs.json carries. */
+ * every method and every "-FLAG", "-NAMEvalue" and "-VALUE" form of it (method_dash_forms: tarc-oracle, ref-ssaa2,
+ * rrc-shadow), the variant method names a ratings file or pairs.json carries. */
 static int describe_methods(sty *s, char *err, size_t err_size)
 {
 	size_t n;
@@ -185,32 +185,13 @@ static int describe_methods(sty *s, char *err, size_t err_size)
 		run_method_facts f;
 		method_facts(m[i], &f);
 		rc = sty_describe_method(s, m[i]->name, &f, err, err_size);
-		for (size_t k = 0; k < m[i]->option_count && !rc; k++)
-			if (m[i]->options[k].variant == '-' && m[i]->options[k].type == METHOD_OPT_BOOL) {
-				char name[64];
-				snprintf(name, sizeof name, "%s-%s", m[i]->name, m[i]->options[k].name);
-				rc = sty_describe_method(s, name, &f, err, err_size);
-			} else if (m[i]->options[k].variant == '-' && m[i]->options[k].allowed) {
-				/* a whole-number '-' option: one method name per allowed value but the default (ref-ssaa2) */
-				const method_option *o = &m[i]->options[k];
-				for (size_t v = 0; o->allowed[v] && !rc; v++) {
-					char name[64];
-					if ((double)o->allowed[v] == o->def)
-						continue;
-					snprintf(name, sizeof name, "%s-%s%u", m[i]->name, o->name, o->allowed[v]);
-					rc = sty_describe_method(s, name, &f, err, err_size);
-				}
-			} else if (m[i]->options[k].variant == '-' && m[i]->options[k].type == METHOD_OPT_CHOICE) {
-				/* a choice: one method name per value but the default (rrc-shadow, rrc-diffuse) */
-				const method_option *o = &m[i]->options[k];
-				for (size_t v = 0; o->choices[v] && !rc; v++) {
-					char name[64];
-					if ((double)v == o->def)
-						continue;
-					snprintf(name, sizeof name, "%s-%s", m[i]->name, o->choices[v]);
-					rc = sty_describe_method(s, name, &f, err, err_size);
-				}
-			}
+		char forms[16][METHOD_DASH_FORM_B];
+		size_t k = method_dash_forms(m[i], forms, 16);
+		for (size_t j = 0; j < k && j < 16 && !rc; j++) {
+			char name[96];
+			snprintf(name, sizeof name, "%s-%s", m[i]->name, forms[j]);
+			rc = sty_describe_method(s, name, &f, err, err_size);
+		}
 	}
 	return rc;
 }

@@ -238,25 +238,40 @@ int method_config_check(const method_config *c, char *err, size_t err_size)
 	return c->method->check ? c->method->check(c->values.bytes, err, err_size) : TL_OK;
 }
 
-/* "its '-' forms: -oracle, -ssaaK, -shadow, -diffuse" (the suffixes a variant of m may carry), or "it has none". */
-static void dash_forms(const method_info *m, char *out, size_t n)
+size_t method_dash_forms(const method_info *m, char (*out)[METHOD_DASH_FORM_B], size_t max)
 {
-	size_t len = (size_t)snprintf(out, n, "its '-' forms:");
-	int any = 0;
-	for (size_t i = 0; i < m->option_count && len < n; i++) {
+	size_t count = 0;
+#define PUT_FORM(...)                                                                                          \
+	do {                                                                                                   \
+		if (count < max)                                                                               \
+			snprintf(out[count], METHOD_DASH_FORM_B, __VA_ARGS__);                                 \
+		count++;                                                                                       \
+	} while (0)
+	for (size_t i = 0; i < m->option_count; i++) {
 		const method_option *o = &m->options[i];
 		if (o->variant != '-')
 			continue;
-		if (o->type == METHOD_OPT_CHOICE) {
-			for (size_t k = 0; o->choices[k] && len < n; k++)
-				if ((double)k != o->def)
-					len += (size_t)snprintf(out + len, n - len, "%s -%s", any++ ? "," : "", o->choices[k]);
-		} else {
-			len += (size_t)snprintf(out + len, n - len, "%s -%s%s", any++ ? "," : "", o->name,
-						o->type == METHOD_OPT_BOOL ? "" : o->arg ? o->arg : "N");
-		}
+		if (o->type == METHOD_OPT_BOOL)
+			PUT_FORM("%s", o->name);
+		for (size_t k = 0; o->type == METHOD_OPT_UINT && o->allowed && o->allowed[k]; k++)
+			if ((double)o->allowed[k] != o->def)
+				PUT_FORM("%s%u", o->name, o->allowed[k]);
+		for (size_t k = 0; o->type == METHOD_OPT_CHOICE && o->choices[k]; k++)
+			if ((double)k != o->def)
+				PUT_FORM("%s", o->choices[k]);
 	}
-	if (!any)
+#undef PUT_FORM
+	return count;
+}
+
+/* "its '-' forms: -oracle, -ssaa2, -shadow, -diffuse" (method_dash_forms), or "it has none". */
+static void dash_forms(const method_info *m, char *out, size_t n)
+{
+	char forms[16][METHOD_DASH_FORM_B];
+	size_t k = method_dash_forms(m, forms, 16), len = (size_t)snprintf(out, n, "its '-' forms:");
+	for (size_t i = 0; i < k && i < 16 && len < n; i++)
+		len += (size_t)snprintf(out + len, n - len, "%s -%s", i ? "," : "", forms[i]);
+	if (!k)
 		snprintf(out, n, "it has none");
 }
 
