@@ -16,7 +16,10 @@ layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded t
 #define VREUSE_PYR_QUALIFIER
 #endif
 layout(std430, set = 2, binding = 4) VREUSE_PYR_QUALIFIER buffer Pyramid { vec4 pyr[]; }; // pull-push: (rgb, weight) per level texel
-layout(std430, set = 2, binding = 11) buffer Normals { vec4 nrm[]; }; // stu: each pixel's normal, object + 1 (w)
+// stu: each pixel's normal (float bits) and object + 1 (w), and its world position (float bits) and g (w, float
+// bits), from the visibility pass (vis.frag.in VIS_SURFACE; background 0); stu.comp.in STU_G sets g at phase pixels
+layout(set = 2, binding = 11, rgba32ui) uniform readonly uimage2D snrm;
+layout(set = 2, binding = 12, rgba32ui) uniform uimage2D spos;
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;

@@ -134,9 +134,9 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.alphaBlendOp = VK_BLEND_OP_ADD,
 		.colorWriteMask = 0xF,
 	};
-	/* pd->color attachments (0, 1 or 2), one blend state; the second of color2_format where set */
-	uint32_t ncolor = pd->color > 2 ? 2u : (uint32_t)(pd->color > 0 ? pd->color : 0);
-	VkPipelineColorBlendAttachmentState cbas[2] = {cba, cba};
+	/* pd->color attachments (0 to 4), one blend state; the second of color2_format where set */
+	uint32_t ncolor = pd->color > 4 ? 4u : (uint32_t)(pd->color > 0 ? pd->color : 0);
+	VkPipelineColorBlendAttachmentState cbas[4] = {cba, cba, cba, cba};
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
 		.attachmentCount = ncolor,
@@ -152,7 +152,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.pDynamicStates = dyn,
 	};
 	VkFormat cfmt = pd->color_format ? pd->color_format : VK_FORMAT_R16G16B16A16_SFLOAT;
-	VkFormat cfmts[2] = {cfmt, pd->color2_format ? pd->color2_format : cfmt};
+	VkFormat cfmts[4] = {cfmt, pd->color2_format ? pd->color2_format : cfmt, cfmt, cfmt};
 	VkPipelineRenderingCreateInfo pr = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
 		.viewMask = pd->view_mask,

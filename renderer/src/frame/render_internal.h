@@ -234,14 +234,14 @@ typedef struct render_pipe_desc {
 	const uint32_t *vs, *fs; /* vs NULL: common/scene.vert, the one vertex shader of all scene passes */
 	size_t vs_size, fs_size;
 	unsigned attributes;   /* bit i: vertex attribute location i (0 position, 1 normal, 2 uv, 3 tangent) */
-	int depth_write, color, bias, blend; /* color: the number of colour attachments (0-2, one format) */
+	int depth_write, color, bias, blend; /* color: the number of colour attachments (0-4; formats below) */
 	VkCompareOp depth_op;
 	int no_depth_test;     /* depth test off (full-screen passes) */
 	int stencil;           /* RENDER_STENCIL_* */
 	int fullscreen;        /* common/fullscreen.vert, no vertex input, no culling state */
 	VkFormat depth_format; /* 0: RENDER_DEPTH_FORMAT */
 	VkFormat color_format; /* 0: the HDR target's RGBA16F */
-	VkFormat color2_format; /* with color = 2: the second attachment's (location 1) format; 0: color_format's */
+	VkFormat color2_format; /* the second attachment's (location 1) format; 0: color_format's (the others') */
 	int fs_alpha_blend;    /* value of shade.frag's ALPHA_BLEND specialisation constant */
 	uint32_t view_mask;    /* multiview (render.multiview): the render pass's viewMask; 0: one view */
 	VkDescriptorSetLayout method_set; /* optional set 1 */

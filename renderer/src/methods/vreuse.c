@@ -13,7 +13,7 @@ const char *const vreuse_rrc_passes[9] = {"shadow", "ids",   "decide",  "shade",
 const char *const vreuse_warp_passes[10] = {"shadow", "depth", "shade", "ids",     "warp",
 					    "fill",   "truth", "blend", "display", "readback"};
 
-enum { VREUSE_BINDINGS = 12 };
+enum { VREUSE_BINDINGS = 13 };
 /* decide's aux[1] flags */
 enum { FLAG_HAVE_CACHE = 1u };
 
@@ -22,9 +22,10 @@ typedef struct vreuse_state {
 	vbuf_pass p;
 	vkdev_image cache_col, cache_rec, rec_new, flag;
 	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
-	vkdev_buffer pyr;  /* warp: the pull-push pyramid, vec4 (rgb, weight) per node of levels 1 up; stu: each pixel's
-			    * world position and g (stu.comp.in); one texel for the others */
-	vkdev_buffer nrm;  /* stu: each pixel's normal and object + 1 (one texel for the others) */
+	vkdev_buffer pyr;  /* warp: the pull-push pyramid, vec4 (rgb, weight) per node of levels 1 up; one texel for the
+			    * others */
+	vkdev_image spos, snrm; /* stu: each pixel's world position and g, its normal and object + 1, as float bits
+				 * (RGBA32UI), written by the visibility pass (vis.frag.in VIS_SURFACE); 1x1 for the others */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
 	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R32_UINT) */
 	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
@@ -33,7 +34,7 @@ typedef struct vreuse_state {
 	VkDescriptorSetLayout set_layout;
 	VkDescriptorSet set[2]; /* sub_prev / sub_next swapped */
 	VkPipelineLayout layout;
-	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_grad, stu_g, stu;
+	VkPipeline decide, resolve, pull, push, fill_args, amss, jshade, stu_g, stu;
 	VkPipeline hshade; /* rrc: the path's shade writing the HDR target (shade.comp.in VBUF_TO_HDR) */
 	int64_t last_frame;
 	bool have_cache;   /* rrc: the cache holds frame t-1 */
@@ -71,13 +72,17 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
  * (its extrapolated frames shade nothing); the rrc variants and stu: beside them (VIS_IDS, two targets: the ids
  * and the record), so that one geometry pass serves the shading and the lookup. */
 static bool vis_writes_ids(const vreuse_state *s) { return s->v.mode != VREUSE_WARP; }
+/* its colour attachments: warp the record; rrc the ids and the record; stu also the surface (position, normal) */
+static uint32_t vis_targets(const vreuse_state *s) { return s->v.mode == VREUSE_STU ? 4 : vis_writes_ids(s) ? 2 : 1; }
 
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
 {
-	/* rrc, stu: this frame's distance too (the record), and the ids */
-	const char *rec = vis_writes_ids(s) ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n" : "";
+	/* rrc, stu: this frame's distance too (the record), and the ids; stu: each pixel's surface too */
+	const char *rec = s->v.mode == VREUSE_STU ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n#define VIS_SURFACE 1\n"
+			  : vis_writes_ids(s)       ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n"
+						    : "";
 	ids_pipe_src src = {"vreuse/vis.vert.in", rec, "vreuse/vis.frag.in", rec, "#define VIS_ALPHA_MASK 1\n"};
-	render_pipe_desc pd = {.color = vis_writes_ids(s) ? 2 : 1, .depth_write = 1,
+	render_pipe_desc pd = {.color = (int)vis_targets(s), .depth_write = 1,
 			       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 			       .method_set = s->p.ids.set_layout};
 	return ids_make_pipelines(r, &src, pd, &s->vis_pipe, &s->vis_pipe_mask, "warp: visibility pipeline", err,
@@ -86,13 +91,15 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 
 /* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the
  * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. For the
- * rrc variants and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment 1). */
+ * rrc variants and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment 1); for
+ * stu attachments 2 and 3 take each pixel's world position and normal, interpolated by the rasterizer, where a
+ * compute pass fetched the pixel's triangle to make them. */
 static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
 {
 	const uint32_t aux23[2] = {key_slot, r->desc.width | r->desc.height << 16};
-	const vkdev_image *targets[2] = {&s->p.ids.image, &s->vis};
-	uint32_t n = vis_writes_ids(s) ? 2 : 1;
-	const vkdev_image *const *t = n == 2 ? targets : targets + 1;
+	const vkdev_image *targets[4] = {&s->p.ids.image, &s->vis, &s->spos, &s->snrm};
+	uint32_t n = vis_targets(s);
+	const vkdev_image *const *t = n == 1 ? targets + 1 : targets;
 	ids_begin(r, cmd, t, n, NULL);
 	ids_draw_objects(r, cmd, s->p.ids.set, &s->vis_pipe, &s->vis_pipe_mask, 0, aux23);
 	ids_end(cmd, t, n);
@@ -144,9 +151,20 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
 	if (rv)
 		return render_vk_error(err, err_size, "warp visibility", rv);
-	/* pyr: warp's pull-push pyramid, levels 1 up to 1x1 (level 0, the frame, is never stored: vreuse.glsl); stu's
-	 * world position and g per pixel, its normal in nrm (stu.comp.in); one texel for the others */
-	VkDeviceSize pixels = (VkDeviceSize)w * h, texels = stu ? pixels : 1;
+	/* stu's surface images (colour attachments of the visibility pass) */
+	const char *const surf_name[2] = {"stu positions", "stu normals"};
+	vkdev_image *surf[2] = {&s->spos, &s->snrm};
+	for (int i = 0; i < 2; i++) {
+		VkResult r3 = vkdev_image_create(r->dev, stu ? w : 1, stu ? h : 1, 1, 1, VK_FORMAT_R32G32B32A32_UINT,
+						 VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+							 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+						 VK_IMAGE_ASPECT_COLOR_BIT, false, surf_name[i], surf[i]);
+		if (r3)
+			return render_vk_error(err, err_size, surf_name[i], r3);
+	}
+	/* pyr: warp's pull-push pyramid, levels 1 up to 1x1 (level 0, the frame, is never stored: vreuse.glsl); one
+	 * texel for the others */
+	VkDeviceSize texels = 1;
 	if (warp)
 		for (texels = 0; w > 1 || h > 1;) {
 			w = (w + 1) / 2, h = (h + 1) / 2;
@@ -154,15 +172,13 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		}
 	texels = texels ? texels : 1;
 	VkDevice d = r->dev->device;
-	if ((rc = render_storage_buffer(r, texels * 16, 0, false, stu ? "stu's positions" : "warp's pull-push pyramid",
-					&s->pyr, err, err_size)) ||
-	    (rc = render_storage_buffer(r, (stu ? pixels : 1) * 16, 0, false, "stu's normals", &s->nrm, err, err_size)))
+	if ((rc = render_storage_buffer(r, texels * 16, 0, false, "warp's pull-push pyramid", &s->pyr, err, err_size)))
 		return rc;
 	VkResult res;
 	VkDescriptorSetLayoutBinding b[VREUSE_BINDINGS];
 	for (uint32_t i = 0; i < VREUSE_BINDINGS; i++)
-		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 || i == 11 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
-									    : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+		b[i] = (VkDescriptorSetLayoutBinding){i, i == 4 ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER
+							: VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
 						      1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
 	VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
 					      .bindingCount = VREUSE_BINDINGS, .pBindings = b};
@@ -178,9 +194,8 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		const vkdev_image *recs[2] = {&s->cache_rec, rrc ? &s->cache_rec2 : &s->cache_rec};
 		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, recs[1 - i], &s->rec_new, &s->flag, NULL,
 							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i],
-							    &s->age[1 - i], &s->age[i], NULL};
-		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr, NULL,
-							     NULL, NULL, NULL, NULL, NULL, &s->nrm};
+							    &s->age[1 - i], &s->age[i], &s->snrm, &s->spos};
+		const vkdev_buffer *bufs[VREUSE_BINDINGS] = {NULL, NULL, NULL, NULL, &s->pyr};
 		vkdev_write_storage_set(d, s->set[i], VREUSE_BINDINGS, bufs, imgs);
 	}
 	VkDescriptorSetLayout sets[3] = {r->scene_set_layout, s->p.set_layout, s->set_layout};
@@ -204,8 +219,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		     (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_JITTER 1\n", &s->jshade, err,
 					     err_size))))
 		return rc;
-	if (stu && ((rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_GRAD 1\n", &s->stu_grad, err, err_size)) ||
-		    (rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_G 1\n", &s->stu_g, err, err_size)) ||
+	if (stu && ((rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_G 1\n", &s->stu_g, err, err_size)) ||
 		    (rc = make_compute(r, s, "vreuse/stu.comp.in", &s->stu, err, err_size))))
 		return rc;
 	/* the cache starts empty (object 0) in GENERAL layout */
@@ -214,9 +228,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return render_vk_error(err, err_size, "command buffer", res);
 	VkClearColorValue zero = {{0}};
 	VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-	const vkdev_image *im[10] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0],
-				     &s->sub[1],     &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1]};
-	for (int i = 0; i < 10; i++) {
+	const vkdev_image *im[12] = {&s->cache_col, &s->cache_rec, &s->rec_new,    &s->flag,   &s->sub[0], &s->sub[1],
+				     &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1], &s->spos,   &s->snrm};
+	for (int i = 0; i < 12; i++) {
 		vkdev_barrier_image(cmd, im[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
@@ -477,9 +491,6 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	vbuf_record_shade(r, p, cmd, 0);
 	render_ts(r, cmd);
 	uint32_t aux[4] = {frame, s->v.period, 0, s->have_cache ? 1u : 0u};
-	bind(r, s, cmd, s->stu_grad, aux);
-	dispatch_pixels(r, cmd);
-	vbuf_barrier(cmd);
 	/* g at the phase pixels only: the shaded list, dispatched as the shade was (two display transforms a sample, which
 	 * a branch in the per-pixel pass made every pixel pay on a SIMD CPU driver) */
 	bind(r, s, cmd, s->stu_g, aux);
@@ -543,23 +554,22 @@ void vreuse_finish(render *r)
 	if (!s)
 		return;
 	VkDevice d = r->dev->device;
-	VkPipeline pp[11] = {s->decide,  s->resolve, s->pull,     s->push, s->fill_args, s->amss,
-			     s->jshade,  s->stu_grad, s->stu_g, s->stu,  s->hshade};
-	for (int i = 0; i < 11; i++)
+	VkPipeline pp[10] = {s->decide, s->resolve, s->pull, s->push, s->fill_args,
+			     s->amss,   s->jshade,  s->stu_g, s->stu,  s->hshade};
+	for (int i = 0; i < 10; i++)
 		if (pp[i])
 			vkDestroyPipeline(d, pp[i], NULL);
 	if (s->layout)
 		vkDestroyPipelineLayout(d, s->layout, NULL);
 	if (s->set_layout)
 		vkDestroyDescriptorSetLayout(d, s->set_layout, NULL);
-	vkdev_image *im[10] = {&s->cache_col, &s->cache_rec, &s->rec_new, &s->flag, &s->sub[0],
-			       &s->sub[1],     &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1]};
-	for (int i = 0; i < 10; i++)
+	vkdev_image *im[12] = {&s->cache_col, &s->cache_rec, &s->rec_new,    &s->flag,   &s->sub[0], &s->sub[1],
+			       &s->vis,       &s->cache_rec2, &s->age[0], &s->age[1], &s->spos,   &s->snrm};
+	for (int i = 0; i < 12; i++)
 		vkdev_image_destroy(r->dev, im[i]);
 	render_pipeline_destroy(r, &s->vis_pipe);
 	render_pipeline_destroy(r, &s->vis_pipe_mask);
 	vkdev_buffer_destroy(r->dev, &s->pyr);
-	vkdev_buffer_destroy(r->dev, &s->nrm);
 	vbuf_finish(r, &s->p);
 	free(s);
 	r->method_state = NULL;

@@ -63,7 +63,7 @@ void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t
  * ids_draw_objects draws every opaque and masked object in scene order with PIPE / PIPE_MASK (set 1 = SET), push
  * constants' aux = (the mesh's first index, its vertex offset, aux23[0], aux23[1]); ids_end ends rendering and makes
  * the images readable by compute shaders. */
-enum { IDS_MAX_TARGETS = 2 };
+enum { IDS_MAX_TARGETS = 4 };
 void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count,
 	       const VkClearColorValue *clears);
 void ids_draw_objects(render *r, VkCommandBuffer cmd, VkDescriptorSet set, const render_pipeline *pipe,
