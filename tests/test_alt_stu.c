@@ -7,7 +7,10 @@
  *  phase sample is a first one (g = 8), so D = 8; from frame N on g = 0 (a static view), so D = 4, 2, 1, 1/2 in
  *  frames N..N+3 and c = clamp((8 - D) / 7.5, 0, 1) reaches 1 at N+3; a pixel equals vref from its first phase frame
  *  at or after N+2 (shows s, then keeps it), the last of which is 2N+1. With g lost (always 0) D would start at 4 and
- *  the frames would equal vref from N+1. */
+ *  the frames would equal vref from N+1.
+ * The surface the windows weigh by (each pixel's world position and normal, written by the visibility pass beside the
+ * ids): equal, within float rounding, to the surface point the ids name (object, triangle, barycentrics), computed
+ * here from the scene's meshes and world matrices; the object + 1 beside the normal, 0 on the background. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,8 +18,10 @@
 
 #include "test_vk.h"
 
+#include "../renderer/src/methods/method_debug.h"
 #include "taslab/render.h"
 #include "taslab/scene.h"
+#include "taslab/tl_math.h"
 #include "taslab/vkdev.h"
 
 /* stu/n for n in [n0, n1] (powers of two) on the static view at W x H against vref (the header's checks). */
@@ -72,10 +77,91 @@ static void test_static(void **state)
 	vkdev_destroy(&dev);
 }
 
+static float bits_f(uint32_t u)
+{
+	float f;
+	memcpy(&f, &u, sizeof f);
+	return f;
+}
+
+/* The surface of frames 0..2 of stu/4 at W x H against the CPU's surface point of each pixel's ids. */
+static void test_surface(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("tfr_static");
+	enum { W = 48, H = 32 };
+	size_t px = (size_t)W * H;
+	uint32_t *ids = malloc(px * 16), *pos = malloc(px * 16), *nrm = malloc(px * 16);
+	tlm_mat4 *world = malloc(s->object_count * sizeof *world);
+	assert_non_null(ids);
+	assert_non_null(pos);
+	assert_non_null(nrm);
+	assert_non_null(world);
+	render *r = tu_render_open(dev, s, 0, "stu/4", NULL, NULL, W, H, false);
+	char err[1024];
+	for (uint32_t f = 0; f < 3; f++) {
+		frame_image img;
+		frame_stats st;
+		if (render_frame(r, f, &img, &st, err, sizeof err))
+			fail_msg("frame %u: %s", f, err);
+		assert_int_equal(vreuse_debug_surface(r, ids, pos, nrm, err, sizeof err), TL_OK);
+		scene_eval(s, (float)f / (float)s->fps, world, NULL);
+		size_t covered = 0;
+		double worst_p = 0.0, worst_n = 0.0;
+		for (size_t i = 0; i < px; i++) {
+			const uint32_t *id = ids + 4 * i, *pp = pos + 4 * i, *nn = nrm + 4 * i;
+			if (id[0] == 0) {
+				if (pp[0] || pp[1] || pp[2] || nn[0] || nn[1] || nn[2] || nn[3])
+					fail_msg("frame %u pixel %zu: background with a surface", f, i);
+				continue;
+			}
+			covered++;
+			assert_int_equal(nn[3], id[0]);
+			assert_true(id[0] <= s->object_count);
+			const scene_mesh *m = &s->meshes[s->objects[id[0] - 1].mesh];
+			assert_true(3 * (size_t)id[1] + 2 < m->index_count);
+			float b1 = bits_f(id[2]), b2 = bits_f(id[3]), b0 = 1.0f - b1 - b2, w3[3] = {b0, b1, b2};
+			tlm_vec3 p = {0, 0, 0}, n = {0, 0, 0};
+			for (int k = 0; k < 3; k++) {
+				const scene_vertex *v = &m->vertices[m->indices[3 * id[1] + k]];
+				p.x += w3[k] * v->position[0], p.y += w3[k] * v->position[1], p.z += w3[k] * v->position[2];
+				n.x += w3[k] * v->normal[0], n.y += w3[k] * v->normal[1], n.z += w3[k] * v->normal[2];
+			}
+			const float *M = world[id[0] - 1].m; /* column-major */
+			tlm_vec3 wp = tlm_mat4_mul_point(world[id[0] - 1], p);
+			double wn[3] = {M[0] * n.x + M[4] * n.y + M[8] * n.z, M[1] * n.x + M[5] * n.y + M[9] * n.z,
+					M[2] * n.x + M[6] * n.y + M[10] * n.z};
+			double len = sqrt(wn[0] * wn[0] + wn[1] * wn[1] + wn[2] * wn[2]);
+			double want_p[3] = {wp.x, wp.y, wp.z}, scale = 1.0 + fabs(wp.x) + fabs(wp.y) + fabs(wp.z);
+			for (int c = 0; c < 3; c++) {
+				double dp = fabs(bits_f(pp[c]) - want_p[c]) / scale, dn = fabs(bits_f(nn[c]) - wn[c] / len);
+				worst_p = dp > worst_p ? dp : worst_p;
+				worst_n = dn > worst_n ? dn : worst_n;
+			}
+		}
+		printf("stu surface, frame %u: %zu covered pixels, position within %.2e (relative), normal within %.2e\n", f,
+		       covered, worst_p, worst_n);
+		assert_true(covered > px / 4);
+		/* float rounding: the rasterizer's interpolation against the CPU's barycentric sums */
+		assert_true(worst_p < 1e-5);
+		assert_true(worst_n < 1e-5);
+	}
+	render_destroy(&r);
+	free(ids);
+	free(pos);
+	free(nrm);
+	free(world);
+	scene_destroy(&s);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_static),
+		cmocka_unit_test(test_surface),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

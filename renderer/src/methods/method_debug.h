@@ -38,6 +38,10 @@ const uint32_t *reproj_debug_state(render *r);
 const uint32_t *vbuf_debug_rates(render *r);
 /* The last frame's ids image (passes/ids.h: width x height x 4 words) copied out. */
 int vbuf_debug_ids(render *r, uint32_t *ids, char *err, size_t err_size);
+/* stu (vreuse.c): the last frame's ids (as vbuf_debug_ids) and the surface its visibility pass wrote beside them,
+ * width x height x 4 words each: pos the world position (float bits) and g (float bits: STU_G's at the phase
+ * pixels, else 0), nrm the unit normal (float bits) and object + 1; all 0 on the background. */
+int vreuse_debug_surface(render *r, uint32_t *ids, uint32_t *pos, uint32_t *nrm, char *err, size_t err_size);
 const float *vrs_debug_tiles(render *r, const int32_t **index, uint32_t *tiles_x, uint32_t *tiles_y);
 
 #endif

@@ -3,6 +3,8 @@
  * rrc-interleaved and warp. */
 #include "vreuse.h"
 
+#include "method_debug.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -157,7 +159,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	for (int i = 0; i < 2; i++) {
 		VkResult r3 = vkdev_image_create(r->dev, stu ? w : 1, stu ? h : 1, 1, 1, VK_FORMAT_R32G32B32A32_UINT,
 						 VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-							 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+							 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
 						 VK_IMAGE_ASPECT_COLOR_BIT, false, surf_name[i], surf[i]);
 		if (r3)
 			return render_vk_error(err, err_size, surf_name[i], r3);
@@ -501,6 +503,17 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	vbuf_barrier(cmd);
 	record_resolve(r, s, cmd);
 	record_truth(r, s, cmd);
+}
+
+int vreuse_debug_surface(render *r, uint32_t *ids, uint32_t *pos, uint32_t *nrm, char *err, size_t err_size)
+{
+	vreuse_state *s = state_of(r);
+	if (s->v.mode != VREUSE_STU)
+		return tl_error(err, err_size, TL_ERR_ARG, "vreuse_debug_surface: not a stu render");
+	int rc = ids_pass_copy(r, &s->p.ids, ids, false, err, err_size);
+	if (!rc)
+		rc = ids_image_copy(r, &s->spos, 0, pos, false, err, err_size);
+	return rc ? rc : ids_image_copy(r, &s->snrm, 0, nrm, false, err, err_size);
 }
 
 void vreuse_record(render *r, VkCommandBuffer cmd, uint32_t frame)

@@ -202,7 +202,8 @@ void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t
 	ids_end(cmd, &image, 1);
 }
 
-int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size)
+int ids_image_copy(render *r, const vkdev_image *image, uint32_t layer, uint32_t *ids, bool upload, char *err,
+		   size_t err_size)
 {
 	VkDeviceSize size = (VkDeviceSize)r->desc.width * r->desc.height * 16;
 	vkdev_buffer b = {0};
@@ -219,16 +220,16 @@ int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char
 	}
 	VkImageLayout tl = upload ? VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
 	VkAccessFlags2 ta = upload ? VK_ACCESS_2_TRANSFER_WRITE_BIT : VK_ACCESS_2_TRANSFER_READ_BIT;
-	layer_barrier(cmd, p->image.image, p->layer, 1, VK_IMAGE_ASPECT_COLOR_BIT,
+	layer_barrier(cmd, image->image, layer, 1, VK_IMAGE_ASPECT_COLOR_BIT,
 		      upload ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, tl, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
 		      VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, ta);
-	VkBufferImageCopy c = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, p->layer, 1},
+	VkBufferImageCopy c = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, layer, 1},
 			       .imageExtent = {r->desc.width, r->desc.height, 1}};
 	if (upload)
-		vkCmdCopyBufferToImage(cmd, b.buffer, p->image.image, tl, 1, &c);
+		vkCmdCopyBufferToImage(cmd, b.buffer, image->image, tl, 1, &c);
 	else
-		vkCmdCopyImageToBuffer(cmd, p->image.image, tl, b.buffer, 1, &c);
-	layer_barrier(cmd, p->image.image, p->layer, 1, VK_IMAGE_ASPECT_COLOR_BIT, tl, VK_IMAGE_LAYOUT_GENERAL,
+		vkCmdCopyImageToBuffer(cmd, image->image, tl, b.buffer, 1, &c);
+	layer_barrier(cmd, image->image, layer, 1, VK_IMAGE_ASPECT_COLOR_BIT, tl, VK_IMAGE_LAYOUT_GENERAL,
 		      VK_PIPELINE_STAGE_2_COPY_BIT, ta, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
 		      VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
 	render_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
@@ -238,6 +239,11 @@ int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char
 		memcpy(ids, b.mapped, size);
 	vkdev_buffer_destroy(r->dev, &b);
 	return res ? render_vk_error(err, err_size, "ids copy", res) : TL_OK;
+}
+
+int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size)
+{
+	return ids_image_copy(r, &p->image, p->layer, ids, upload, err, err_size);
 }
 
 /* ---- multiview (STEREO.md "Vulkan multiview") ---- */

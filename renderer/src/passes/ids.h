@@ -56,7 +56,8 @@ void ids_pass_finish(render *r, ids_pass *p);
 void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot);
 
 /* The pieces of ids_pass_record for passes that draw the same way with other shaders into other images (the
- * reprojecting visibility pass of methods/vreuse.c, alone or writing the ids too as a second target; the VRS methods'
+ * reprojecting visibility pass of methods/vreuse.c, alone or writing the ids too as a second target, stu's surface as
+ * a third and fourth; the VRS methods'
  * ids pass with their per-pixel motion and texel density as the second target, methods/vrs.c): ids_begin
  * orders the previous frame's compute reads of IMAGES[0..COUNT) (COUNT <= IDS_MAX_TARGETS, colour attachments
  * 0..COUNT-1), clears them to CLEARS[0..COUNT) (NULL: all 0) and the render's depth target to 1 and begins rendering;
@@ -93,5 +94,8 @@ void ids_multiview_record(render *r, const ids_multiview *m, VkCommandBuffer cmd
 /* Diagnostics for the tests (methods/method_debug.h): copies the image out to `ids` (width x height x 4 words), or
  * with `upload` from `ids` into the image; waits for the copy. */
 int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size);
+/* The same for any RGBA32UI image of the frame's size in GENERAL layout (layer `layer`), e.g. a pass's second target. */
+int ids_image_copy(render *r, const vkdev_image *image, uint32_t layer, uint32_t *ids, bool upload, char *err,
+		   size_t err_size);
 
 #endif
