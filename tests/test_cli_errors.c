@@ -79,13 +79,13 @@ static void test_bad_inputs(void **state)
 	snprintf(run, sizeof run, "%s/a_file/run", dir);
 	snprintf(args, sizeof args, "--scene turntable --size 32x18 --frames 0 --device " TASLAB_TEST_DEVICE " --out %s", run);
 	expect_failure(args, "a_file", run);
-	/* a storage buffer past the device's range (lavapipe: 128 MiB): stu's positions at 4096x2304 are 144 MiB; until
+	/* a storage buffer past the device's range (lavapipe: 128 MiB): the sample list at 4096x4160 is 130 MiB; until
 	 * 2026-11-27 such a buffer was created and bound anyway, and a shader read past the range is undefined */
 	snprintf(run, sizeof run, "%s/run", dir);
 	snprintf(args, sizeof args,
-		 "--scene turntable --method stu/4 --size 4096x2304 --frames 0 --device " TASLAB_TEST_DEVICE " --out %s", run);
+		 "--scene turntable --method vref --size 4096x4160 --frames 0 --device " TASLAB_TEST_DEVICE " --out %s", run);
 	expect_failure(args,
-		       "stu's positions needs 144.0 MiB at 4096x2304, more than this device's storage buffer range (128.0 MiB)",
+		       "vbuf sample list needs 130.0 MiB at 4096x4160, more than this device's storage buffer range (128.0 MiB)",
 		       run);
 }
 
