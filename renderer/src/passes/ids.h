@@ -94,7 +94,8 @@ void ids_multiview_record(render *r, const ids_multiview *m, VkCommandBuffer cmd
 /* Diagnostics for the tests (methods/method_debug.h): copies the image out to `ids` (width x height x 4 words), or
  * with `upload` from `ids` into the image; waits for the copy. */
 int ids_pass_copy(render *r, const ids_pass *p, uint32_t *ids, bool upload, char *err, size_t err_size);
-/* The same for any RGBA32UI image of the frame's size in GENERAL layout (layer `layer`), e.g. a pass's second target. */
+/* The same for any RGBA32UI image of the frame's size in GENERAL layout (layer `layer`), e.g. a pass's second
+ * target. */
 int ids_image_copy(render *r, const vkdev_image *image, uint32_t layer, uint32_t *ids, bool upload, char *err,
 		   size_t err_size);
 
