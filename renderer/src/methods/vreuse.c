@@ -30,7 +30,7 @@ typedef struct vreuse_state {
 				 * (RGBA32UI), written by the visibility pass (vis.frag.in VIS_SURFACE); 1x1 for the others */
 	vkdev_image sub[2]; /* amss: 2x2 sub-pixel buffers, 2W x 2H (1x1 for the other methods), swapped per frame */
 	vkdev_image age[2]; /* amss: frames since each subsample took its own sample (R32_UINT) */
-	vkdev_image vis;    /* warp: the reprojecting visibility pass's target (vis.frag.in; 1x1 for the others) */
+	vkdev_image vis;    /* the reprojecting visibility pass's record (vis.frag.in) */
 	render_pipeline vis_pipe, vis_pipe_mask;
 	uint32_t parity;   /* amss: sub[parity] is this frame's (sub_next) */
 	VkDescriptorSetLayout set_layout;
@@ -71,10 +71,10 @@ static int make_compute(render *r, vreuse_state *s, const char *path, VkPipeline
 
 /* The reprojecting visibility pass (vis.vert.in, vis.frag.in): the ids pass's draw with the ids pass's set 1 (the
  * scene's vertices and indices), writing what the lookup needs; MASK objects alpha-tested. warp: instead of the ids
- * (its extrapolated frames shade nothing); the rrc variants and stu: beside them (VIS_IDS, two targets: the ids
- * and the record), so that one geometry pass serves the shading and the lookup. */
+ * (its extrapolated frames shade nothing); the rrc variants, amss and stu: beside them (VIS_IDS, two targets: the
+ * ids and the record), so that one geometry pass serves the shading and the lookup. */
 static bool vis_writes_ids(const vreuse_state *s) { return s->v.mode != VREUSE_WARP; }
-/* its colour attachments: warp the record; rrc the ids and the record; stu also the surface (position, normal) */
+/* its colour attachments: warp the record; rrc, amss the ids and the record; stu also the surface (position, normal) */
 static uint32_t vis_targets(const vreuse_state *s) { return s->v.mode == VREUSE_STU ? 4 : vis_writes_ids(s) ? 2 : 1; }
 
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
@@ -141,13 +141,13 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 			return render_vk_error(err, err_size, "amss sub-pixel age", r2);
 	}
 	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
-	bool vis = warp || rrc || stu; /* the methods that look up through the reprojecting visibility pass */
 	VkResult rc2 = vkdev_image_create(r->dev, rrc ? r->desc.width : 1, rrc ? r->desc.height : 1, 1, 1,
 					  VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 					  VK_IMAGE_ASPECT_COLOR_BIT, false, "vreuse cache record 2", &s->cache_rec2);
 	if (rc2)
 		return render_vk_error(err, err_size, "vreuse cache record 2", rc2);
-	VkResult rv = vkdev_image_create(r->dev, vis ? r->desc.width : 1, vis ? r->desc.height : 1, 1, 1,
+	/* every method looks up through the reprojecting visibility pass (its record) */
+	VkResult rv = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1,
 					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
@@ -212,7 +212,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)) ||
 	    (rc = make_compute_x(r, s, "vreuse/push.comp.in", "#define FILL_ARGS 1\n", &s->fill_args, err, err_size)))
 		return rc;
-	if (vis && (rc = make_vis_pipelines(r, s, err, err_size)))
+	if ((rc = make_vis_pipelines(r, s, err, err_size)))
 		return rc;
 	if (rrc && (rc = vbuf_make_compute(r, &s->p, "vbuf/shade.comp.in", "#define VBUF_TO_HDR 1\n", &s->hshade, err,
 					   err_size)))
@@ -453,7 +453,7 @@ static void record_warp(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_
 static void record_amss(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t frame)
 {
 	vbuf_pass *p = &s->p;
-	ids_pass_record(r, &p->ids, cmd, 0);
+	record_vis(r, s, cmd, 1); /* the ids (the jittered shading) and the record (decide, amss.comp.in) */
 	vbuf_barrier(cmd);
 	render_ts(r, cmd);
 	clear_to_sky(r, cmd);
