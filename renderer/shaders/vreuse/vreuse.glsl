@@ -38,31 +38,11 @@ const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 uvec4 vreuse_pack(uvec2 rec, vec3 c) { return uvec4(rec, packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0))); }
 vec3 vreuse_unpack_colour(uvec4 t) { return vec3(unpackHalf2x16(t.z), unpackHalf2x16(t.w).x); }
 
-// The surface point of pixel p from the ids pass (object, triangle, perspective-correct barycentrics).
-vec3 vreuse_point(uvec4 id)
-{
-	Vertex A, B, C;
-	vbuf_triangle(id.x - 1u, id.y, A, B, C);
-	float b1 = uintBitsToFloat(id.z), b2 = uintBitsToFloat(id.w);
-	return A.p * (1.0 - b1 - b2) + B.p * b1 + C.p * b2;
-}
-
-// Where the surface point (object, p_obj) is in the frame of `slot`, in pixels, and its view distance there.
-bool vreuse_project(uint slot, uint object, vec3 p_obj, ivec2 size, out vec2 f, out float dist)
-{
-	vec4 w = object_at(slot, object).world * vec4(p_obj, 1.0);
-	vec4 c = states[slot].view_proj * w;
-	dist = distance(w.xyz, states[slot].camera_time.xyz);
-	f = vec2(0.0);
-	if (c.w <= 0.0)
-		return false;
-	f = (c.xy / c.w * 0.5 + 0.5) * vec2(size);
-	return !(any(lessThan(f, vec2(0.0))) || any(greaterThanEqual(f, vec2(size))));
-}
-
 // The cache lookup of TAS-METHODS section 1 (the rule rrc uses): the four taps around f - 0.5, fractions quantised
 // to 1/64 (a static view gives weights exactly 0 and 1: reuse is bit-exact), each tap valid when it holds the same
-// object at a view distance within 2 %, invalid taps weighted 0 and the rest renormalised. False: a miss.
+// object at a view distance within 2 %, invalid taps weighted 0 and the rest renormalised. False: a miss. f and
+// dist: the pixel's surface point in the cache's frame (pixels) and its view distance there, as the reprojecting
+// visibility pass records them (vis.frag.in), so no triangle is fetched per pixel.
 bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 {
 	ivec2 size = imageSize(cache_rec);
@@ -94,14 +74,6 @@ bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 		return false;
 	colour = wsum == 1.0 ? acc : acc / wsum;
 	return true;
-}
-// The same for the surface point (object, p_obj), projected into the frame of `slot`.
-bool vreuse_lookup(uint slot, uint object, vec3 p_obj, out vec3 colour)
-{
-	vec2 f;
-	float dist;
-	colour = vec3(0.0);
-	return vreuse_project(slot, object, p_obj, imageSize(cache_rec), f, dist) && vreuse_lookup_at(object, f, dist, colour);
 }
 
 // Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other from level 1 on (level 0,
