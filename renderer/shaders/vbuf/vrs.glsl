@@ -4,12 +4,18 @@
 // Per 16x16 tile a palette index 0..10 (S: two halves of `index`, the current frame's and the previous one's, which
 // swap every frame: Alg. 4.1 reads S as "previous" after clearing it, so S is double-buffered). The history images
 // hold what frame t-1 left for the rate pass of frame t (written by history.comp.in at the end of each frame; hist_aux
-// by the ids pass of frame t-1, common/ids.frag.in IDS_VRS_AUX; taas's two colour images swap every frame, vrs.c).
+// by the ids pass of frame t-1, common/ids.frag.in IDS_VRS_AUX; taas's two colour images swap every frame, vrs.c;
+// casedge reads frame t-1's displayed image, which the display pass wrote).
 #ifndef TASLAB_VRS_GLSL
 #define TASLAB_VRS_GLSL
 
 layout(std430, set = 2, binding = 0) buffer Index { int sidx[]; };          // 2 x tiles: [half * tiles + tile]
+#ifdef CASEDGE
+// casedge: the frame t-1 as shown, the display pass's RGBA8 image itself (vrs.c binds it; FXAA reads an LDR frame)
+layout(set = 2, binding = 1, rgba8) uniform readonly image2D hist_color;
+#else
 layout(set = 2, binding = 1, rgba16f) uniform image2D hist_color;          // display values 0..1 of frame t-1
+#endif
 layout(set = 2, binding = 2, rgba16f) uniform image2D hist_color2;         // ... of frame t-2
 layout(set = 2, binding = 3, rgba32f) uniform image2D hist_pos;            // world position at t-1, w: covered
 layout(set = 2, binding = 4, rgba32f) uniform image2D hist_aux;            // xy motion t-2 -> t-1 (pixels), z texel density

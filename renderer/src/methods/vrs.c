@@ -4,7 +4,8 @@
  * density, Alg. 4.4), `mas` (motion-adaptive, Alg. 4.7), `fovea` (foveated, fixed gaze), `taas` (TAA-error-adaptive,
  * Alg. 4.10). One rate per 16x16 tile, chosen on frame t-1's outputs and stabilised over time (shaders/vbuf/rate.comp.in);
  * frame 0 (and a jump in frames) starts at index 10 (1x1). Passes added to the path: rate + finalize before the
- * select, history after the resolve (the display colour per pixel for casedge and taas, the tile centres' positions).
+ * select, history after the resolve (the display colour per pixel for taas, the tile centres' positions; casedge's
+ * rate pass reads frame t-1's displayed image itself, the display pass's RGBA8 output, as FXAA reads an LDR frame).
  * castexel, mas and taas draw the ids pass with a second colour attachment (common/ids.frag.in IDS_VRS_AUX): the
  * per-pixel texel density or screen motion that the next frame's rate pass reads, written where the path already
  * rasterizes each pixel's triangle instead of by a per-pixel triangle fetch in the history pass; it is
@@ -159,7 +160,9 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 		return render_vk_error(err, err_size, "vrs: descriptor set", res);
 	for (int c = 0; c < 2; c++) {
 		bool two_colours = s->kind == VRS_TAAS;
-		const vkdev_image *imgs[VRS_BINDINGS] = {NULL, &s->hcol[two_colours ? 1 - c : 0],
+		/* casedge: frame t-1's displayed image (the display pass's, RGBA8), read by its rate pass */
+		const vkdev_image *col = s->kind == VRS_CASEDGE ? &r->display : &s->hcol[two_colours ? 1 - c : 0];
+		const vkdev_image *imgs[VRS_BINDINGS] = {NULL, col,
 							 &s->hcol[two_colours ? c : 0], &s->hpos, &s->haux[1 - c], NULL};
 		const vkdev_buffer *bufs[VRS_BINDINGS] = {&s->index, NULL, NULL, NULL, NULL, &s->dbg};
 		vkdev_write_storage_set(d, s->set[c], VRS_BINDINGS, bufs, imgs);
@@ -173,8 +176,7 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 	s->aux = s->kind == VRS_CASTEXEL || s->kind == VRS_MAS || s->kind == VRS_TAAS;
 	if ((rc = make_compute(r, s, "vbuf/rate.comp.in", "", &s->rate, err, err_size)) ||
 	    (rc = make_compute(r, s, "vbuf/finalize.comp.in", "", &s->finalize, err, err_size)) ||
-	    ((s->kind == VRS_CASEDGE || s->kind == VRS_TAAS) &&
-	     (rc = make_compute(r, s, "vbuf/history.comp.in", "", &s->history, err, err_size))) ||
+	    (s->kind == VRS_TAAS && (rc = make_compute(r, s, "vbuf/history.comp.in", "", &s->history, err, err_size))) ||
 	    (s->kind != VRS_FOVEA &&
 	     (rc = make_compute(r, s, "vbuf/history.comp.in", "#define CENTRES 1\n", &s->centres, err, err_size))) ||
 	    (s->aux && (rc = make_ids_pipelines(r, p, s, err, err_size))))
@@ -242,6 +244,10 @@ static void vrs_rate_record(render *r, vbuf_pass *p, void *user, VkCommandBuffer
 		aux[1] = (uint32_t)lroundf(s->inner * 64.0f) | (uint32_t)lroundf(s->outer * 64.0f) << 16;
 		aux[3] = gx | gy << 16;
 	}
+	if (s->kind == VRS_CASEDGE) /* frame t-1's displayed image, left by its read-back (readback.c) */
+		vkdev_barrier_image(cmd, &r->display, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+				    VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+				    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
 	bind(r, p, s, cmd, s->rate, aux);
 	if (s->kind == VRS_TAAS) /* one invocation per tile, eight tiles of a row a workgroup (rate.comp.in
 				  * taas_tile_sum); rows in y, so that 16384 x 16384 (1024 x 1024 tiles) stays within the
