@@ -23,7 +23,8 @@ layout(set = 2, binding = 12, rgba32ui) uniform uimage2D spos;
 // amss: the 2x2 sub-pixel buffers (2W x 2H; alpha 1 = filled) of the previous frame and of this one (swapped per frame)
 layout(set = 2, binding = 5, rgba16f) uniform readonly image2D sub_prev;
 layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
-// warp: the reprojecting visibility pass (vis.frag.in): object + 1, the keyframe position (x, y), its view distance
+// the reprojecting visibility pass's record (vis.frag.in), every method: object + 1, the surface point's position (x, y)
+// in the earlier frame (warp: the keyframe), its view distance there (rrc, amss, stu: both distances as halves)
 layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 // the cache of the next frame: rrc variants, the other of two cache images (swapped per frame, so that decide can
 // write it while its lookups read cache_rec); the other methods, cache_rec itself

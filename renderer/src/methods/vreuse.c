@@ -79,7 +79,7 @@ static uint32_t vis_targets(const vreuse_state *s) { return s->v.mode == VREUSE_
 
 static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_size)
 {
-	/* rrc, stu: this frame's distance too (the record), and the ids; stu: each pixel's surface too */
+	/* rrc, amss, stu: this frame's distance too (the record), and the ids; stu: each pixel's surface too */
 	const char *rec = s->v.mode == VREUSE_STU ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n#define VIS_SURFACE 1\n"
 			  : vis_writes_ids(s)       ? "#define VIS_RECORD 1\n#define VIS_IDS 1\n"
 						    : "";
@@ -87,14 +87,14 @@ static int make_vis_pipelines(render *r, vreuse_state *s, char *err, size_t err_
 	render_pipe_desc pd = {.color = (int)vis_targets(s), .depth_write = 1,
 			       .depth_op = VK_COMPARE_OP_LESS_OR_EQUAL, .color_format = VK_FORMAT_R32G32B32A32_UINT,
 			       .method_set = s->p.ids.set_layout};
-	return ids_make_pipelines(r, &src, pd, &s->vis_pipe, &s->vis_pipe_mask, "warp: visibility pipeline", err,
+	return ids_make_pipelines(r, &src, pd, &s->vis_pipe, &s->vis_pipe_mask, "vreuse: visibility pipeline", err,
 				  err_size);
 }
 
 /* The reprojecting visibility pass: the ids pass's begin, draws and end (passes/ids.h) with the vis pipelines, so the
  * same surfaces win as in ids_pass_record (scene order, depth LESS_OR_EQUAL) and BLEND finds the same depth. For the
- * rrc variants and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment 1); for
- * stu attachments 2 and 3 take each pixel's world position and normal, interpolated by the rasterizer, where a
+ * rrc variants, amss and stu it is the frame's ids pass too (the ids image is attachment 0, the record attachment
+ * 1); for stu attachments 2 and 3 take each pixel's world position and normal, interpolated by the rasterizer, where a
  * compute pass fetched the pixel's triangle to make them. */
 static void record_vis(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t key_slot)
 {
@@ -150,9 +150,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	VkResult rv = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1,
 					 VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
 						 VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-					 VK_IMAGE_ASPECT_COLOR_BIT, false, "warp visibility", &s->vis);
+					 VK_IMAGE_ASPECT_COLOR_BIT, false, "vreuse visibility record", &s->vis);
 	if (rv)
-		return render_vk_error(err, err_size, "warp visibility", rv);
+		return render_vk_error(err, err_size, "vreuse visibility record", rv);
 	/* stu's surface images (colour attachments of the visibility pass) */
 	const char *const surf_name[2] = {"stu positions", "stu normals"};
 	vkdev_image *surf[2] = {&s->spos, &s->snrm};

@@ -1,9 +1,10 @@
 /* vreuse.h (private) — temporal reuse on the compacted sample path (BASELINES.md A2, A6; passes/vbuf.h): the
  * survey's refresh patterns that a stencil cannot save on lavapipe (`rrc-random/N`, `rrc-interleaved/N`) and frame
  * extrapolation (`warp/N`). A per-pixel cache (colour as shown, object + 1 and view distance) of an earlier frame is
- * reverse-reprojected per pixel of frame t (the ids pass gives its surface point); the methods decide per pixel
- * which samples to shade, the listed samples are shaded by the path's indirect shade, the rest show the cache
- * (bilinear with per-tap validity, TAS-METHODS section 1) or, for warp, are filled by pull-push.
+ * reverse-reprojected per pixel of frame t (the reprojecting visibility pass records where its surface point was);
+ * the methods decide per pixel which samples to shade, the listed samples are shaded by the path's indirect shade,
+ * the rest show the cache (bilinear with per-tap validity, TAS-METHODS section 1) or, for warp, are filled by
+ * pull-push.
  *
  * Frame (rrc variants; state slot 0 = t, slot 1 = t-1): shadow, ids (one geometry pass writing the ids and the
  * reprojecting visibility record), decide (reproject, decide, append; the reused pixels' values and next-cache

@@ -32,10 +32,11 @@ typedef struct vrs_state {
 	VkDescriptorSetLayout set_layout;
 	/* set[c], bound in the frames whose ids pass writes haux[c]: hist_aux = haux[1 - c]; taas: hist_color =
 	 * hcol[1 - c] (frame t-1), hist_color2 = hcol[c] (t-2, which the history pass then overwrites with frame t's,
-	 * so no copy); the others: hist_color = hist_color2 = hcol[0] */
+	 * so no copy); casedge: hist_color = the display pass's image (frame t-1 as shown); the others: hist_color =
+	 * hist_color2 = hcol[0] */
 	VkDescriptorSet set[2];
 	VkPipelineLayout layout;
-	VkPipeline rate, finalize, history, centres; /* history: per pixel (casedge, taas); centres: per tile */
+	VkPipeline rate, finalize, history, centres; /* history: per pixel (taas); centres: per tile */
 	bool aux;                                     /* castexel, mas, taas: the ids pass writes haux */
 	render_pipeline ids_pipe, ids_pipe_mask;      /* ... with these pipelines */
 	int64_t last_frame;
@@ -192,6 +193,12 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 				    VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
 		vkCmdClearColorImage(cmd, im[i]->image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
 	}
+	/* casedge reads the display image in the layout every frame's read-back leaves (readback.c); it starts there too,
+	 * so that the rate pass's barrier holds even after a frame that failed before its read-back */
+	if (s->kind == VRS_CASEDGE)
+		vkdev_barrier_image(cmd, &r->display, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+				    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+				    VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
 	vbuf_barrier(cmd);
 	if ((res = vkdev_cmd_submit_wait(r->dev, cmd)))
 		return render_vk_error(err, err_size, "vrs setup", res);

@@ -161,11 +161,12 @@ void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images,
 	uint32_t w = r->desc.width, h = r->desc.height;
 	VkRenderingAttachmentInfo ca[IDS_MAX_TARGETS];
 	for (uint32_t i = 0; i < count; i++) {
-		/* cleared to CLEARS[i] (0 without: background), depth to 1; the previous frame's compute reads of the image come first */
+		/* cleared to CLEARS[i] (0 without: background), depth to 1; the previous frame's compute reads (and writes:
+		 * stu's g) of the image come first */
 		vkdev_barrier_image(cmd, images[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
 				    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-				    VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-				    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+				    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+				    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
 		ca[i] = (VkRenderingAttachmentInfo){.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
 						    .imageView = images[i]->view,
 						    .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
