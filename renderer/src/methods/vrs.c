@@ -93,10 +93,11 @@ static int fovea_check(const void *options, char *err, size_t err_size)
 
 enum { VRS_BINDINGS = 6 };
 
-static int make_image(render *r, VkFormat fmt, VkImageUsageFlags usage, const char *name, vkdev_image *out, char *err,
-		      size_t err_size)
+/* A history image of the frame's size, or 1x1 where the method never reads it (`used` false: it is only bound). */
+static int make_image(render *r, VkFormat fmt, VkImageUsageFlags usage, bool used, const char *name, vkdev_image *out,
+		      char *err, size_t err_size)
 {
-	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, fmt,
+	VkResult res = vkdev_image_create(r->dev, used ? r->desc.width : 1, used ? r->desc.height : 1, 1, 1, fmt,
 					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | usage,
 					  VK_IMAGE_ASPECT_COLOR_BIT, false, name, out);
 	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
@@ -137,12 +138,15 @@ static int vrs_rate_init(render *r, vbuf_pass *p, void *user, char *err, size_t 
 		return render_vk_error(err, err_size, "vrs buffers", res);
 	int rc;
 	const VkImageUsageFlags att = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, "vrs history colour 0", &s->hcol[0], err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, "vrs history colour 1", &s->hcol[1], err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, 0, "vrs history position", &s->hpos, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, "vrs motion / texel density 0", &s->haux[0], err,
+	bool taas = s->kind == VRS_TAAS; /* the display colours of frames t-1 and t-2 (casedge reads the display image) */
+	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, taas, "vrs history colour 0", &s->hcol[0], err,
 			     err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, "vrs motion / texel density 1", &s->haux[1], err,
+	    (rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, 0, taas, "vrs history colour 1", &s->hcol[1], err,
+			     err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, 0, true, "vrs history position", &s->hpos, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, true, "vrs motion / texel density 0", &s->haux[0], err,
+			     err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_SFLOAT, att, true, "vrs motion / texel density 1", &s->haux[1], err,
 			     err_size)))
 		return rc;
 	VkDescriptorSetLayoutBinding b[VRS_BINDINGS];

@@ -56,14 +56,13 @@ void ids_pass_finish(render *r, ids_pass *p);
 void ids_pass_record(render *r, const ids_pass *p, VkCommandBuffer cmd, uint32_t slot);
 
 /* The pieces of ids_pass_record for passes that draw the same way with other shaders into other images (the
- * reprojecting visibility pass of methods/vreuse.c, alone or writing the ids too as a second target, stu's surface as
- * a third and fourth; the VRS methods'
- * ids pass with their per-pixel motion and texel density as the second target, methods/vrs.c): ids_begin
- * orders the previous frame's compute reads of IMAGES[0..COUNT) (COUNT <= IDS_MAX_TARGETS, colour attachments
- * 0..COUNT-1), clears them to CLEARS[0..COUNT) (NULL: all 0) and the render's depth target to 1 and begins rendering;
- * ids_draw_objects draws every opaque and masked object in scene order with PIPE / PIPE_MASK (set 1 = SET), push
- * constants' aux = (the mesh's first index, its vertex offset, aux23[0], aux23[1]); ids_end ends rendering and makes
- * the images readable by compute shaders. */
+ * reprojecting visibility pass of methods/vreuse.c, alone or writing the ids too as a second target, stu's surface as a
+ * third and fourth; the VRS methods' ids pass with their per-pixel motion and texel density as the second target,
+ * methods/vrs.c): ids_begin orders the previous frame's compute reads and writes of IMAGES[0..COUNT) (COUNT <=
+ * IDS_MAX_TARGETS, colour attachments 0..COUNT-1), clears them to CLEARS[0..COUNT) (NULL: all 0) and the render's depth
+ * target to 1 and begins rendering; ids_draw_objects draws every opaque and masked object in scene order with PIPE /
+ * PIPE_MASK (set 1 = SET), push constants' aux = (the mesh's first index, its vertex offset, aux23[0], aux23[1]);
+ * ids_end ends rendering and makes the images readable by compute shaders. */
 enum { IDS_MAX_TARGETS = 4 };
 void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count,
 	       const VkClearColorValue *clears);
