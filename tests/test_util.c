@@ -51,22 +51,13 @@ int tu_run(const char *cmd, char *out, size_t out_size)
 {
 	char full[16384];
 	snprintf(full, sizeof full, "%s %s 2>&1", tu_child_env(), cmd);
-	for (int attempt = 0;; attempt++) {
-		FILE *p = popen(full, "r");
-		if (!p)
-			return -1;
-		size_t n = fread(out, 1, out_size - 1, p);
-		out[n] = 0;
-		int st = pclose(p);
-		int rc = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-		/* LeakSanitizer's own stop-the-world tracer crashing at exit (google/sanitizers#1353, open: intermittent with
-		 * lavapipe's threads winding down) is not a leak report and not the command's result: run it once more. A
-		 * leak report ("detected memory leaks") or any other failure is returned as it is. */
-		if (!rc || attempt || !strstr(out, "Tracer caught signal") ||
-		    !strstr(out, "LeakSanitizer has encountered a fatal error"))
-			return rc;
-		fprintf(stderr, "tu_run: LeakSanitizer's tracer crashed at exit; running once more: %s\n", cmd);
-	}
+	FILE *p = popen(full, "r");
+	if (!p)
+		return -1;
+	size_t n = fread(out, 1, out_size - 1, p);
+	out[n] = 0;
+	int st = pclose(p);
+	return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
 }
 
 int tu_file_exists(const char *path)
