@@ -154,6 +154,16 @@ static void test_dash_forms_unambiguous(void **state)
 		if (strcmp(joined, want[i].forms))
 			fail_msg("%s's '-' forms: '%s', expected '%s'", want[i].method, joined, want[i].forms);
 	}
+	/* every method's forms fit the arrays its callers keep (METHOD_DASH_FORMS_MAX): the study describes each one */
+	size_t nm;
+	const method_info *const *all = method_list(&nm);
+	for (size_t i = 0; i < nm; i++) {
+		char forms[METHOD_DASH_FORMS_MAX][METHOD_DASH_FORM_B];
+		size_t k = method_dash_forms(all[i], forms, METHOD_DASH_FORMS_MAX);
+		if (k > METHOD_DASH_FORMS_MAX)
+			fail_msg("%s has %zu '-' forms, more than METHOD_DASH_FORMS_MAX (%d)", all[i]->name, k,
+				 METHOD_DASH_FORMS_MAX);
+	}
 }
 
 static void test_options(void **state)

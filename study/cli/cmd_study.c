@@ -185,9 +185,9 @@ static int describe_methods(sty *s, char *err, size_t err_size)
 		run_method_facts f;
 		method_facts(m[i], &f);
 		rc = sty_describe_method(s, m[i]->name, &f, err, err_size);
-		char forms[16][METHOD_DASH_FORM_B];
-		size_t k = method_dash_forms(m[i], forms, 16);
-		for (size_t j = 0; j < k && j < 16 && !rc; j++) {
+		char forms[METHOD_DASH_FORMS_MAX][METHOD_DASH_FORM_B];
+		size_t k = method_dash_forms(m[i], forms, METHOD_DASH_FORMS_MAX);
+		for (size_t j = 0; j < k && j < METHOD_DASH_FORMS_MAX && !rc; j++) {
 			char name[96];
 			snprintf(name, sizeof name, "%s-%s", m[i]->name, forms[j]);
 			rc = sty_describe_method(s, name, &f, err, err_size);

@@ -86,8 +86,9 @@ const method_info *method_reference(void);
 void method_facts(const method_info *m, run_method_facts *out);
 /* The '-' suffixes a variant of m may carry, in option order: a flag's name ("oracle"), a whole-number option's name
  * with each allowed value but the default ("ssaa2"), a choice's values but the default ("shadow"). Writes at most max
- * of them into out; returns how many there are. */
-enum { METHOD_DASH_FORM_B = 48 };
+ * of them into out; returns how many there are. No method has more than METHOD_DASH_FORMS_MAX (test_methods checks
+ * the registry), so an array of that many holds every method's. */
+enum { METHOD_DASH_FORM_B = 48, METHOD_DASH_FORMS_MAX = 16 };
 size_t method_dash_forms(const method_info *m, char (*out)[METHOD_DASH_FORM_B], size_t max);
 
 #define METHOD_OPTIONS_MAX_B 64

@@ -43,6 +43,10 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	const uint32_t *vs = pd->vs ? pd->vs : pd->fullscreen ? fullscreen_vert : scene_vert, *fs = pd->fs;
 	size_t vs_size = pd->vs ? pd->vs_size : pd->fullscreen ? sizeof fullscreen_vert : sizeof scene_vert;
 	size_t fs_size = pd->fs_size;
+	/* 0 to 4 colour attachments: 4 is every Vulkan device's maxColorAttachments at least; more is a caller's error,
+	 * refused rather than cut to four (the shader would write attachments the pass does not have) */
+	if (pd->color < 0 || pd->color > 4)
+		return VK_ERROR_FEATURE_NOT_PRESENT;
 	VkShaderModule vm = VK_NULL_HANDLE, fm = VK_NULL_HANDLE;
 	VkResult res = vkdev_shader_module(r->dev, vs, vs_size, &vm);
 	if (!res && fs)
@@ -135,7 +139,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 		.colorWriteMask = 0xF,
 	};
 	/* pd->color attachments (0 to 4), one blend state; the second of color2_format where set */
-	uint32_t ncolor = pd->color > 4 ? 4u : (uint32_t)(pd->color > 0 ? pd->color : 0);
+	uint32_t ncolor = (uint32_t)pd->color;
 	VkPipelineColorBlendAttachmentState cbas[4] = {cba, cba, cba, cba};
 	VkPipelineColorBlendStateCreateInfo cb = {
 		.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,

@@ -267,9 +267,9 @@ size_t method_dash_forms(const method_info *m, char (*out)[METHOD_DASH_FORM_B], 
 /* "its '-' forms: -oracle, -ssaa2, -shadow, -diffuse" (method_dash_forms), or "it has none". */
 static void dash_forms(const method_info *m, char *out, size_t n)
 {
-	char forms[16][METHOD_DASH_FORM_B];
-	size_t k = method_dash_forms(m, forms, 16), len = (size_t)snprintf(out, n, "its '-' forms:");
-	for (size_t i = 0; i < k && i < 16 && len < n; i++)
+	char forms[METHOD_DASH_FORMS_MAX][METHOD_DASH_FORM_B];
+	size_t k = method_dash_forms(m, forms, METHOD_DASH_FORMS_MAX), len = (size_t)snprintf(out, n, "its '-' forms:");
+	for (size_t i = 0; i < k && i < METHOD_DASH_FORMS_MAX && len < n; i++)
 		len += (size_t)snprintf(out + len, n - len, "%s -%s", i ? "," : "", forms[i]);
 	if (!k)
 		snprintf(out, n, "it has none");

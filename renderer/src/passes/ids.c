@@ -160,6 +160,7 @@ void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images,
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
 	VkRenderingAttachmentInfo ca[IDS_MAX_TARGETS];
+	count = count < IDS_MAX_TARGETS ? count : IDS_MAX_TARGETS; /* the pipeline of more was refused (pipeline.c) */
 	for (uint32_t i = 0; i < count; i++) {
 		/* cleared to CLEARS[i] (0 without: background), depth to 1; the previous frame's compute reads (and writes:
 		 * stu's g) of the image come first */
