@@ -265,6 +265,9 @@ static void test_model_bad_input(void **state)
 		 "\"interval_half_width_log2\""},
 		{"{\"format\": \"taslab study model 1\", \"metric\": \"flip_mean\", \"metric\": \"flicker_mean\"}",
 		 "not a model"},
+		/* a raw newline in an unterminated string, which jansson quotes in its message (found by fuzz_model) */
+		{"{\"format\": \"taslab study model 1\", \"metric\": \"\\\n", "not a model"},
+		{"", "not a model"},
 	};
 	char mpath[4200], out[4096];
 	snprintf(mpath, sizeof mpath, "%s/bad-model.json", dir);

@@ -10,6 +10,7 @@
 
 #include "study_internal.h"
 #include "taslab/study_model.h"
+#include "taslab/tl_json.h"
 
 #define KEY_LEN 160
 #define MAX_COLS 256
@@ -629,9 +630,11 @@ static bool json_num(json_t *v, bool null_ok, double *out)
 static int model_load(const char *path, saved *m, char *err, size_t err_size)
 {
 	memset(m, 0, sizeof *m);
-	json_error_t je;
-	if (!(m->root = json_load_file(path, JSON_REJECT_DUPLICATES, &je)))
-		return tl_error(err, err_size, TL_ERR_ARG, "--model %s: not a model: %s (line %d)", path, je.text, je.line);
+	/* tl_json_read: bounded in size and depth, regular files only, and jansson's quote of the input made one line
+	 * (a raw newline in a string was quoted into the message: found by fuzz_model, 2026-11-27) */
+	char why_json[768];
+	if (tl_json_read(path, &m->root, why_json, sizeof why_json))
+		return tl_error(err, err_size, TL_ERR_ARG, "--model %s: not a model: %s", path, why_json);
 	const char *why = NULL;
 	json_t *r = m->root, *lo = json_object_get(r, "leave_one_scene_out");
 	const char *format = json_string_value(json_object_get(r, "format"));
@@ -808,10 +811,10 @@ int sty_model_run(const sty_model_desc *d, sty_model_summary *s, char *err, size
 int sty_model_prior(const char *model_json, const char *method, long period, const char *scene, const char *camera,
 		    double *theta, double *sd, char *err, size_t err_size)
 {
-	json_error_t je;
-	json_t *root = json_load_file(model_json, 0, &je);
-	if (!root)
-		return tl_error(err, err_size, TL_ERR_ARG, "--prior %s: %s (line %d)", model_json, je.text, je.line);
+	json_t *root = NULL;
+	char why_json[768];
+	if (tl_json_read(model_json, &root, why_json, sizeof why_json))
+		return tl_error(err, err_size, TL_ERR_ARG, "--prior %s: not a model: %s", model_json, why_json);
 	json_t *preds = json_object_get(root, "predictions");
 	double half = json_number_value(json_object_get(root, "interval_half_width_log2"));
 	if (!json_is_array(preds) || !json_is_number(json_object_get(root, "interval_half_width_log2"))) {

@@ -75,13 +75,10 @@ void vbuf_family_record(render *r, VkCommandBuffer cmd, uint32_t frame)
 	} else {
 		/* level 0, then per step s = s0 .. 2 its diamond and square sub-steps, each a select and a shade */
 		float S = s->v.force ? -1.0f : s->v.S;
-		vbuf_record_ads_step(r, p, cmd, s->v.step, 0, S, s->v.edge_guard);
-		vbuf_record_shade(r, p, cmd, 0);
+		vbuf_record_ads_step(r, p, cmd, s->v.step, 0, S, s->v.edge_guard, false);
 		for (uint32_t step = s->v.step; step >= 2; step /= 2)
-			for (uint32_t kind = 1; kind <= 2; kind++) {
-				vbuf_record_ads_step(r, p, cmd, step, kind, S, s->v.edge_guard);
-				vbuf_record_shade(r, p, cmd, 0);
-			}
+			for (uint32_t kind = 1; kind <= 2; kind++)
+				vbuf_record_ads_step(r, p, cmd, step, kind, S, s->v.edge_guard, step == 2 && kind == 2);
 	}
 	render_ts(r, cmd);
 	vbuf_record_resolve(r, p, cmd);

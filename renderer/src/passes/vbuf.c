@@ -102,12 +102,14 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 	snprintf(shade_defs, sizeof shade_defs, "%s%s%s", mode,
 		 g && !strcmp(g, "analytic") ? "#define VBUF_ANALYTIC_GRADIENTS 1\n" : "",
 		 v->centroid ? "#define VBUF_CENTROID 1\n" : "");
+	const char *plain_defs = shade_defs + strlen(mode); /* the same without ADS */
 	if ((rc = vbuf_make_compute(r, v, "vbuf/args.comp.in", mode, &v->args, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, "vbuf/shade.comp.in", shade_defs, &v->shade, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, "vbuf/resolve.comp.in", mode, &v->resolve, err, err_size)) ||
 	    (rc = vbuf_make_compute(r, v, ads ? "vbuf/ads_select.comp.in" : "vbuf/select.comp.in", mode,
 				    ads ? &v->ads_select : &v->select, err, err_size)) ||
 	    (ads && (rc = vbuf_make_compute(r, v, "vbuf/ads_display.comp.in", mode, &v->ads_display, err, err_size))) ||
+	    (ads && (rc = vbuf_make_compute(r, v, "vbuf/shade.comp.in", plain_defs, &v->shade_last, err, err_size))) ||
 	    (v->truth && (rc = vbuf_make_compute(r, v, "vbuf/truth.comp.in", shade_defs, &v->truth_pipe, err, err_size))))
 		return rc;
 	/* the samples image starts at 0 in GENERAL layout */
@@ -133,8 +135,9 @@ int vbuf_init(render *r, vbuf_pass *v, bool ads, char *err, size_t err_size)
 void vbuf_finish(render *r, vbuf_pass *v)
 {
 	VkDevice d = r->dev->device;
-	VkPipeline p[7] = {v->select, v->args, v->shade, v->resolve, v->ads_select, v->ads_display, v->truth_pipe};
-	for (int i = 0; i < 7; i++)
+	VkPipeline p[8] = {v->select, v->args,        v->shade,      v->resolve,
+			   v->ads_select, v->ads_display, v->truth_pipe, v->shade_last};
+	for (size_t i = 0; i < sizeof p / sizeof p[0]; i++)
 		if (p[i])
 			vkDestroyPipeline(d, p[i], NULL);
 	if (v->layout)
@@ -193,7 +196,8 @@ void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd)
 	record_args(r, v, cmd);
 }
 
-void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard)
+void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard,
+			  bool last)
 {
 	uint32_t sbits;
 	memcpy(&sbits, &S, sizeof sbits);
@@ -207,9 +211,16 @@ void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t
 	if (nx && ny)
 		vkCmdDispatch(cmd, (nx + 7) / 8, (ny + 7) / 8, kind == 2 ? 2 : 1);
 	record_args(r, v, cmd);
-	/* the interpolated pixels' display values, before the next step reads them (ads_display.comp.in) */
-	vbuf_bind(r, v, cmd, v->ads_display, 0, NULL);
-	vkCmdDispatchIndirect(cmd, v->counters.buffer, 12 * sizeof(uint32_t));
+	/* the interpolated pixels' display values, before the next step reads them (ads_display.comp.in); the shaded
+	 * pixels' are stored by the shade. The last step's pixels are no step's neighbours: neither (half the pixels
+	 * of a frame, each a display transform and a store; 2026-11-27 README bench-ads-last) */
+	if (!last) {
+		vbuf_bind(r, v, cmd, v->ads_display, 0, NULL);
+		vkCmdDispatchIndirect(cmd, v->counters.buffer, 12 * sizeof(uint32_t));
+		vbuf_barrier(cmd);
+	}
+	vbuf_bind(r, v, cmd, last ? v->shade_last : v->shade, 0, NULL);
+	vkCmdDispatchIndirect(cmd, v->counters.buffer, 2 * sizeof(uint32_t));
 	vbuf_barrier(cmd);
 }
 

@@ -43,6 +43,7 @@ typedef struct vbuf_pass {
 	VkDescriptorSet set;
 	VkPipelineLayout layout;     /* sets 0 (scene) and 1 (this), push constants gpu_push */
 	VkPipeline select, args, shade, resolve, ads_select, ads_display, truth_pipe;
+	VkPipeline shade_last; /* ads: the shade of its last step, without the display values (vref's shade) */
 } vbuf_pass;
 
 /* `ads`: the ads select pass instead of the rate select; `shade_defs`: extra #defines of the shade pass. */
@@ -60,9 +61,11 @@ void vbuf_barrier(VkCommandBuffer cmd);
 void vbuf_record_begin(render *r, vbuf_pass *v, VkCommandBuffer cmd);
 /* The rate select (vref, VRS) and its dispatch arguments. */
 void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd);
-/* One ads select step (ads_select.comp.in: s, kind 0 level 0 / 1 diamond / 2 square), threshold S, edge guard,
- * and its dispatch arguments. */
-void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard);
+/* One ads step: its select (ads_select.comp.in: s, kind 0 level 0 / 1 diamond / 2 square, threshold S, edge guard),
+ * dispatch arguments and indirect shade. Every step but the LAST also stores its pixels' display code values for the
+ * later steps' variance (ads_display.comp.in, shade.comp.in with ADS); no step reads the last step's pixels. */
+void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard,
+			  bool last);
 /* The indirect shade of the list the last select built. */
 void vbuf_record_shade(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t slot);
 /* The HDR target cleared to the sky and the resolve (the target stays GENERAL). */
