@@ -196,8 +196,8 @@ void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd)
 	record_args(r, v, cmd);
 }
 
-void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard,
-			  bool last)
+void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S,
+			  bool edge_guard, bool last)
 {
 	uint32_t sbits;
 	memcpy(&sbits, &S, sizeof sbits);

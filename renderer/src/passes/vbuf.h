@@ -64,8 +64,8 @@ void vbuf_record_select(render *r, vbuf_pass *v, VkCommandBuffer cmd);
 /* One ads step: its select (ads_select.comp.in: s, kind 0 level 0 / 1 diamond / 2 square, threshold S, edge guard),
  * dispatch arguments and indirect shade. Every step but the LAST also stores its pixels' display code values for the
  * later steps' variance (ads_display.comp.in, shade.comp.in with ADS); no step reads the last step's pixels. */
-void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S, bool edge_guard,
-			  bool last);
+void vbuf_record_ads_step(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t s, uint32_t kind, float S,
+			  bool edge_guard, bool last);
 /* The indirect shade of the list the last select built. */
 void vbuf_record_shade(render *r, vbuf_pass *v, VkCommandBuffer cmd, uint32_t slot);
 /* The HDR target cleared to the sky and the resolve (the target stays GENERAL). */
