@@ -632,9 +632,9 @@ static int model_load(const char *path, saved *m, char *err, size_t err_size)
 	memset(m, 0, sizeof *m);
 	/* tl_json_read: bounded in size and depth, regular files only, and jansson's quote of the input made one line
 	 * (a raw newline in a string was quoted into the message: found by fuzz_model, 2026-11-27) */
-	char why_json[768];
+	char why_json[4608]; /* names the file first */
 	if (tl_json_read(path, &m->root, why_json, sizeof why_json))
-		return tl_error(err, err_size, TL_ERR_ARG, "--model %s: not a model: %s", path, why_json);
+		return tl_error(err, err_size, TL_ERR_ARG, "--model: not a model: %s", why_json);
 	const char *why = NULL;
 	json_t *r = m->root, *lo = json_object_get(r, "leave_one_scene_out");
 	const char *format = json_string_value(json_object_get(r, "format"));
@@ -812,9 +812,9 @@ int sty_model_prior(const char *model_json, const char *method, long period, con
 		    double *theta, double *sd, char *err, size_t err_size)
 {
 	json_t *root = NULL;
-	char why_json[768];
+	char why_json[4608]; /* names the file first */
 	if (tl_json_read(model_json, &root, why_json, sizeof why_json))
-		return tl_error(err, err_size, TL_ERR_ARG, "--prior %s: not a model: %s", model_json, why_json);
+		return tl_error(err, err_size, TL_ERR_ARG, "--prior: not a model: %s", why_json);
 	json_t *preds = json_object_get(root, "predictions");
 	double half = json_number_value(json_object_get(root, "interval_half_width_log2"));
 	if (!json_is_array(preds) || !json_is_number(json_object_get(root, "interval_half_width_log2"))) {

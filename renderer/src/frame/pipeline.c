@@ -46,7 +46,7 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
 	/* 0 to 4 colour attachments: 4 is every Vulkan device's maxColorAttachments at least; more is a caller's error,
 	 * refused rather than cut to four (the shader would write attachments the pass does not have) */
 	if (pd->color < 0 || pd->color > 4)
-		return VK_ERROR_FEATURE_NOT_PRESENT;
+		return VK_ERROR_INITIALIZATION_FAILED;
 	VkShaderModule vm = VK_NULL_HANDLE, fm = VK_NULL_HANDLE;
 	VkResult res = vkdev_shader_module(r->dev, vs, vs_size, &vm);
 	if (!res && fs)

@@ -160,7 +160,7 @@ void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images,
 {
 	uint32_t w = r->desc.width, h = r->desc.height;
 	VkRenderingAttachmentInfo ca[IDS_MAX_TARGETS];
-	count = count < IDS_MAX_TARGETS ? count : IDS_MAX_TARGETS; /* the pipeline of more was refused (pipeline.c) */
+	count = count < IDS_MAX_TARGETS ? count : IDS_MAX_TARGETS; /* as ids_end; its pipeline has as many (at most 4) */
 	for (uint32_t i = 0; i < count; i++) {
 		/* cleared to CLEARS[i] (0 without: background), depth to 1; the previous frame's compute reads (and writes:
 		 * stu's g) of the image come first */
@@ -187,6 +187,7 @@ void ids_begin(render *r, VkCommandBuffer cmd, const vkdev_image *const *images,
 
 void ids_end(VkCommandBuffer cmd, const vkdev_image *const *images, uint32_t count)
 {
+	count = count < IDS_MAX_TARGETS ? count : IDS_MAX_TARGETS; /* as ids_begin */
 	vkCmdEndRendering(cmd);
 	for (uint32_t i = 0; i < count; i++)
 		vkdev_barrier_image(cmd, images[i], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
