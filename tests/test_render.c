@@ -11,6 +11,8 @@
 #include "taslab/vkdev.h"
 #include "test_vk.h"
 
+#include "../renderer/src/frame/render_internal.h" /* render_make_graphics */
+
 #define W 96
 #define H 54
 
@@ -147,6 +149,15 @@ static void test_bad_arguments(void **state)
 	d.camera = 0;
 	d.width = 0;
 	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), TL_ERR_ARG);
+	/* a graphics pipeline of more colour attachments than every device has (4) is refused, not cut to four */
+	d.width = W;
+	assert_int_equal(render_create(dev, &d, &r, err, sizeof err), TL_OK);
+	render_pipeline p = {0};
+	render_pipe_desc pd = {.color = 5, .depth_write = 1};
+	assert_int_equal(render_make_graphics(r, &pd, &p), VK_ERROR_INITIALIZATION_FAILED);
+	assert_true(p.pipeline == VK_NULL_HANDLE && p.layout == VK_NULL_HANDLE);
+	render_destroy(&r);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
 }
 
 static void test_builtin_scenes_render(void **state)
