@@ -2,7 +2,8 @@
  * (any message fails), tfr_static (a textured floor, a box, a shadow-casting sun) at 48 x 32 and 49 x 31:
  *  stu/2, stu/4 (BASELINES' N) and stu/8 (at 49 x 31: stu/4), static view: every frame shades exactly the covered
  *  phase pixels of the interleaved pattern (the CPU count of rrc-interleaved/N's refresh set); from frame 2N + 5 on the frames equal vref (display and HDR:
- *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); determinism.
+ *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); the misses (new_units): every
+ *  covered pixel in frame 0, none later (also counted one atomic per pixel, TASLAB_COUNT_ATOMICS); determinism.
  *  The first frame equal to vref is exactly 2N + 1, which checks the temporal smoothing of g: in frames 0..N-1 every
  *  phase sample is a first one (g = 8), so D = 8; from frame N on g = 0 (a static view), so D = 4, 2, 1, 1/2 in
  *  frames N..N+3 and c = clamp((8 - D) / 7.5, 0, 1) reaches 1 at N+3; a pixel equals vref from its first phase frame
@@ -45,6 +46,9 @@ static void stu_static(vkdev *dev, const scene *s, uint32_t W, uint32_t H, uint3
 					want += tu_half_to_float(v.hdr[f][4 * ((size_t)y * W + x) + 3]) != 0.0f && x % a == k % a &&
 						y % b == k / a;
 			assert_int_equal(c.st[f].shaded_samples, want);
+			/* the misses (new_units, counted by the stu pass): every covered pixel in frame 0 (no history), none
+			 * after it (a static view: each pixel's previous record is its own) */
+			assert_int_equal(c.st[f].new_units, f == 0 ? c.st[f].visible_samples : 0);
 			bool same = !memcmp(c.disp[f], v.disp[f], px * 4) && !memcmp(c.hdr[f], v.hdr[f], px * 8);
 			if (same && first_equal < 0)
 				first_equal = (int)f;
@@ -67,6 +71,9 @@ static void test_static(void **state)
 	enum { W = 48, H = 32 };
 	stu_static(dev, s, W, H, 2, 8); /* the 2x1, 2x2 and 4x2 cells */
 	stu_static(dev, s, 49, 31, 4, 4); /* a size no 4x4 decide block and no 8x8 workgroup divides */
+	setenv("TASLAB_COUNT_ATOMICS", "1", 1); /* the misses counted one atomic per pixel, not per subgroup */
+	stu_static(dev, s, 49, 31, 4, 4);
+	unsetenv("TASLAB_COUNT_ATOMICS");
 	tu_clip a1 = tu_render_clip(dev, s, 0, "stu/4", NULL, NULL, W, H, 3, false);
 	tu_clip a2 = tu_render_clip(dev, s, 0, "stu/4", NULL, NULL, W, H, 3, false);
 	tu_assert_same_frames(&a1, &a2, true);

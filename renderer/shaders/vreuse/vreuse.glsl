@@ -9,7 +9,13 @@
 #define TASLAB_VREUSE_GLSL
 
 layout(set = 2, binding = 0, rgba16f) uniform image2D cache_col;
-layout(set = 2, binding = 1, rgba32ui) uniform uimage2D cache_rec;
+// the cache's record: stu keeps (object + 1, view distance bits) alone, in two channels (vreuse.c)
+#ifdef STU
+#define VREUSE_REC_FORMAT rg32ui
+#else
+#define VREUSE_REC_FORMAT rgba32ui
+#endif
+layout(set = 2, binding = 1, VREUSE_REC_FORMAT) uniform uimage2D cache_rec;
 layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record
 layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded this frame, 2 a hole (warp)
 #ifndef VREUSE_PYR_QUALIFIER
@@ -28,7 +34,7 @@ layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
 layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 // the cache of the next frame: rrc variants, the other of two cache images (swapped per frame, so that decide can
 // write it while its lookups read cache_rec); the other methods, cache_rec itself
-layout(set = 2, binding = 8, rgba32ui) uniform writeonly uimage2D cache_next;
+layout(set = 2, binding = 8, VREUSE_REC_FORMAT) uniform writeonly uimage2D cache_next;
 // amss: frames since each subsample of sub_prev / sub_next took its own sample (amss.comp.in)
 layout(set = 2, binding = 9, r32ui) uniform readonly uimage2D age_prev;
 layout(set = 2, binding = 10, r32ui) uniform writeonly uimage2D age_next;

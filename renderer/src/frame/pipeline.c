@@ -38,6 +38,18 @@ render_count_mode render_count_mode_of(VkPhysicalDevice pd)
 	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_SUBGROUP;
 }
 
+bool render_compute_ballot(VkPhysicalDevice pd)
+{
+	const char *force = getenv("TASLAB_COUNT_ATOMICS");
+	if (force && strcmp(force, "1") == 0)
+		return false;
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
+	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+	return (sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sp.supportedOperations & need) == need;
+}
+
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)
 {
 	const uint32_t *vs = pd->vs ? pd->vs : pd->fullscreen ? fullscreen_vert : scene_vert, *fs = pd->fs;

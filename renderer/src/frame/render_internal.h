@@ -258,6 +258,9 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
  * fragment otherwise, or with TASLAB_COUNT_ATOMICS=1 in the environment (test_reuse compares the two). */
 typedef enum { RENDER_COUNT_ATOMIC = 0, RENDER_COUNT_SUBGROUP, RENDER_COUNT_SUBGROUP_NO_HELPERS } render_count_mode;
 render_count_mode render_count_mode_of(VkPhysicalDevice pd);
+/* Whether compute shaders may count with ballot subgroup operations (TL_SUBGROUP: one atomic per subgroup; compute
+ * has no helper invocations); false also with TASLAB_COUNT_ATOMICS=1. */
+bool render_compute_ballot(VkPhysicalDevice pd);
 /* Specialisation constants of every pipeline (entries for constants a shader does not declare are ignored):
  * 0 ALPHA_BLEND (shade.frag), 2 LIGHT_COUNT and 3 + i LIGHT_SHADOW_i (shading.glsl: the light loop unrolled,
  * each light's shadow chunk a constant). */

@@ -67,12 +67,8 @@ static reproj_state *state_of(render *r) { return r->method_state; }
 static const char *count_defines(VkPhysicalDevice pd, bool compute)
 {
 	render_count_mode mode = render_count_mode_of(pd);
-	if (compute && mode != RENDER_COUNT_ATOMIC) {
-		VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-		VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-		vkGetPhysicalDeviceProperties2(pd, &p2);
-		mode = sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_ATOMIC;
-	}
+	if (compute)
+		mode = render_compute_ballot(pd) ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_ATOMIC;
 	switch (mode) {
 	case RENDER_COUNT_SUBGROUP_NO_HELPERS:
 		return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";

@@ -23,7 +23,7 @@ typedef struct vreuse_state {
 	vreuse_variant v;
 	vbuf_pass p;
 	vkdev_image cache_col, cache_rec, rec_new, flag;
-	vkdev_image cache_rec2; /* rrc: the second cache, swapped with cache_rec per frame (1x1 for the others) */
+	vkdev_image cache_rec2; /* rrc, stu: the second cache, swapped with cache_rec per frame (1x1 for the others) */
 	vkdev_buffer pyr;  /* warp: the pull-push pyramid, vec4 (rgb, weight) per node of levels 1 up; one texel for the
 			    * others */
 	vkdev_image spos, snrm; /* stu: each pixel's world position and g, its normal and object + 1, as float bits
@@ -120,8 +120,10 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	int rc = vbuf_init(r, &s->p, false, err, err_size);
 	if (rc)
 		return rc;
+	/* stu's record is (object + 1, view distance) alone: two channels (vreuse.glsl VREUSE_REC_FORMAT) */
+	VkFormat rec_format = v->mode == VREUSE_STU ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32G32B32A32_UINT;
 	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vreuse cache colour", &s->cache_col, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse cache record", &s->cache_rec, err, err_size)) ||
+	    (rc = make_image(r, rec_format, "vreuse cache record", &s->cache_rec, err, err_size)) ||
 	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse record", &s->rec_new, err, err_size)) ||
 	    (rc = make_image(r, VK_FORMAT_R32_UINT, "vreuse flags", &s->flag, err, err_size)))
 		return rc;
@@ -141,8 +143,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 			return render_vk_error(err, err_size, "amss sub-pixel age", r2);
 	}
 	bool warp = v->mode == VREUSE_WARP, rrc = v->mode == VREUSE_RRC_RANDOM || v->mode == VREUSE_RRC_INTERLEAVED;
-	VkResult rc2 = vkdev_image_create(r->dev, rrc ? r->desc.width : 1, rrc ? r->desc.height : 1, 1, 1,
-					  VK_FORMAT_R32G32B32A32_UINT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+	bool two_recs = rrc || stu; /* the cache record read (the previous frame's) and the one written, swapped */
+	VkResult rc2 = vkdev_image_create(r->dev, two_recs ? r->desc.width : 1, two_recs ? r->desc.height : 1, 1, 1,
+					  rec_format, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 					  VK_IMAGE_ASPECT_COLOR_BIT, false, "vreuse cache record 2", &s->cache_rec2);
 	if (rc2)
 		return render_vk_error(err, err_size, "vreuse cache record 2", rc2);
@@ -191,9 +194,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					  .descriptorPool = r->pool, .descriptorSetCount = 2, .pSetLayouts = two};
 	if ((res = vkAllocateDescriptorSets(d, &ai, s->set)))
 		return render_vk_error(err, err_size, "vreuse: descriptor set", res);
-	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's; rrc: the
-				       * cache recs[1 - i] is read, recs[i] written (cache_next) */
-		const vkdev_image *recs[2] = {&s->cache_rec, rrc ? &s->cache_rec2 : &s->cache_rec};
+	for (int i = 0; i < 2; i++) { /* set i: sub[i] is this frame's buffer, sub[1 - i] the previous frame's; rrc, stu:
+				       * the cache recs[1 - i] is read, recs[i] written (cache_next) */
+		const vkdev_image *recs[2] = {&s->cache_rec, two_recs ? &s->cache_rec2 : &s->cache_rec};
 		const vkdev_image *imgs[VREUSE_BINDINGS] = {&s->cache_col, recs[1 - i], &s->rec_new, &s->flag, NULL,
 							    &s->sub[1 - i], &s->sub[i], &s->vis, recs[i],
 							    &s->age[1 - i], &s->age[i], &s->snrm, &s->spos};
@@ -207,7 +210,7 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 	if ((res = vkCreatePipelineLayout(d, &pli, NULL, &s->layout)))
 		return render_vk_error(err, err_size, "vreuse: pipeline layout", res);
 	if ((rc = make_compute(r, s, "vreuse/decide.comp.in", &s->decide, err, err_size)) ||
-	    (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size)) ||
+	    (!stu && (rc = make_compute(r, s, "vreuse/resolve.comp.in", &s->resolve, err, err_size))) ||
 	    (rc = make_compute(r, s, "vreuse/pull.comp.in", &s->pull, err, err_size)) ||
 	    (rc = make_compute(r, s, "vreuse/push.comp.in", &s->push, err, err_size)) ||
 	    (rc = make_compute_x(r, s, "vreuse/push.comp.in", "#define FILL_ARGS 1\n", &s->fill_args, err, err_size)))
@@ -222,7 +225,9 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 					     err_size))))
 		return rc;
 	if (stu && ((rc = make_compute_x(r, s, "vreuse/stu.comp.in", "#define STU_G 1\n", &s->stu_g, err, err_size)) ||
-		    (rc = make_compute(r, s, "vreuse/stu.comp.in", &s->stu, err, err_size))))
+		    (rc = make_compute_x(r, s, "vreuse/stu.comp.in",
+					 render_compute_ballot(r->dev->physical) ? "#define TL_SUBGROUP 1\n" : "", &s->stu, err,
+					 err_size))))
 		return rc;
 	/* the cache starts empty (object 0) in GENERAL layout */
 	VkCommandBuffer cmd;
@@ -322,9 +327,9 @@ static void record_decide(render *r, vreuse_state *s, VkCommandBuffer cmd, uint3
 	vbuf_barrier(cmd);
 }
 
-/* The resolve: the cache := the frame's opaque values (before BLEND) and its record (resolve.comp.in); amss, stu: the
+/* The resolve: the cache := the frame's opaque values (before BLEND) and its record (resolve.comp.in); amss: the
  * shaded pixels' values into the HDR target first; rrc variants: the shaded pixels' texels only (decide stored the
- * reused ones, the shade wrote the HDR target). */
+ * reused ones, the shade wrote the HDR target); stu has none (stu.comp.in keeps its record). */
 static void record_resolve(render *r, vreuse_state *s, VkCommandBuffer cmd)
 {
 	uint32_t aux[4] = {0, 0, 0, 0};
@@ -498,10 +503,10 @@ static void record_stu(render *r, vreuse_state *s, VkCommandBuffer cmd, uint32_t
 	bind(r, s, cmd, s->stu_g, aux);
 	vkCmdDispatchIndirect(cmd, p->counters.buffer, 2 * sizeof(uint32_t));
 	vbuf_barrier(cmd);
+	/* the output, the next frame's record and L (stu.comp.in): no resolve pass */
 	bind(r, s, cmd, s->stu, aux);
 	dispatch_pixels(r, cmd);
 	vbuf_barrier(cmd);
-	record_resolve(r, s, cmd);
 	record_truth(r, s, cmd);
 }
 
