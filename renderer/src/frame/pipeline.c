@@ -22,32 +22,37 @@ void render_specialization(const render *r, int alpha_blend, render_spec *data, 
 	*out = (VkSpecializationInfo){RENDER_SPEC_COUNT, data->entries, sizeof data->values, data->values};
 }
 
-render_count_mode render_count_mode_of(VkPhysicalDevice pd)
+/* Whether env names "1" (a test's switch to the one-atomic-per-invocation paths). */
+static bool env_is_one(const char *env)
 {
-	const char *force = getenv("TASLAB_COUNT_ATOMICS");
-	if (force && strcmp(force, "1") == 0)
-		return RENDER_COUNT_ATOMIC;
-	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES, .pNext = &dp};
+	const char *v = getenv(env);
+	return v && strcmp(v, "1") == 0;
+}
+
+bool render_subgroup_has(VkPhysicalDevice pd, VkShaderStageFlags stage, VkSubgroupFeatureFlags ops)
+{
+	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
 	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
 	vkGetPhysicalDeviceProperties2(pd, &p2);
-	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
-	if (!(sp.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) || (sp.supportedOperations & need) != need)
+	return (sp.supportedStages & stage) == stage && (sp.supportedOperations & ops) == ops;
+}
+
+render_count_mode render_count_mode_of(VkPhysicalDevice pd)
+{
+	VkSubgroupFeatureFlags ballot = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+	if (env_is_one("TASLAB_COUNT_ATOMICS") || !render_subgroup_has(pd, VK_SHADER_STAGE_FRAGMENT_BIT, ballot))
 		return RENDER_COUNT_ATOMIC;
+	VkPhysicalDeviceDriverProperties dp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &dp};
+	vkGetPhysicalDeviceProperties2(pd, &p2);
 	/* llvmpipe shades whole 4x4 blocks with the uncovered lanes masked off: no helper invocations to leave out */
 	return dp.driverID == VK_DRIVER_ID_MESA_LLVMPIPE ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_SUBGROUP;
 }
 
 bool render_compute_ballot(VkPhysicalDevice pd)
 {
-	const char *force = getenv("TASLAB_COUNT_ATOMICS");
-	if (force && strcmp(force, "1") == 0)
-		return false;
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-	vkGetPhysicalDeviceProperties2(pd, &p2);
-	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
-	return (sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sp.supportedOperations & need) == need;
+	VkSubgroupFeatureFlags ballot = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+	return !env_is_one("TASLAB_COUNT_ATOMICS") && render_subgroup_has(pd, VK_SHADER_STAGE_COMPUTE_BIT, ballot);
 }
 
 VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipeline *out)

@@ -258,6 +258,8 @@ VkResult render_make_graphics(render *r, const render_pipe_desc *pd, render_pipe
  * fragment otherwise, or with TASLAB_COUNT_ATOMICS=1 in the environment (test_reuse compares the two). */
 typedef enum { RENDER_COUNT_ATOMIC = 0, RENDER_COUNT_SUBGROUP, RENDER_COUNT_SUBGROUP_NO_HELPERS } render_count_mode;
 render_count_mode render_count_mode_of(VkPhysicalDevice pd);
+/* Whether the device has the subgroup operations ops in every stage of stage. */
+bool render_subgroup_has(VkPhysicalDevice pd, VkShaderStageFlags stage, VkSubgroupFeatureFlags ops);
 /* Whether compute shaders may count with ballot subgroup operations (TL_SUBGROUP: one atomic per subgroup; compute
  * has no helper invocations); false also with TASLAB_COUNT_ATOMICS=1. */
 bool render_compute_ballot(VkPhysicalDevice pd);

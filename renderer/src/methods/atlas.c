@@ -265,12 +265,9 @@ static bool has_subgroup_reduction(VkPhysicalDevice pd)
 	const char *force = getenv("TASLAB_ATLAS_ATOMICS");
 	if (force && strcmp(force, "1") == 0)
 		return false;
-	VkPhysicalDeviceSubgroupProperties sp = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-	VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &sp};
-	vkGetPhysicalDeviceProperties2(pd, &p2);
 	VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT |
 				      VK_SUBGROUP_FEATURE_VOTE_BIT;
-	return (sp.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sp.supportedOperations & need) == need;
+	return render_subgroup_has(pd, VK_SHADER_STAGE_COMPUTE_BIT, need);
 }
 
 /* TAS-METHODS section 4: "record s, rho, lmax, hysteresis in the manifest" — s and lmax are options; these are what
