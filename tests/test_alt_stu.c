@@ -3,7 +3,8 @@
  *  stu/2, stu/4 (BASELINES' N) and stu/8 (at 49 x 31: stu/4), static view: every frame shades exactly the covered
  *  phase pixels of the interleaved pattern (the CPU count of rrc-interleaved/N's refresh set); from frame 2N + 5 on the frames equal vref (display and HDR:
  *  D has fallen below 1/2, so c = 1, and every pixel has been reshaded once since); the misses (new_units): every
- *  covered pixel in frame 0, none later (also counted one atomic per pixel, TASLAB_COUNT_ATOMICS); determinism.
+ *  covered pixel in frame 0, none later; determinism. Under motion (test_slide) the misses are exactly the pixels the
+ *  moving card uncovered, counted per subgroup and, with TASLAB_COUNT_ATOMICS, one atomic per pixel.
  *  The first frame equal to vref is exactly 2N + 1, which checks the temporal smoothing of g: in frames 0..N-1 every
  *  phase sample is a first one (g = 8), so D = 8; from frame N on g = 0 (a static view), so D = 4, 2, 1, 1/2 in
  *  frames N..N+3 and c = clamp((8 - D) / 7.5, 0, 1) reaches 1 at N+3; a pixel equals vref from its first phase frame
@@ -71,9 +72,6 @@ static void test_static(void **state)
 	enum { W = 48, H = 32 };
 	stu_static(dev, s, W, H, 2, 8); /* the 2x1, 2x2 and 4x2 cells */
 	stu_static(dev, s, 49, 31, 4, 4); /* a size no 4x4 decide block and no 8x8 workgroup divides */
-	setenv("TASLAB_COUNT_ATOMICS", "1", 1); /* the misses counted one atomic per pixel, not per subgroup */
-	stu_static(dev, s, 49, 31, 4, 4);
-	unsetenv("TASLAB_COUNT_ATOMICS");
 	tu_clip a1 = tu_render_clip(dev, s, 0, "stu/4", NULL, NULL, W, H, 3, false);
 	tu_clip a2 = tu_render_clip(dev, s, 0, "stu/4", NULL, NULL, W, H, 3, false);
 	tu_assert_same_frames(&a1, &a2, true);
@@ -164,11 +162,80 @@ static void test_surface(void **state)
 	vkdev_destroy(&dev);
 }
 
+/* stu/4 on tests/data/stu_slide.json, frames 10..16 at 64 x 32: a card 1 unit above a floor, the camera straight down
+ * (screen x = world x, 4 px a unit at the card's depth), the card moving 0.5 units = 2 px a frame to the right, its
+ * edges on pixel boundaries. The misses (new_units) of a frame after the first: the covered pixels whose previous
+ * record (at the nearest pixel to where their surface point was in frame t-1) names another object - exactly the
+ * floor pixels the card has just left (card at t-1, floor at t: 2 x 12 a frame; the card's pixels were card 2 px to
+ * the left), counted here from the frames' ids. A pass that read the record it is writing (one image, not two
+ * swapped) would find the floor's own record there, no miss; one reading the record of t-2 would count the strip the
+ * card left in two frames. */
+static void slide_misses(vkdev *dev, const scene *s)
+{
+	enum { W = 64, H = 32, F0 = 10, F1 = 17 };
+	size_t px = (size_t)W * H;
+	uint32_t *ids = malloc(px * 16), *pos = malloc(px * 16), *nrm = malloc(px * 16), *prev = malloc(px * 4);
+	assert_non_null(ids);
+	assert_non_null(pos);
+	assert_non_null(nrm);
+	assert_non_null(prev);
+	render *r = tu_render_open(dev, s, 0, "stu/4", NULL, NULL, W, H, false);
+	char err[1024];
+	for (uint32_t f = F0; f < F1; f++) {
+		frame_image img;
+		frame_stats st;
+		if (render_frame(r, f, &img, &st, err, sizeof err))
+			fail_msg("frame %u: %s", f, err);
+		assert_int_equal(vreuse_debug_surface(r, ids, pos, nrm, err, sizeof err), TL_OK);
+		int64_t want = 0;
+		size_t card = 0;
+		for (size_t i = 0; i < px; i++) {
+			uint32_t obj = ids[4 * i]; /* object + 1: 1 the floor, 2 the card */
+			assert_true(obj == 1 || obj == 2);
+			size_t x = i % W;
+			card += obj == 2;
+			if (f == F0)
+				want++; /* no history yet */
+			else if (obj == 1)
+				want += prev[i] == 2;
+			else
+				want += x < 2 || prev[i - 2] != 2;
+		}
+		assert_int_equal(card, 16 * 12);
+		if (f > F0)
+			assert_int_equal(want, 2 * 12);
+		assert_int_equal(st.new_units, want);
+		for (size_t i = 0; i < px; i++)
+			prev[i] = ids[4 * i];
+	}
+	render_destroy(&r);
+	free(ids);
+	free(pos);
+	free(nrm);
+	free(prev);
+}
+
+static void test_slide(void **state)
+{
+	(void)state;
+	vkdev *dev = tu_lavapipe();
+	scene *s = tu_load_scene("stu_slide");
+	unsetenv("TASLAB_COUNT_ATOMICS");
+	slide_misses(dev, s);
+	setenv("TASLAB_COUNT_ATOMICS", "1", 1); /* the misses counted one atomic per pixel, not per subgroup */
+	slide_misses(dev, s);
+	unsetenv("TASLAB_COUNT_ATOMICS");
+	scene_destroy(&s);
+	assert_int_equal(vkdev_validation_messages(dev), 0);
+	vkdev_destroy(&dev);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_static),
 		cmocka_unit_test(test_surface),
+		cmocka_unit_test(test_slide), /* last: it sets TASLAB_COUNT_ATOMICS for a while */
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
