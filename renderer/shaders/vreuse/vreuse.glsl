@@ -3,8 +3,9 @@
 //
 // The cache holds an earlier frame (rrc variants: t-1; warp: the keyframe) at state slot pc.aux[0]: per pixel
 // (object + 1, view distance bits, the colour as shown before BLEND as three halves) in one texel, so that a tap of
-// the lookup is one load (amss and stu keep their colours in cache_col / sub-pixel buffers). Compiled per method: RRC_RANDOM,
-// RRC_INTERLEAVED, WARP, AMSS.
+// the lookup is one load (amss keeps its colours in sub-pixel buffers). stu's record is (object + 1, view distance)
+// alone, two channels, and its colours live in cache_col (L) and the sub buffers: no lookup, no packed texel.
+// Compiled per method: RRC_RANDOM, RRC_INTERLEAVED, WARP, AMSS, STU.
 #ifndef TASLAB_VREUSE_GLSL
 #define TASLAB_VREUSE_GLSL
 
@@ -16,7 +17,7 @@ layout(set = 2, binding = 0, rgba16f) uniform image2D cache_col;
 #define VREUSE_REC_FORMAT rgba32ui
 #endif
 layout(set = 2, binding = 1, VREUSE_REC_FORMAT) uniform uimage2D cache_rec;
-layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record
+layout(set = 2, binding = 2, rgba32ui) uniform uimage2D rec_new;   // this frame's record (amss)
 layout(set = 2, binding = 3, r32ui) uniform uimage2D flags;        // 1 shaded this frame, 2 a hole (warp)
 #ifndef VREUSE_PYR_QUALIFIER
 #define VREUSE_PYR_QUALIFIER
@@ -33,7 +34,8 @@ layout(set = 2, binding = 6, rgba16f) uniform writeonly image2D sub_next;
 // in the earlier frame (warp: the keyframe), its view distance there (rrc, amss, stu: both distances as halves)
 layout(set = 2, binding = 7, rgba32ui) uniform readonly uimage2D vis;
 // the cache of the next frame: rrc variants, the other of two cache images (swapped per frame, so that decide can
-// write it while its lookups read cache_rec); the other methods, cache_rec itself
+// write it while its lookups read cache_rec); stu likewise (stu.comp.in writes it while its history test reads
+// cache_rec); the other methods, cache_rec itself
 layout(set = 2, binding = 8, VREUSE_REC_FORMAT) uniform writeonly uimage2D cache_next;
 // amss: frames since each subsample of sub_prev / sub_next took its own sample (amss.comp.in)
 layout(set = 2, binding = 9, r32ui) uniform readonly uimage2D age_prev;
@@ -41,6 +43,7 @@ layout(set = 2, binding = 10, r32ui) uniform writeonly uimage2D age_next;
 
 const uint FLAG_SHADED = 1u, FLAG_HOLE = 2u;
 
+#ifndef STU // (stu's record has no colour: these would read its two channels as a texel of four)
 // The cache texel of a covered pixel: record (object + 1, view distance bits) and colour (halves, as rgba16f holds it).
 uvec4 vreuse_pack(uvec2 rec, vec3 c) { return uvec4(rec, packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0))); }
 vec3 vreuse_unpack_colour(uvec4 t) { return vec3(unpackHalf2x16(t.z), unpackHalf2x16(t.w).x); }
@@ -82,6 +85,7 @@ bool vreuse_lookup_at(uint object, vec2 f, float dist, out vec3 colour)
 	colour = wsum == 1.0 ? acc : acc / wsum;
 	return true;
 }
+#endif
 
 // Pull-push pyramid: level l is ceil(W / 2^l) x ceil(H / 2^l), stored one after the other from level 1 on (level 0,
 // the frame itself, is never stored: decide.comp.in pulls levels 1 and 2 from it in registers).

@@ -66,9 +66,11 @@ static reproj_state *state_of(render *r) { return r->method_state; }
  * the compute stage. */
 static const char *count_defines(VkPhysicalDevice pd, bool compute)
 {
-	render_count_mode mode = render_count_mode_of(pd);
-	if (compute)
+	render_count_mode mode;
+	if (compute) /* (compute has no helper invocations) */
 		mode = render_compute_ballot(pd) ? RENDER_COUNT_SUBGROUP_NO_HELPERS : RENDER_COUNT_ATOMIC;
+	else
+		mode = render_count_mode_of(pd);
 	switch (mode) {
 	case RENDER_COUNT_SUBGROUP_NO_HELPERS:
 		return "#define TL_SUBGROUP 1\n#define TL_NO_HELPERS 1\n";

@@ -47,9 +47,11 @@ typedef struct vreuse_state {
 
 static vreuse_state *state_of(render *r) { return r->method_state; }
 
-static int make_image(render *r, VkFormat fmt, const char *name, vkdev_image *out, char *err, size_t err_size)
+/* A storage image of the frame's size (1x1 where the method does not use it: full false). */
+static int make_image(render *r, VkFormat fmt, bool full, const char *name, vkdev_image *out, char *err,
+		      size_t err_size)
 {
-	VkResult res = vkdev_image_create(r->dev, r->desc.width, r->desc.height, 1, 1, fmt,
+	VkResult res = vkdev_image_create(r->dev, full ? r->desc.width : 1, full ? r->desc.height : 1, 1, 1, fmt,
 					  VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
 					  VK_IMAGE_ASPECT_COLOR_BIT, false, name, out);
 	return res ? render_vk_error(err, err_size, name, res) : TL_OK;
@@ -122,10 +124,12 @@ int vreuse_init(render *r, const vreuse_variant *v, char *err, size_t err_size)
 		return rc;
 	/* stu's record is (object + 1, view distance) alone: two channels (vreuse.glsl VREUSE_REC_FORMAT) */
 	VkFormat rec_format = v->mode == VREUSE_STU ? VK_FORMAT_R32G32_UINT : VK_FORMAT_R32G32B32A32_UINT;
-	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, "vreuse cache colour", &s->cache_col, err, err_size)) ||
-	    (rc = make_image(r, rec_format, "vreuse cache record", &s->cache_rec, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, "vreuse record", &s->rec_new, err, err_size)) ||
-	    (rc = make_image(r, VK_FORMAT_R32_UINT, "vreuse flags", &s->flag, err, err_size)))
+	if ((rc = make_image(r, VK_FORMAT_R16G16B16A16_SFLOAT, true, "vreuse cache colour", &s->cache_col, err,
+			     err_size)) ||
+	    (rc = make_image(r, rec_format, true, "vreuse cache record", &s->cache_rec, err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32G32B32A32_UINT, v->mode == VREUSE_AMSS, "vreuse record (amss)", &s->rec_new,
+			     err, err_size)) ||
+	    (rc = make_image(r, VK_FORMAT_R32_UINT, true, "vreuse flags", &s->flag, err, err_size)))
 		return rc;
 	uint32_t w = r->desc.width, h = r->desc.height;
 	bool amss = v->mode == VREUSE_AMSS, stu = v->mode == VREUSE_STU;
@@ -559,7 +563,7 @@ void vreuse_collect(render *r, frame_stats *st)
 	st->reused_samples = st->visible_samples >= 0 ? st->visible_samples - st->shaded_samples : -1;
 	st->visible_units = st->visible_samples;
 	st->shaded_units = st->shaded_samples;
-	st->new_units = c[VBUF_C_METHOD]; /* cache misses (rrc: shaded; warp: holes) */
+	st->new_units = c[VBUF_C_METHOD]; /* cache misses (rrc: shaded; warp: holes; stu: no history) */
 	st->late_samples = s->v.truth ? (int64_t)c[VBUF_C_LATE] : -1;
 	put_extra(st, "filled_samples", (double)c[VBUF_C_FILLED]);
 	put_extra(st, "listed_samples", (double)c[VBUF_C_LISTED]);
