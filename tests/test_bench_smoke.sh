@@ -29,6 +29,7 @@ smokes=(
   "bench-methods|--set atlas --size 64x36 --frames 0:3 --paths moderate:boulders|moderate / boulders"
   "bench-methods|--set oracle --size 64x36 --frames 0:3 --paths calm:fan_shadow|calm / fan_shadow"
   "bench-methods|--set payload --size 64x36 --frames 0:3 --paths calm:fan_shadow|calm / fan_shadow"
+  "bench-ab|--old same --size 64x36 --frames 0:3 --first 1 --rounds 1 --paths dynamic:deck|dynamic / deck | stu4 | new | 1 |"
   "bench-metrics|--pairs 2 --runs 1 --compute-runs 1|metrics speed"
   "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"
   "bench-study|--participants 3|: 60 test ratings in the database (expected 60)"
