@@ -79,9 +79,10 @@ layout(set = 1, binding = 8, rg32ui) uniform uimage2D next_disp;          // KEE
 // subgroup operations in the pass's stage: fragment, or compute for the screen-space reproject pass; lavapipe:
 // subgroups of 8) the subgroup's active invocations are counted together, one atomic per subgroup by its lowest
 // active invocation: subgroup operations act on the active invocations, so it may be used in divergent control
-// flow. Helper invocations (derivatives of the shading pass's texture lookups on GPUs) may be active in subgroup operations but their atomics have no effect: they are left
-// out (gl_HelperInvocation; llvmpipe has none and cannot compile it: TL_NO_HELPERS). On lavapipe an atomic is a
-// loop over the lanes: one per fragment cost ~8 ms of the reproject pass and ~13 ms of the shading pass at 960x540.
+// flow. Helper invocations (derivatives of the shading pass's texture lookups on GPUs) may be active in subgroup
+// operations but their atomics have no effect: they are left out (gl_HelperInvocation; llvmpipe has none and cannot
+// compile it: TL_NO_HELPERS). On lavapipe an atomic is a loop over the lanes: one per fragment cost ~8 ms of the
+// reproject pass and ~13 ms of the shading pass at 960x540.
 #ifdef TL_SUBGROUP
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
