@@ -11,8 +11,9 @@
 /* A fresh empty folder under the build tree (TASLAB_TMP) for one test; returns its path. */
 const char *tu_tmpdir(const char *name);
 /* The environment for the taslab processes a test starts ("export VAR=value; ..." to put before a shell command):
- * LeakSanitizer on (with LSAN_OPTIONS from the test's environment: lsan.supp, intercept_tls_get_addr=0), lavapipe and the validation layer pinned by the
- * preloaded lsan_pin.c, a small quarantine. A leak makes the process exit non-zero, so the test that ran it fails. */
+ * LeakSanitizer on (with LSAN_OPTIONS from the test's environment: lsan.supp, intercept_tls_get_addr=0), lavapipe
+ * and the validation layer pinned by the preloaded lsan_pin.c, a small quarantine. A leak makes the process exit
+ * non-zero, so the test that ran it fails. */
 const char *tu_child_env(void);
 /* Runs a shell command (with tu_child_env); returns its exit status; stdout+stderr captured into `out`. */
 int tu_run(const char *cmd, char *out, size_t out_size);

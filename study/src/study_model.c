@@ -2,6 +2,7 @@
  * method, T, period, scene and camera path, a weighted isotonic fit of the JOD drop on log2 metric, its
  * leave-one-scene-out error on the measured thresholds (thresholds.csv), and predictions for another sweep. */
 #include <errno.h>
+#include <limits.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -624,17 +625,26 @@ static bool json_num(json_t *v, bool null_ok, double *out)
 	return true;
 }
 
+/* MODEL.json read for option opt (--model, --prior) through tl_json_read: bounded in size and depth, regular files
+ * only, and jansson's quote of the input made one line (a raw newline in a string was quoted into the message: found
+ * by fuzz_model, 2026-11-27). TL_ERR_ARG with one line ("OPT: not a model: FILE: why") when it is not JSON. */
+static int model_json_read(const char *opt, const char *path, json_t **root, char *err, size_t err_size)
+{
+	char why[PATH_MAX + 512]; /* tl_json_read's message names the file first */
+	if (tl_json_read(path, root, why, sizeof why))
+		return tl_error(err, err_size, TL_ERR_ARG, "%s: not a model: %s", opt, why);
+	return TL_OK;
+}
+
 /* Reads and checks MODEL.json (`study model --out`). TL_ERR_ARG with one line naming the file and what is wrong:
  * not JSON, another format (a model written before --model, whose stored numbers are not the ones it predicted
  * with), or a missing or malformed member. */
 static int model_load(const char *path, saved *m, char *err, size_t err_size)
 {
 	memset(m, 0, sizeof *m);
-	/* tl_json_read: bounded in size and depth, regular files only, and jansson's quote of the input made one line
-	 * (a raw newline in a string was quoted into the message: found by fuzz_model, 2026-11-27) */
-	char why_json[4608]; /* names the file first */
-	if (tl_json_read(path, &m->root, why_json, sizeof why_json))
-		return tl_error(err, err_size, TL_ERR_ARG, "--model: not a model: %s", why_json);
+	int rc = model_json_read("--model", path, &m->root, err, err_size);
+	if (rc)
+		return rc;
 	const char *why = NULL;
 	json_t *r = m->root, *lo = json_object_get(r, "leave_one_scene_out");
 	const char *format = json_string_value(json_object_get(r, "format"));
@@ -812,9 +822,9 @@ int sty_model_prior(const char *model_json, const char *method, long period, con
 		    double *theta, double *sd, char *err, size_t err_size)
 {
 	json_t *root = NULL;
-	char why_json[4608]; /* names the file first */
-	if (tl_json_read(model_json, &root, why_json, sizeof why_json))
-		return tl_error(err, err_size, TL_ERR_ARG, "--prior: not a model: %s", why_json);
+	int rc = model_json_read("--prior", model_json, &root, err, err_size);
+	if (rc)
+		return rc;
 	json_t *preds = json_object_get(root, "predictions");
 	double half = json_number_value(json_object_get(root, "interval_half_width_log2"));
 	if (!json_is_array(preds) || !json_is_number(json_object_get(root, "interval_half_width_log2"))) {

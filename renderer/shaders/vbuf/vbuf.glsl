@@ -34,9 +34,9 @@ const uint VBUF_TILE = 16u;
 // of each covered pixel's value in svals, stored once where the value is made - by the shade pass for a shaded pixel,
 // by ads_display.comp.in for an interpolated one; none for the last step's pixels, which no later step reads - and
 // read by the later selects' variance of a candidate's neighbours, instead of transforming four neighbours per
-// candidate in each of the five rounds. They are computed from the value
-// read back from svals (its half rounding, as the neighbours' svals were read before), in fixed point in RG32UI
-// (tas/disp.glsl: within 6.2e-5 code values; an RGBA32F texel cost four channel accesses on lavapipe).
+// candidate in each of the five rounds. They are computed from the value read back from svals (its half rounding, as
+// the neighbours' svals were read before), in fixed point in RG32UI (tas/disp.glsl: within 6.2e-5 code values; an
+// RGBA32F texel cost four channel accesses on lavapipe).
 #include "tas/disp.glsl"
 layout(set = 1, binding = 9, rg32ui) uniform uimage2D sdisp;
 
