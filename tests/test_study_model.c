@@ -283,6 +283,12 @@ static void test_model_bad_input(void **state)
 			fail_msg("model %zu: exit %d, want 2 and one line naming the file with '%s':\n%s", i, st, bad[i].needle,
 				 out);
 	}
+	/* the same reader for an adaptive design's --prior: one line naming the option and the file */
+	char perr[8192];
+	double th, sd;
+	assert_int_equal(sty_model_prior(mpath, "tfr", 0, "s101", "c0", &th, &sd, perr, sizeof perr), TL_ERR_ARG);
+	if (strncmp(perr, "--prior: not a model: ", 22) || !strstr(perr, mpath) || strchr(perr, '\n'))
+		fail_msg("--prior on a file that is not JSON: %s", perr);
 	char p2[4200];
 	snprintf(p2, sizeof p2, "%s/p.csv", dir);
 	assert_false(tu_file_exists(p2));
