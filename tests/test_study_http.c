@@ -482,6 +482,21 @@ static void test_hostile_framing(void **state)
 	int len = snprintf(req, sizeof req, "GET /api/%s/trial HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n", code);
 	assert_int_equal(request_within(port, req, (size_t)len, 2.0, resp, sizeof resp), 200);
 	assert_non_null(strstr(resp, "\"answered\":0"));
+	/* the server's count and time of acknowledged answers (issue 32.3): none of the refused ones; then one answer,
+	 * timed to within the histogram's 9 % of what the client waited for it */
+	sty_server_stats st = sty_server_get_stats(sv);
+	assert_int_equal(st.answers, 0);
+	const char *body = "{\"trial\": 0, \"answer\": 1, \"rt_ms\": 5}";
+	len = snprintf(req, sizeof req, "POST /api/%s/answer HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: %zu\r\n"
+		       "Connection: close\r\n\r\n%s", code, strlen(body), body);
+	double t0 = now_s();
+	assert_int_equal(request_within(port, req, (size_t)len, 2.0, resp, sizeof resp), 200);
+	double waited_ms = (now_s() - t0) * 1e3;
+	st = sty_server_get_stats(sv);
+	assert_int_equal(st.answers, 1);
+	if (!(st.answer_ms_p50 > 0 && st.answer_ms_p50 == st.answer_ms_p99 && st.answer_ms_p99 <= waited_ms * 1.1))
+		fail_msg("one answer: server time p50 %.3f ms, p99 %.3f ms; the client waited %.3f ms", st.answer_ms_p50,
+			 st.answer_ms_p99, waited_ms);
 	sty_server_stop(&sv);
 	sty_close(&s);
 }

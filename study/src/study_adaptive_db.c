@@ -34,13 +34,13 @@ int sty_adaptive_schema(sty *s, char *err, size_t err_size)
 int sty_adaptive_set_prior(sty *s, int64_t grp, double theta, double sd)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db, "INSERT INTO adaptive_prior(grp, theta, sd) VALUES(?, ?, ?)", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "INSERT INTO adaptive_prior(grp, theta, sd) VALUES(?, ?, ?)")))
 		return TL_ERR_DB;
 	sqlite3_bind_int64(st, 1, grp);
 	sqlite3_bind_double(st, 2, theta);
 	sqlite3_bind_double(st, 3, sd);
 	int r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return r == SQLITE_DONE ? TL_OK : TL_ERR_DB;
 }
 
@@ -48,36 +48,35 @@ int sty_adaptive_set_prior(sty *s, int64_t grp, double theta, double sd)
 static int apply_prior(sty *s, int64_t grp, sty_adapt *a, char *err, size_t err_size)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_prior'", -1,
-			       &st, NULL))
+	if (!(st = sty_stmt(s, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_prior'")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	int has = sqlite3_step(st) == SQLITE_ROW;
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (!has)
 		return TL_OK;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT p.theta, p.sd FROM adaptive_prior p JOIN conditions c ON c.id = p.grp JOIN conditions g ON"
-			       " g.id = ?1 WHERE c.method = g.method AND c.period IS g.period AND c.scene = g.scene AND"
-			       " c.camera = g.camera", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT p.theta, p.sd FROM adaptive_prior p JOIN conditions c ON c.id = p.grp JOIN conditions g ON"
+			    " g.id = ?1 WHERE c.method = g.method AND c.period IS g.period AND c.scene = g.scene AND"
+			    " c.camera = g.camera")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, grp);
 	int r = sqlite3_step(st);
 	if (r == SQLITE_ROW) /* an SD below 0.1 octave would pin theta to one grid step: 0.1 at least */
 		sty_adapt_prior(a, sqlite3_column_double(st, 0), fmax(sqlite3_column_double(st, 1), 0.1));
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return r == SQLITE_ROW || r == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "adaptive design");
 }
 
 int sty_adaptive_plan(sty *s, int64_t pid, int64_t idx, int64_t grp)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db, "INSERT INTO adaptive_trials(participant, idx, grp) VALUES(?, ?, ?)", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "INSERT INTO adaptive_trials(participant, idx, grp) VALUES(?, ?, ?)")))
 		return TL_ERR_DB;
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
 	sqlite3_bind_int64(st, 3, grp);
 	int r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return r == SQLITE_DONE ? TL_OK : TL_ERR_DB;
 }
 
@@ -87,10 +86,10 @@ static int group_levels(sty *s, int64_t grp, int64_t *ids, double *T, size_t *n,
 {
 	sqlite3_stmt *st;
 	*n = 0;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT c.id, c.T FROM conditions c JOIN conditions g ON g.id = ?1 WHERE c.is_catch = 0 AND"
-			       " c.method = g.method AND c.period IS g.period AND c.scene = g.scene AND c.camera = g.camera"
-			       " ORDER BY c.T, c.id", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT c.id, c.T FROM conditions c JOIN conditions g ON g.id = ?1 WHERE c.is_catch = 0 AND"
+			    " c.method = g.method AND c.period IS g.period AND c.scene = g.scene AND c.camera = g.camera"
+			    " ORDER BY c.T, c.id")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, grp);
 	while (sqlite3_step(st) == SQLITE_ROW && *n < MAX_GROUP_LEVELS) {
@@ -98,7 +97,7 @@ static int group_levels(sty *s, int64_t grp, int64_t *ids, double *T, size_t *n,
 		T[*n] = sqlite3_column_type(st, 1) == SQLITE_NULL ? NAN : sqlite3_column_double(st, 1);
 		(*n)++;
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return *n ? TL_OK : tl_error(err, err_size, TL_ERR_INTERNAL, "%s: adaptive group %lld has no condition", s->path,
 				       (long long)grp);
 }
@@ -123,11 +122,11 @@ int sty_adaptive_choice(sty *s, int64_t grp, int64_t *condition, char *err, size
 		return rc;
 	}
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT t.condition, t.ref_first, a.answer FROM answers a JOIN trials t ON t.participant ="
-			       " a.participant AND t.idx = a.idx JOIN conditions c ON c.id = t.condition JOIN conditions g ON"
-			       " g.id = ?1 WHERE t.kind = 'test' AND a.broken IS NULL AND c.is_catch = 0 AND c.method = g.method AND c.period IS"
-			       " g.period AND c.scene = g.scene AND c.camera = g.camera", -1, &st, NULL)) {
+	if (!(st = sty_stmt(s,
+			    "SELECT t.condition, t.ref_first, a.answer FROM answers a JOIN trials t ON t.participant ="
+			    " a.participant AND t.idx = a.idx JOIN conditions c ON c.id = t.condition JOIN conditions g ON"
+			    " g.id = ?1 WHERE t.kind = 'test' AND a.broken IS NULL AND c.is_catch = 0 AND c.method = g.method AND c.period IS"
+			    " g.period AND c.scene = g.scene AND c.camera = g.camera"))) {
 		sty_adapt_free(&a);
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	}
@@ -140,7 +139,7 @@ int sty_adaptive_choice(sty *s, int64_t grp, int64_t *condition, char *err, size
 			if (ids[l] == c)
 				sty_adapt_update(a, l, rating > 0 ? 1 : rating == 0 ? 0.5 : 0);
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_DONE)
 		rc = sty_db_fail(s, err, err_size, "adaptive design");
 	else
@@ -154,22 +153,21 @@ int sty_adaptive_resolve(sty *s, int64_t pid, char *err, size_t err_size)
 	sqlite3_stmt *st;
 	int rc = TL_OK;
 	/* a study without the table is not adaptive */
-	if (sqlite3_prepare_v2(s->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_trials'", -1,
-			       &st, NULL))
+	if (!(st = sty_stmt(s, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_trials'")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	int adaptive = sqlite3_step(st) == SQLITE_ROW;
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (!adaptive)
 		return TL_OK;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT a.idx, a.grp FROM adaptive_trials a WHERE a.participant = ?1 AND a.resolved = 0 AND"
-			       " a.idx = (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
-			       " idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT a.idx, a.grp FROM adaptive_trials a WHERE a.participant = ?1 AND a.resolved = 0 AND"
+			    " a.idx = (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
+			    " idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, pid);
 	int r = sqlite3_step(st);
 	int64_t idx = r == SQLITE_ROW ? sqlite3_column_int64(st, 0) : -1, grp = r == SQLITE_ROW ? sqlite3_column_int64(st, 1) : 0;
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r == SQLITE_DONE)
 		return TL_OK; /* the current trial is chosen already, or not an adaptive one */
 	if (r != SQLITE_ROW)
@@ -177,20 +175,19 @@ int sty_adaptive_resolve(sty *s, int64_t pid, char *err, size_t err_size)
 	int64_t cond;
 	if ((rc = sty_adaptive_choice(s, grp, &cond, err, err_size)))
 		return rc;
-	if (sqlite3_prepare_v2(s->db, "UPDATE trials SET condition = ?3 WHERE participant = ?1 AND idx = ?2;", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "UPDATE trials SET condition = ?3 WHERE participant = ?1 AND idx = ?2;")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
 	sqlite3_bind_int64(st, 3, cond);
 	r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_DONE ||
-	    sqlite3_prepare_v2(s->db, "UPDATE adaptive_trials SET resolved = 1 WHERE participant = ?1 AND idx = ?2", -1, &st,
-			       NULL))
+	    !(st = sty_stmt(s, "UPDATE adaptive_trials SET resolved = 1 WHERE participant = ?1 AND idx = ?2")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
 	r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return r == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "adaptive design");
 }

@@ -42,11 +42,11 @@ void sty_batch_lock(sty *s)
 int sty_batch_join(sty *s, char *err, size_t err_size)
 {
 	if (!s->batch.open) {
-		if (sqlite3_exec(s->db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK)
+		if (sty_exec(s, "BEGIN IMMEDIATE") != SQLITE_OK)
 			return sty_db_fail(s, err, err_size, "starting a transaction");
 		s->batch.open = true;
 	}
-	if (sqlite3_exec(s->db, "SAVEPOINT request", NULL, NULL, NULL) != SQLITE_OK)
+	if (sty_exec(s, "SAVEPOINT request") != SQLITE_OK)
 		return sty_db_fail(s, err, err_size, "starting a transaction");
 	return TL_OK;
 }
@@ -55,10 +55,10 @@ int sty_batch_join(sty *s, char *err, size_t err_size)
 static void batch_commit(sty *s)
 {
 	int rc = TL_OK;
-	if (sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+	if (sty_exec(s, "COMMIT") != SQLITE_OK) {
 		rc = TL_ERR_DB;
 		snprintf(s->batch.why, sizeof s->batch.why, "%s", sqlite3_errmsg(s->db));
-		sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
+		sty_exec(s, "ROLLBACK");
 	}
 	s->batch.open = false;
 	s->batch.members = 0;
@@ -76,15 +76,15 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 	bool saw_batch = !rc && !wrote && s->batch.open && s->batch.members > 0;
 	if (rc || (!wrote && !saw_batch)) { /* nothing of this request stays: undo it, and close a batch nobody else is in */
 		if (rc)
-			sqlite3_exec(s->db, "ROLLBACK TO request", NULL, NULL, NULL);
-		sqlite3_exec(s->db, "RELEASE request", NULL, NULL, NULL);
+			sty_exec(s, "ROLLBACK TO request");
+		sty_exec(s, "RELEASE request");
 		if (s->batch.open && !s->batch.members && !s->batch.leading) {
-			sqlite3_exec(s->db, "COMMIT", NULL, NULL, NULL); /* no change in it: no fsync */
+			sty_exec(s, "COMMIT"); /* no change in it: no fsync */
 			s->batch.open = false;
 		}
 		return rc;
 	}
-	if (sqlite3_exec(s->db, "RELEASE request", NULL, NULL, NULL) != SQLITE_OK)
+	if (sty_exec(s, "RELEASE request") != SQLITE_OK)
 		return sty_db_fail(s, err, err_size, "storing");
 	uint64_t mine = s->batch.epoch;
 	s->batch.members++;

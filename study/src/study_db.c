@@ -313,12 +313,21 @@ int sty_create(const char *path, sty **out, char *err, size_t err_size)
 	return TL_OK;
 }
 
+/* sty_stmt's statements finalized (before the connection closes: SQLite refuses to close with any left). */
+static void stmts_finalize(sty *s)
+{
+	for (unsigned i = 0; i < s->stmt_count; i++)
+		sqlite3_finalize(s->stmts[i].st);
+	s->stmt_count = 0;
+}
+
 int sty_commit(sty *s, char *err, size_t err_size)
 {
 	if (!s->pending.open)
 		return TL_OK;
 	/* Closing the last connection checkpoints the WAL into the file and deletes it, so the one file holds
 	 * the whole study before it is renamed. */
+	stmts_finalize(s);
 	if (sqlite3_close(s->db) != SQLITE_OK) {
 		int rc = sty_db_fail(s, err, err_size, "closing the new study");
 		return rc;
@@ -336,11 +345,50 @@ int sty_commit(sty *s, char *err, size_t err_size)
 	return db_connect(s, s->path, false, err, err_size);
 }
 
+sqlite3_stmt *sty_stmt(sty *s, const char *sql)
+{
+	for (unsigned i = 0; i < s->stmt_count; i++)
+		if (s->stmts[i].sql == sql && !strcmp(sqlite3_sql(s->stmts[i].st), sql))
+			return s->stmts[i].st;
+	sqlite3_stmt *st = NULL;
+	if (sqlite3_prepare_v3(s->db, sql, -1, s->stmt_count < STY_STMTS ? SQLITE_PREPARE_PERSISTENT : 0, &st, NULL)) {
+		sqlite3_finalize(st);
+		return NULL;
+	}
+	if (s->stmt_count < STY_STMTS) /* else used once and finalized by sty_stmt_done */
+		s->stmts[s->stmt_count++] = (struct sty_stmt_slot){sql, st};
+	return st;
+}
+
+void sty_stmt_done(sty *s, sqlite3_stmt *st)
+{
+	if (!st)
+		return;
+	for (unsigned i = 0; i < s->stmt_count; i++)
+		if (s->stmts[i].st == st) {
+			sqlite3_reset(st);
+			sqlite3_clear_bindings(st);
+			return;
+		}
+	sqlite3_finalize(st);
+}
+
+int sty_exec(sty *s, const char *sql)
+{
+	sqlite3_stmt *st = sty_stmt(s, sql);
+	if (!st)
+		return sqlite3_errcode(s->db);
+	int r = sqlite3_step(st);
+	sty_stmt_done(s, st);
+	return r == SQLITE_DONE || r == SQLITE_ROW ? SQLITE_OK : r;
+}
+
 void sty_close(sty **ps)
 {
 	if (!ps || !*ps)
 		return;
 	sty *s = *ps;
+	stmts_finalize(s);
 	if (s->db)
 		sqlite3_close(s->db);
 	if (s->pending.open) { /* never committed: the new study goes away */

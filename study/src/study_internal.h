@@ -10,6 +10,7 @@
 #include "taslab/study.h"
 #include "taslab/tl_fs.h"
 
+#define STY_STMTS 40 /* prepared statements kept per handle (sty_stmt) */
 #define STY_BATCH_RESULTS 64 /* results of the last batches kept for members that wake late (study_commit.c) */
 
 struct sty {
@@ -32,12 +33,26 @@ struct sty {
 		char why[256];        /* SQLite's message of the last failed commit */
 		pthread_cond_t joined, done;
 	} batch;
+	struct sty_stmt_slot { /* sty_stmt's cache: the SQL's address and its prepared statement */
+		const char *sql;
+		sqlite3_stmt *st;
+	} stmts[STY_STMTS];
+	unsigned stmt_count;
 	struct sty_method {   /* the caller's method descriptions (sty_describe_method, issue 30.1) */
 		char name[32];
 		run_method_facts facts;
 	} methods[STY_MAX_METHODS];
 	size_t method_count;
 };
+
+/* The server's per-request SQL, prepared once per handle (study_db.c, issue 32.3): preparing a statement costs
+ * SQLite several times what running one of these does. `sql` is a string constant (the cache knows it by its
+ * address, and checks the text). Returns the statement reset with no bindings, or NULL (sqlite3_errmsg says why);
+ * hand it back with sty_stmt_done (NULL is fine there). Under s->lock, or on a handle no other thread uses. */
+sqlite3_stmt *sty_stmt(sty *s, const char *sql);
+void sty_stmt_done(sty *s, sqlite3_stmt *st);
+/* sty_stmt + sqlite3_step + sty_stmt_done for a statement without results (transaction control): SQLite's code. */
+int sty_exec(sty *s, const char *sql);
 
 /* Group commit (study_commit.c, issue 32.3). A server request that writes:
  *   sty_batch_lock(s);                          // instead of pthread_mutex_lock(&s->lock)

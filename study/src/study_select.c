@@ -16,12 +16,12 @@ int64_t sty_select_participant(sty *s, const char *code)
 {
 	sqlite3_stmt *st;
 	int64_t id = -1;
-	if (sqlite3_prepare_v2(s->db, "SELECT id FROM participants WHERE code = ?", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "SELECT id FROM participants WHERE code = ?")))
 		return -1; /* local sentinel: no id (study_select.h) */
 	sqlite3_bind_text(st, 1, code, -1, SQLITE_STATIC);
 	if (sqlite3_step(st) == SQLITE_ROW)
 		id = sqlite3_column_int64(st, 0);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return id;
 }
 
@@ -30,14 +30,14 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	memset(p, 0, sizeof *p);
 	sqlite3_stmt *st = NULL;
 	int rc = TL_OK;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL),"
-			       " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers"
-			       "  WHERE participant = ?1)),"
-			       " t.idx, t.ref_first, t.kind, t.break_before, c.ref_clip, c.test_clip"
-			       " FROM trials t JOIN conditions c ON c.id = t.condition"
-			       " WHERE t.participant = ?1 AND t.idx NOT IN (SELECT idx FROM answers WHERE participant = ?1)"
-			       " ORDER BY t.idx LIMIT 1", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL),"
+			    " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers"
+			    "  WHERE participant = ?1)),"
+			    " t.idx, t.ref_first, t.kind, t.break_before, c.ref_clip, c.test_clip"
+			    " FROM trials t JOIN conditions c ON c.id = t.condition"
+			    " WHERE t.participant = ?1 AND t.idx NOT IN (SELECT idx FROM answers WHERE participant = ?1)"
+			    " ORDER BY t.idx LIMIT 1")))
 		return sty_db_fail(s, err, err_size, "next trial");
 	sqlite3_bind_int64(st, 1, pid);
 	int r = sqlite3_step(st);
@@ -53,10 +53,9 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 		snprintf(p->ref_clip, sizeof p->ref_clip, "%s", (const char *)sqlite3_column_text(st, 6));
 		snprintf(p->test_clip, sizeof p->test_clip, "%s", (const char *)sqlite3_column_text(st, 7));
 	} else if (r == SQLITE_DONE) {
-		sqlite3_finalize(st);
+		sty_stmt_done(s, st);
 		st = NULL;
-		if (sqlite3_prepare_v2(s->db, "SELECT count(*) FROM trials WHERE participant = ? AND retake_of IS NULL", -1, &st,
-				       NULL))
+		if (!(st = sty_stmt(s, "SELECT count(*) FROM trials WHERE participant = ? AND retake_of IS NULL")))
 			return sty_db_fail(s, err, err_size, "next trial");
 		sqlite3_bind_int64(st, 1, pid);
 		if (sqlite3_step(st) == SQLITE_ROW)
@@ -65,7 +64,7 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	} else {
 		rc = sty_db_fail(s, err, err_size, "next trial");
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return rc;
 }
 
@@ -75,11 +74,11 @@ int sty_select_answer(sty *s, int64_t pid, uint32_t trial, int64_t answer, int64
 	sqlite3_stmt *st = NULL;
 	/* Does the trial exist, is it answered, and which trial is current (the lowest-index unanswered one). The
 	 * lock serialises this check with the INSERT below against the other server threads. */
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
-			       " (SELECT count(*) FROM answers WHERE participant = ?1 AND idx = ?2),"
-			       " (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
-			       "  idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))", -1, &st, NULL)) {
+	if (!(st = sty_stmt(s,
+			    "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
+			    " (SELECT count(*) FROM answers WHERE participant = ?1 AND idx = ?2),"
+			    " (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
+			    "  idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))"))) {
 		rc = sty_db_fail(s, err, err_size, "answer");
 		goto done;
 	}
@@ -102,12 +101,12 @@ int sty_select_answer(sty *s, int64_t pid, uint32_t trial, int64_t answer, int64
 			      trial, (long long)sqlite3_column_int64(st, 2));
 		goto done;
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	st = NULL;
 	/* Inside the caller's transaction (a group commit, study_commit.c): the answer is acknowledged only after
 	 * that transaction's COMMIT has returned (with synchronous=FULL: on disk). */
-	if (sqlite3_prepare_v2(s->db, "INSERT INTO answers(participant, idx, answer, rt_ms, at)"
-				      " VALUES(?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))", -1, &st, NULL)) {
+	if (!(st = sty_stmt(s, "INSERT INTO answers(participant, idx, answer, rt_ms, at)"
+				      " VALUES(?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))"))) {
 		rc = sty_db_fail(s, err, err_size, "storing the answer");
 		goto done;
 	}
@@ -124,7 +123,7 @@ int sty_select_answer(sty *s, int64_t pid, uint32_t trial, int64_t answer, int64
 	else if (r != SQLITE_DONE)
 		rc = sty_db_fail(s, err, err_size, "storing the answer");
 done:
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return rc;
 }
 
@@ -146,8 +145,7 @@ static const char *clip_ext(const char *path)
 static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *path, char *out, size_t n, bool *made)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db, "SELECT name FROM clip_names WHERE participant = ? AND idx = ? AND slot = ?", -1, &st,
-			       NULL))
+	if (!(st = sty_stmt(s, "SELECT name FROM clip_names WHERE participant = ? AND idx = ? AND slot = ?")))
 		return false;
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
@@ -155,7 +153,7 @@ static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *pa
 	int r = sqlite3_step(st);
 	if (r == SQLITE_ROW)
 		snprintf(out, n, "%s", (const char *)sqlite3_column_text(st, 0));
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r == SQLITE_ROW)
 		return true;
 	if (r != SQLITE_DONE)
@@ -164,14 +162,14 @@ static bool clip_name(sty *s, int64_t pid, int64_t idx, int slot, const char *pa
 	if (!sty_random_hex(hex))
 		return false;
 	snprintf(out, n, "%s%s", hex, clip_ext(path));
-	if (sqlite3_prepare_v2(s->db, "INSERT INTO clip_names(name, participant, idx, slot) VALUES(?, ?, ?, ?)", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "INSERT INTO clip_names(name, participant, idx, slot) VALUES(?, ?, ?, ?)")))
 		return false;
 	sqlite3_bind_text(st, 1, out, -1, SQLITE_STATIC);
 	sqlite3_bind_int64(st, 2, pid);
 	sqlite3_bind_int64(st, 3, idx);
 	sqlite3_bind_int(st, 4, slot);
 	r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	*made = true;
 	return r == SQLITE_DONE;
 }
@@ -222,10 +220,10 @@ int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *er
 	sqlite3_stmt *st;
 	pthread_mutex_lock(&s->lock);
 	int rc = TL_OK;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT CASE WHEN (k.slot = 0) = (t.ref_first != 0) THEN c.ref_clip ELSE c.test_clip END"
-			       " FROM clip_names k JOIN trials t ON t.participant = k.participant AND t.idx = k.idx"
-			       " JOIN conditions c ON c.id = t.condition WHERE k.name = ?", -1, &st, NULL)) {
+	if (!(st = sty_stmt(s,
+			    "SELECT CASE WHEN (k.slot = 0) = (t.ref_first != 0) THEN c.ref_clip ELSE c.test_clip END"
+			    " FROM clip_names k JOIN trials t ON t.participant = k.participant AND t.idx = k.idx"
+			    " JOIN conditions c ON c.id = t.condition WHERE k.name = ?"))) {
 		rc = sty_db_fail(s, err, err_size, "clip");
 		goto done;
 	}
@@ -237,7 +235,7 @@ int sty_clip_file(sty *s, const char *name, char *rel, size_t rel_size, char *er
 		rc = tl_error(err, err_size, TL_ERR_NOTFOUND, "no such clip");
 	else
 		rc = sty_db_fail(s, err, err_size, "clip");
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 done:
 	pthread_mutex_unlock(&s->lock);
 	return rc;

@@ -10,6 +10,8 @@
 
 #include "taslab/study_serve.h"
 
+#define STY_ANSWER_BUCKETS 216 /* 8 per octave from 1 us to 2^27 us (134 s) */
+
 struct MHD_Daemon;
 struct conn_track;
 
@@ -34,6 +36,7 @@ struct sty_server {
 	bool stopping;
 	pthread_t watchdog;
 	sty_server_stats stats;
+	uint64_t answer_us[STY_ANSWER_BUCKETS]; /* answers by handling time, bucket floor(8 log2 us) (atomic) */
 };
 
 /* One line to the server's log (desc.log, else stderr), at most 10 a second; newlines become spaces. */

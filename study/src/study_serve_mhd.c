@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <math.h>
 #include <microhttpd.h>
 #include <netinet/in.h>
 #include <pthread.h>
@@ -290,11 +291,38 @@ static void *watchdog_main(void *arg)
 	return NULL;
 }
 
+/* ------------------------------------------------------------------ answers' handling time */
+
+static void answer_timed(struct sty_server *sv, const struct timespec *since)
+{
+	struct timespec now;
+	clock_gettime(CLOCK_MONOTONIC, &now);
+	double us = elapsed_s(since, &now) * 1e6;
+	int b = us < 1 ? 0 : (int)(8 * log2(us));
+	__atomic_add_fetch(&sv->answer_us[b < STY_ANSWER_BUCKETS ? b : STY_ANSWER_BUCKETS - 1], 1, __ATOMIC_RELAXED);
+}
+
+/* The upper edge, in ms, of the bucket holding the answer of rank ceil(q n) (1-based) of `n`. */
+static double answer_quantile_ms(const uint64_t *counts, uint64_t n, double q)
+{
+	uint64_t rank = (uint64_t)ceil(q * (double)n), seen = 0;
+	for (int b = 0; b < STY_ANSWER_BUCKETS; b++)
+		if ((seen += counts[b]) >= rank && seen)
+			return exp2((b + 1) / 8.0) / 1e3;
+	return 0;
+}
+
 sty_server_stats sty_server_get_stats(sty_server *sv)
 {
 	pthread_mutex_lock(&sv->conn_lock);
 	sty_server_stats st = sv->stats;
 	pthread_mutex_unlock(&sv->conn_lock);
+	uint64_t counts[STY_ANSWER_BUCKETS];
+	st.answers = 0;
+	for (int b = 0; b < STY_ANSWER_BUCKETS; b++)
+		st.answers += counts[b] = __atomic_load_n(&sv->answer_us[b], __ATOMIC_RELAXED);
+	st.answer_ms_p50 = answer_quantile_ms(counts, st.answers, 0.5);
+	st.answer_ms_p99 = answer_quantile_ms(counts, st.answers, 0.99);
 	return st;
 }
 
@@ -340,10 +368,15 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 	rq.body = cs->body;
 	rq.body_size = cs->len;
 	rq.body_too_large = cs->too_large;
+	struct timespec t0;
+	clock_gettime(CLOCK_MONOTONIC, &t0);
 	sty_server_handle(sv, &rq, &r);
 	if (r.status == 0) { /* cannot happen with a body; be safe */
 		sty_response_error(&r, 500, "internal error");
 	}
+	size_t n = strlen(url);
+	if (r.status == 200 && !strcmp(method, "POST") && n > 7 && !strcmp(url + n - 7, "/answer"))
+		answer_timed(sv, &t0);
 	return queue(c, &r);
 }
 

@@ -20,12 +20,11 @@ static const char *SESSIONS =
 static void fill_info(sty *s, int64_t pid, sty_session_info *info)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT label, (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL) -"
-			       " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers WHERE"
-			       " participant = ?1)), (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL)"
-			       " FROM participants WHERE id = ?1", -1, &st,
-			       NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT label, (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL) -"
+			    " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers WHERE"
+			    " participant = ?1)), (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL)"
+			    " FROM participants WHERE id = ?1")))
 		return;
 	sqlite3_bind_int64(st, 1, pid);
 	if (sqlite3_step(st) == SQLITE_ROW) {
@@ -33,31 +32,30 @@ static void fill_info(sty *s, int64_t pid, sty_session_info *info)
 		info->answered = (uint32_t)sqlite3_column_int(st, 1);
 		info->total = (uint32_t)sqlite3_column_int(st, 2);
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 }
 
 /* Within the caller's transaction: the session row of participant `pid` made or taken over by a new token. */
 static int start_in_tx(sty *s, int64_t pid, char session[33], sty_session_info *info, char *err, size_t err_size)
 {
 	sqlite3_stmt *st = NULL;
-	if (sqlite3_exec(s->db, SESSIONS, NULL, NULL, NULL) != SQLITE_OK ||
-	    sqlite3_prepare_v2(s->db, "SELECT starts FROM sessions WHERE participant = ?", -1, &st, NULL))
+	if (sty_exec(s, SESSIONS) != SQLITE_OK ||
+	    !(st = sty_stmt(s, "SELECT starts FROM sessions WHERE participant = ?")))
 		return sty_db_fail(s, err, err_size, "session");
 	sqlite3_bind_int64(st, 1, pid);
 	info->restart = sqlite3_step(st) == SQLITE_ROW;
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (!sty_random_hex(session))
 		return tl_error(err, err_size, TL_ERR_INTERNAL, "no random bits from the kernel");
-	if (sqlite3_prepare_v2(s->db,
-			       "INSERT INTO sessions(participant, token, started, starts) VALUES(?1, ?2,"
-			       " strftime('%Y-%m-%dT%H:%M:%fZ','now'), 1) ON CONFLICT(participant) DO UPDATE SET token = ?2,"
-			       " started = excluded.started, starts = starts + 1, last_idx = NULL, last_answer = NULL", -1, &st,
-			       NULL))
+	if (!(st = sty_stmt(s,
+			    "INSERT INTO sessions(participant, token, started, starts) VALUES(?1, ?2,"
+			    " strftime('%Y-%m-%dT%H:%M:%fZ','now'), 1) ON CONFLICT(participant) DO UPDATE SET token = ?2,"
+			    " started = excluded.started, starts = starts + 1, last_idx = NULL, last_answer = NULL")))
 		return sty_db_fail(s, err, err_size, "session");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_text(st, 2, session, -1, SQLITE_STATIC);
 	int rc = sqlite3_step(st) == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "session");
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return rc;
 }
 
@@ -89,8 +87,8 @@ static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t 
 			     const sty_telemetry *tm, sty_session_info *info, char *err, size_t err_size)
 {
 	sqlite3_stmt *st;
-	if (sqlite3_exec(s->db, SESSIONS, NULL, NULL, NULL) != SQLITE_OK ||
-	    sqlite3_prepare_v2(s->db, "SELECT token, last_idx, last_answer FROM sessions WHERE participant = ?", -1, &st, NULL))
+	if (sty_exec(s, SESSIONS) != SQLITE_OK ||
+	    !(st = sty_stmt(s, "SELECT token, last_idx, last_answer FROM sessions WHERE participant = ?")))
 		return sty_db_fail(s, err, err_size, "session");
 	sqlite3_bind_int64(st, 1, pid);
 	int r = sqlite3_step(st), current = 0;
@@ -100,7 +98,7 @@ static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t 
 		if (sqlite3_column_type(st, 1) != SQLITE_NULL)
 			last_idx = sqlite3_column_int64(st, 1), last_answer = sqlite3_column_int64(st, 2);
 	}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_ROW && r != SQLITE_DONE)
 		return sty_db_fail(s, err, err_size, "session");
 	if (!current) {
@@ -117,13 +115,13 @@ static int answer_in_session(sty *s, int64_t pid, const char *session, uint32_t 
 		rc = sty_telemetry_store(s, pid, trial, tm, info->broken, sizeof info->broken, err, err_size);
 	if (rc)
 		return rc;
-	if (sqlite3_prepare_v2(s->db, "UPDATE sessions SET last_idx = ?, last_answer = ? WHERE participant = ?", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "UPDATE sessions SET last_idx = ?, last_answer = ? WHERE participant = ?")))
 		return sty_db_fail(s, err, err_size, "session");
 	sqlite3_bind_int64(st, 1, trial);
 	sqlite3_bind_int64(st, 2, answer);
 	sqlite3_bind_int64(st, 3, pid);
 	rc = sqlite3_step(st) == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "session");
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return rc;
 }
 
@@ -181,10 +179,10 @@ int sty_clip_padded_size(sty *s, const char *root, const char *name, const char 
 	int rc = TL_OK;
 	uint64_t largest = 0;
 	/* every clip of the conditions that share this clip's reference: one scene x camera path, catch pairs included */
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT c2.ref_clip, c2.test_clip FROM clip_names k JOIN trials t ON t.participant = k.participant"
-			       " AND t.idx = k.idx JOIN conditions c ON c.id = t.condition JOIN conditions c2 ON c2.ref_clip = c.ref_clip"
-			       " WHERE k.name = ?", -1, &st, NULL)) {
+	if (!(st = sty_stmt(s,
+			    "SELECT c2.ref_clip, c2.test_clip FROM clip_names k JOIN trials t ON t.participant = k.participant"
+			    " AND t.idx = k.idx JOIN conditions c ON c.id = t.condition JOIN conditions c2 ON c2.ref_clip = c.ref_clip"
+			    " WHERE k.name = ?"))) {
 		rc = sty_db_fail(s, err, err_size, "clip size");
 		goto out;
 	}
@@ -198,7 +196,7 @@ int sty_clip_padded_size(sty *s, const char *root, const char *name, const char 
 			if (stat(path, &sb) == 0 && (uint64_t)sb.st_size > largest)
 				largest = (uint64_t)sb.st_size;
 		}
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_DONE)
 		rc = sty_db_fail(s, err, err_size, "clip size");
 	else

@@ -37,10 +37,9 @@ static int has_adaptive(sty *s)
 {
 	sqlite3_stmt *st;
 	int has = 0;
-	if (sqlite3_prepare_v2(s->db, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_trials'", -1, &st,
-			       NULL) == SQLITE_OK)
+	if ((st = sty_stmt(s, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'adaptive_trials'")))
 		has = sqlite3_step(st) == SQLITE_ROW;
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return has;
 }
 
@@ -52,37 +51,36 @@ static int append_retake(sty *s, int64_t pid, int64_t idx, int64_t orig, char *e
 	int adaptive = has_adaptive(s);
 	int64_t grp = -1;
 	if (adaptive) {
-		if (sqlite3_prepare_v2(s->db, "SELECT grp FROM adaptive_trials WHERE participant = ? AND idx = ?", -1, &st, NULL))
+		if (!(st = sty_stmt(s, "SELECT grp FROM adaptive_trials WHERE participant = ? AND idx = ?")))
 			return sty_db_fail(s, err, err_size, "retake");
 		sqlite3_bind_int64(st, 1, pid);
 		sqlite3_bind_int64(st, 2, idx);
 		if (sqlite3_step(st) == SQLITE_ROW)
 			grp = sqlite3_column_int64(st, 0);
-		sqlite3_finalize(st);
+		sty_stmt_done(s, st);
 	}
-	if (sqlite3_prepare_v2(s->db,
-			       "INSERT INTO trials(participant, idx, condition, ref_first, kind, break_before, retake_of)"
-			       " SELECT ?1, (SELECT max(idx) + 1 FROM trials WHERE participant = ?1), CASE WHEN ?4 >= 0 THEN ?4 ELSE"
-			       " condition END, ref_first, kind, 0, ?3 FROM trials WHERE participant = ?1 AND idx = ?2", -1, &st,
-			       NULL))
+	if (!(st = sty_stmt(s,
+			    "INSERT INTO trials(participant, idx, condition, ref_first, kind, break_before, retake_of)"
+			    " SELECT ?1, (SELECT max(idx) + 1 FROM trials WHERE participant = ?1), CASE WHEN ?4 >= 0 THEN ?4 ELSE"
+			    " condition END, ref_first, kind, 0, ?3 FROM trials WHERE participant = ?1 AND idx = ?2")))
 		return sty_db_fail(s, err, err_size, "retake");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, idx);
 	sqlite3_bind_int64(st, 3, orig);
 	sqlite3_bind_int64(st, 4, grp);
 	int r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_DONE)
 		return sty_db_fail(s, err, err_size, "retake");
 	if (grp < 0)
 		return TL_OK;
-	if (sqlite3_prepare_v2(s->db, "INSERT INTO adaptive_trials(participant, idx, grp) SELECT ?1, max(idx), ?2 FROM trials"
-				      " WHERE participant = ?1", -1, &st, NULL))
+	if (!(st = sty_stmt(s, "INSERT INTO adaptive_trials(participant, idx, grp) SELECT ?1, max(idx), ?2 FROM trials"
+				      " WHERE participant = ?1")))
 		return sty_db_fail(s, err, err_size, "retake");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, grp);
 	r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	return r == SQLITE_DONE ? TL_OK : sty_db_fail(s, err, err_size, "retake");
 }
 
@@ -94,26 +92,26 @@ int sty_telemetry_store(sty *s, int64_t pid, uint32_t trial, const sty_telemetry
 		broken_out[0] = 0;
 	sqlite3_stmt *st;
 	/* the trial: its clip duration, kind, planned trial and how often that one was retaken already */
-	if (sqlite3_prepare_v2(s->db,
-			       "SELECT c.clip_ms, t.kind, coalesce(t.retake_of, t.idx), (SELECT count(*) FROM trials r WHERE"
-			       " r.participant = ?1 AND r.retake_of = coalesce(t.retake_of, t.idx)) FROM trials t JOIN conditions c"
-			       " ON c.id = t.condition WHERE t.participant = ?1 AND t.idx = ?2", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "SELECT c.clip_ms, t.kind, coalesce(t.retake_of, t.idx), (SELECT count(*) FROM trials r WHERE"
+			    " r.participant = ?1 AND r.retake_of = coalesce(t.retake_of, t.idx)) FROM trials t JOIN conditions c"
+			    " ON c.id = t.condition WHERE t.participant = ?1 AND t.idx = ?2")))
 		return sty_db_fail(s, err, err_size, "telemetry");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, trial);
 	if (sqlite3_step(st) != SQLITE_ROW) {
-		sqlite3_finalize(st);
+		sty_stmt_done(s, st);
 		return sty_db_fail(s, err, err_size, "telemetry");
 	}
 	double clip_ms = sqlite3_column_type(st, 0) == SQLITE_NULL ? NAN : sqlite3_column_double(st, 0);
 	int training = !strcmp((const char *)sqlite3_column_text(st, 1), "training");
 	int64_t orig = sqlite3_column_int64(st, 2), retakes = sqlite3_column_int64(st, 3);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	sty_playback_verdict(t, clip_ms, why, sizeof why);
-	if (sqlite3_prepare_v2(s->db,
-			       "UPDATE answers SET play_a_ms = ?3, play_b_ms = ?4, dropped_frames = ?5, total_frames = ?6,"
-			       " hidden = ?7, hidden_ms = ?8, hidden_play = ?9, fullscreen = ?10, broken = ?11"
-			       " WHERE participant = ?1 AND idx = ?2", -1, &st, NULL))
+	if (!(st = sty_stmt(s,
+			    "UPDATE answers SET play_a_ms = ?3, play_b_ms = ?4, dropped_frames = ?5, total_frames = ?6,"
+			    " hidden = ?7, hidden_ms = ?8, hidden_play = ?9, fullscreen = ?10, broken = ?11"
+			    " WHERE participant = ?1 AND idx = ?2")))
 		return sty_db_fail(s, err, err_size, "telemetry");
 	sqlite3_bind_int64(st, 1, pid);
 	sqlite3_bind_int64(st, 2, trial);
@@ -130,7 +128,7 @@ int sty_telemetry_store(sty *s, int64_t pid, uint32_t trial, const sty_telemetry
 	else
 		sqlite3_bind_null(st, 11);
 	int r = sqlite3_step(st);
-	sqlite3_finalize(st);
+	sty_stmt_done(s, st);
 	if (r != SQLITE_DONE)
 		return sty_db_fail(s, err, err_size, "telemetry");
 	if (broken_out && broken_size)
