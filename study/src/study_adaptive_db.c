@@ -161,8 +161,8 @@ int sty_adaptive_resolve(sty *s, int64_t pid, char *err, size_t err_size)
 		return TL_OK;
 	if (!(st = sty_stmt(s,
 			    "SELECT a.idx, a.grp FROM adaptive_trials a WHERE a.participant = ?1 AND a.resolved = 0 AND"
-			    " a.idx = (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
-			    " idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))")))
+			    " a.idx = (SELECT min(idx) FROM trials u WHERE participant = ?1 AND"
+			    " NOT EXISTS (SELECT 1 FROM answers b WHERE b.participant = ?1 AND b.idx = u.idx))")))
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	sqlite3_bind_int64(st, 1, pid);
 	int r = sqlite3_step(st);

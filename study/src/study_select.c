@@ -32,11 +32,11 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 	int rc = TL_OK;
 	if (!(st = sty_stmt(s,
 			    "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL),"
-			    " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers"
-			    "  WHERE participant = ?1)),"
+			    " (SELECT count(*) FROM trials u WHERE participant = ?1 AND NOT EXISTS (SELECT 1 FROM answers a"
+			    "  WHERE a.participant = ?1 AND a.idx = u.idx)),"
 			    " t.idx, t.ref_first, t.kind, t.break_before, c.ref_clip, c.test_clip"
 			    " FROM trials t JOIN conditions c ON c.id = t.condition"
-			    " WHERE t.participant = ?1 AND t.idx NOT IN (SELECT idx FROM answers WHERE participant = ?1)"
+			    " WHERE t.participant = ?1 AND NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1 AND a.idx = t.idx)"
 			    " ORDER BY t.idx LIMIT 1")))
 		return sty_db_fail(s, err, err_size, "next trial");
 	sqlite3_bind_int64(st, 1, pid);
@@ -77,8 +77,8 @@ int sty_select_answer(sty *s, int64_t pid, uint32_t trial, int64_t answer, int64
 	if (!(st = sty_stmt(s,
 			    "SELECT (SELECT count(*) FROM trials WHERE participant = ?1 AND idx = ?2),"
 			    " (SELECT count(*) FROM answers WHERE participant = ?1 AND idx = ?2),"
-			    " (SELECT min(idx) FROM trials WHERE participant = ?1 AND"
-			    "  idx NOT IN (SELECT idx FROM answers WHERE participant = ?1))"))) {
+			    " (SELECT min(idx) FROM trials u WHERE participant = ?1 AND"
+			    "  NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1 AND a.idx = u.idx))"))) {
 		rc = sty_db_fail(s, err, err_size, "answer");
 		goto done;
 	}

@@ -21,13 +21,12 @@ static void fill_info(sty *s, int64_t pid, sty_session_info *info)
 {
 	sqlite3_stmt *st;
 	if (!(st = sty_stmt(s,
-			    "SELECT label, (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL) -"
-			    " (SELECT count(*) FROM trials WHERE participant = ?1 AND idx NOT IN (SELECT idx FROM answers WHERE"
-			    " participant = ?1)), (SELECT count(*) FROM trials WHERE participant = ?1 AND retake_of IS NULL)"
-			    " FROM participants WHERE id = ?1")))
+			    "SELECT (SELECT label FROM participants WHERE id = ?1), count(*) FILTER (WHERE retake_of IS NULL) -"
+			    " count(*) FILTER (WHERE NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1 AND a.idx = t.idx)),"
+			    " count(*) FILTER (WHERE retake_of IS NULL) FROM trials t WHERE t.participant = ?1"))) /* one pass */
 		return;
 	sqlite3_bind_int64(st, 1, pid);
-	if (sqlite3_step(st) == SQLITE_ROW) {
+	if (sqlite3_step(st) == SQLITE_ROW && sqlite3_column_text(st, 0)) {
 		snprintf(info->label, sizeof info->label, "%s", (const char *)sqlite3_column_text(st, 0));
 		info->answered = (uint32_t)sqlite3_column_int(st, 1);
 		info->total = (uint32_t)sqlite3_column_int(st, 2);
