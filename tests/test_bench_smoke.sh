@@ -33,7 +33,7 @@ smokes=(
   "bench-metrics|--pairs 2 --runs 1 --compute-runs 1|metrics speed"
   "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"
   "bench-study|--participants 3|: 60 test ratings in the database (expected 60)"
-  "bench-study|--participants 3 --client node --addresses many|The server's time per answer p50"
+  "bench-study|--participants 3 --client node --addresses many|the server's time per answer p50"
   "bench-thresholds|--studies 2|sd 1: .*RMSE"
 )
 failed=0

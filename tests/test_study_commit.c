@@ -14,19 +14,26 @@
 #include <stddef.h>
 #include <cmocka.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "study_internal.h"
+#include "taslab/study_serve.h"
 #include "test_study_util.h"
 
 static int fail_commits; /* how many of the next commits the hook fails */
+static int commits_seen; /* commits the hook saw (it runs where SQLite commits) */
 
 static int commit_hook(void *arg)
 {
 	(void)arg;
+	__atomic_add_fetch(&commits_seen, 1, __ATOMIC_SEQ_CST);
 	return fail_commits > 0 ? fail_commits--, 1 : 0;
 }
 
@@ -159,10 +166,91 @@ static void test_reader_waits_for_the_batch(void **state)
 	sty_close(&s);
 }
 
+/* One request on a new connection (Connection: close) to 127.0.0.1:port; the reply into `out`, its status returned. */
+static int http(int port, const char *method, const char *path, const char *body, char *out, size_t size)
+{
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+	struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+	assert_int_equal(connect(fd, (struct sockaddr *)&a, sizeof a), 0);
+	char req[1024];
+	int n = snprintf(req, sizeof req, "%s %s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n"
+		 "Content-Type: application/json\r\nContent-Length: %zu\r\n\r\n%s", method, path, strlen(body), body);
+	assert_int_equal(write(fd, req, (size_t)n), n);
+	size_t len = 0;
+	ssize_t r;
+	while (len + 1 < size && (r = read(fd, out + len, size - 1 - len)) > 0)
+		len += (size_t)r;
+	out[len] = 0;
+	close(fd);
+	int status = 0;
+	sscanf(out, "HTTP/1.1 %d", &status);
+	return status;
+}
+
+static char log_text[16384];
+static void log_keep(void *cls, const char *line)
+{
+	(void)cls;
+	size_t n = strlen(log_text);
+	snprintf(log_text + n, sizeof log_text - n, "%s\n", line);
+}
+
+/* Issue 32.3: the server's replies wait for their commit without holding a thread (the committer thread commits,
+ * the connection is suspended until then). Over HTTP, with one server thread: a commit that fails makes the
+ * parked reply a 500 and stores nothing (the trial's clip names, an answer); the next requests succeed; every
+ * commit the server reports is one SQLite made (the hook counts them). */
+static void test_parked_replies(void **state)
+{
+	(void)state;
+	const char *dir = tu_tmpdir("study_commit_parked");
+	char stim[4096], err[1024], path[256], body[128], resp[8192];
+	snprintf(stim, sizeof stim, "%s/stimuli", dir);
+	make_stimuli(stim);
+	sty_design_summary sm;
+	sty *s = designed(dir, "p.db", 2, 8, &sm);
+	char **codes;
+	size_t n;
+	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), TL_OK);
+	sty_server *sv = NULL;
+	sty_server_desc d = {.threads = 1, .log = log_keep};
+	if (sty_server_start(s, &d, &sv, err, sizeof err))
+		fail_msg("%s", err);
+	sqlite3_commit_hook(s->db, commit_hook, NULL); /* after the start's own write (the served URL) */
+	commits_seen = 0;
+	int port = sty_server_port(sv);
+	snprintf(path, sizeof path, "/api/%s/trial", codes[0]);
+	fail_commits = 1; /* the trial's clip names are not stored: 500, and no names */
+	assert_int_equal(http(port, "GET", path, "", resp, sizeof resp), 500);
+	assert_null(strstr(resp, "clip_a"));
+	if (!strstr(log_text, "a failed commit: its requests got 500"))
+		fail_msg("the log has no line on the failed commit:\n%s", log_text);
+	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM clip_names"), 0);
+	assert_int_equal(http(port, "GET", path, "", resp, sizeof resp), 200);
+	assert_non_null(strstr(resp, "\"index\":0"));
+	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM clip_names"), 2);
+	snprintf(path, sizeof path, "/api/%s/answer", codes[0]);
+	snprintf(body, sizeof body, "{\"trial\": 0, \"answer\": 1, \"rt_ms\": 900}");
+	fail_commits = 1; /* the answer is not stored: 500, and the trial is still to be answered */
+	assert_int_equal(http(port, "POST", path, body, resp, sizeof resp), 500);
+	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 0);
+	assert_int_equal(http(port, "POST", path, body, resp, sizeof resp), 200);
+	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 1);
+	sty_server_stats st = sty_server_get_stats(sv);
+	assert_int_equal(st.answers, 1);
+	sty_server_stop(&sv);
+	assert_int_equal(st.commits, (uint64_t)__atomic_load_n(&commits_seen, __ATOMIC_SEQ_CST));
+	assert_true(st.commits >= 4);
+	sqlite3_commit_hook(s->db, NULL, NULL);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_reader_waits_for_the_batch),
+		cmocka_unit_test(test_parked_replies),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -277,9 +277,10 @@ static int study_main(void *opts, cli_ctx *ctx)
 			sty_server_stats st = sty_server_get_stats(sv);
 			sty_server_stop(&sv);
 			if (st.answers)
-				fprintf(stderr, "taslab study serve: %llu answers acknowledged; the server's time per answer p50 %.2f ms, "
-						"p99 %.2f ms (complete request to reply queued, its durable commit included)\n",
-					(unsigned long long)st.answers, st.answer_ms_p50, st.answer_ms_p99);
+				fprintf(stderr, "taslab study serve: %llu answers acknowledged in %llu commits; the server's time per "
+						"answer p50 %.2f ms, p99 %.2f ms (complete request to reply queued, its durable commit "
+						"included)\n", (unsigned long long)st.answers, (unsigned long long)st.commits,
+					st.answer_ms_p50, st.answer_ms_p99);
 			fprintf(stderr, "taslab study serve: stopped\n");
 		}
 	} else if (!strcmp(sub, "tally")) {

@@ -23,12 +23,33 @@ void sty_batch_init(sty *s)
 {
 	pthread_cond_init(&s->batch.joined, NULL);
 	pthread_cond_init(&s->batch.done, NULL);
+	pthread_cond_init(&s->batch.work, NULL);
 }
 
 void sty_batch_destroy(sty *s)
 {
 	pthread_cond_destroy(&s->batch.joined);
 	pthread_cond_destroy(&s->batch.done);
+	pthread_cond_destroy(&s->batch.work);
+}
+
+/* The deferral state of this thread (sty_batch_defer_begin / _end). */
+static __thread struct {
+	bool on, taken;
+	uint64_t ticket;
+} defer;
+
+void sty_batch_defer_begin(void)
+{
+	defer.on = true;
+	defer.taken = false;
+}
+
+bool sty_batch_defer_end(uint64_t *ticket)
+{
+	defer.on = false;
+	*ticket = defer.ticket;
+	return defer.taken;
 }
 
 void sty_batch_lock(sty *s)
@@ -49,6 +70,21 @@ int sty_batch_join(sty *s, char *err, size_t err_size)
 	if (sty_exec(s, "SAVEPOINT request") != SQLITE_OK)
 		return sty_db_fail(s, err, err_size, "starting a transaction");
 	return TL_OK;
+}
+
+/* Waits (s->lock released meanwhile) up to GATHER_ROUNDS x GATHER_NS while requests are on their way into the batch. */
+static void gather(sty *s)
+{
+	for (int round = 0; round < GATHER_ROUNDS && __atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST); round++) {
+		struct timespec until;
+		clock_gettime(CLOCK_REALTIME, &until);
+		until.tv_nsec += GATHER_NS;
+		if (until.tv_nsec >= 1000000000)
+			until.tv_sec++, until.tv_nsec -= 1000000000;
+		while (__atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST) &&
+		       pthread_cond_timedwait(&s->batch.joined, &s->lock, &until) != ETIMEDOUT)
+			;
+	}
 }
 
 /* Commits the open batch (s->lock held) and publishes its result to the members. */
@@ -88,22 +124,21 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 		return sty_db_fail(s, err, err_size, "storing");
 	uint64_t mine = s->batch.epoch;
 	s->batch.members++;
+	if (s->batch.committer && defer.on && !defer.taken) { /* the reply waits instead (sty_batch_defer_end) */
+		defer.taken = true;
+		defer.ticket = mine;
+		pthread_cond_signal(&s->batch.work);
+		return TL_OK;
+	}
+	if (s->batch.committer)
+		pthread_cond_signal(&s->batch.work);
 	while (s->batch.epoch == mine) {
-		if (s->batch.leading) { /* another request is gathering this batch: it commits for us */
+		if (s->batch.leading || s->batch.committer) { /* another request is gathering this batch: it commits for us */
 			pthread_cond_wait(&s->batch.done, &s->lock);
 			continue;
 		}
 		s->batch.leading = true;
-		for (int round = 0; round < GATHER_ROUNDS && __atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST); round++) {
-			struct timespec until;
-			clock_gettime(CLOCK_REALTIME, &until);
-			until.tv_nsec += GATHER_NS;
-			if (until.tv_nsec >= 1000000000)
-				until.tv_sec++, until.tv_nsec -= 1000000000;
-			while (__atomic_load_n(&s->batch.coming, __ATOMIC_SEQ_CST) &&
-			       pthread_cond_timedwait(&s->batch.joined, &s->lock, &until) != ETIMEDOUT)
-				;
-		}
+		gather(s);
 		s->batch.leading = false;
 		batch_commit(s);
 	}
@@ -112,4 +147,55 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 	if (s->batch.results[mine % STY_BATCH_RESULTS])
 		return tl_error(err, err_size, TL_ERR_DB, "%s: storing: %s", s->path, s->batch.why);
 	return TL_OK;
+}
+
+/* ------------------------------------------------------------------ the committer thread */
+
+static void *committer_main(void *arg)
+{
+	sty *s = arg;
+	pthread_mutex_lock(&s->lock);
+	for (;;) {
+		while (!s->batch.stopping && !(s->batch.open && s->batch.members))
+			pthread_cond_wait(&s->batch.work, &s->lock);
+		if (!(s->batch.open && s->batch.members))
+			break; /* stopping, and nothing left to commit */
+		gather(s);
+		uint64_t epoch = s->batch.epoch;
+		batch_commit(s);
+		int rc = s->batch.results[epoch % STY_BATCH_RESULTS];
+		char why[sizeof s->batch.why];
+		snprintf(why, sizeof why, "%s", rc ? s->batch.why : "");
+		pthread_mutex_unlock(&s->lock);
+		s->batch.on_commit(s->batch.ctx, epoch, rc, why);
+		pthread_mutex_lock(&s->lock);
+	}
+	s->batch.committer = false;
+	pthread_mutex_unlock(&s->lock);
+	return NULL;
+}
+
+int sty_batch_committer_start(sty *s, void (*on_commit)(void *ctx, uint64_t epoch, int rc, const char *why), void *ctx)
+{
+	pthread_mutex_lock(&s->lock);
+	s->batch.on_commit = on_commit;
+	s->batch.ctx = ctx;
+	s->batch.stopping = false;
+	s->batch.committer = true;
+	int bad = pthread_create(&s->batch.thread, NULL, committer_main, s);
+	if (bad)
+		s->batch.committer = false;
+	pthread_mutex_unlock(&s->lock);
+	return bad ? TL_ERR_NOMEM : TL_OK;
+}
+
+void sty_batch_committer_stop(sty *s)
+{
+	pthread_mutex_lock(&s->lock);
+	bool running = s->batch.committer;
+	s->batch.stopping = true;
+	pthread_cond_signal(&s->batch.work);
+	pthread_mutex_unlock(&s->lock);
+	if (running)
+		pthread_join(s->batch.thread, NULL);
 }

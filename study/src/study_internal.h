@@ -32,6 +32,12 @@ struct sty {
 		int results[STY_BATCH_RESULTS];
 		char why[256];        /* SQLite's message of the last failed commit */
 		pthread_cond_t joined, done;
+		/* The committer thread (sty_batch_committer_start): it commits, requests on a deferring thread do not wait */
+		bool committer, stopping;
+		pthread_t thread;
+		pthread_cond_t work; /* a deferred member joined, or stop */
+		void (*on_commit)(void *ctx, uint64_t epoch, int rc, const char *why);
+		void *ctx;
 	} batch;
 	struct sty_stmt_slot { /* sty_stmt's cache: the SQL's address and its prepared statement */
 		const char *sql;
@@ -68,6 +74,18 @@ void sty_batch_destroy(sty *s);
 void sty_batch_lock(sty *s);
 int sty_batch_join(sty *s, char *err, size_t err_size);
 int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size);
+
+/* Deferred replies (the server, issue 32.3). While a committer thread runs, a request handled between
+ * sty_batch_defer_begin and sty_batch_defer_end on its thread does not wait in sty_batch_leave for its commit: that
+ * returns TL_OK at once, and sty_batch_defer_end returns true with the batch's epoch in *ticket. The caller must not
+ * send the reply before on_commit(ctx, ticket, rc, why) has been called for that epoch (from the committer thread,
+ * s->lock not held; rc TL_OK, or TL_ERR_DB and SQLite's message: nothing of the batch was stored). So a waiting
+ * request no longer holds its server thread, and a batch gathers every request that arrives during a commit. */
+int sty_batch_committer_start(sty *s, void (*on_commit)(void *ctx, uint64_t epoch, int rc, const char *why), void *ctx);
+/* Commits what is open, reports it, stops the thread; requests afterwards wait for their commits again. */
+void sty_batch_committer_stop(sty *s);
+void sty_batch_defer_begin(void);
+bool sty_batch_defer_end(uint64_t *ticket);
 
 /* Formats "DB: what: sqlite message" into err; returns TL_ERR_DB. */
 int sty_db_fail(sty *s, char *err, size_t err_size, const char *what);

@@ -12,6 +12,8 @@
 
 #define STY_ANSWER_BUCKETS 216 /* 8 per octave from 1 us to 2^27 us (134 s) */
 
+#define STY_PARK_RESULTS 4096 /* epochs whose result a reply parked late can still find */
+
 struct MHD_Daemon;
 struct conn_track;
 
@@ -37,6 +39,13 @@ struct sty_server {
 	pthread_t watchdog;
 	sty_server_stats stats;
 	uint64_t answer_us[STY_ANSWER_BUCKETS]; /* answers by handling time, bucket floor(8 log2 us) (atomic) */
+	/* Replies waiting for their batch's commit, their connections suspended (study_serve_mhd.c, issue 32.3). */
+	pthread_mutex_t park_lock;
+	struct conn_state *parked;
+	uint64_t reported;               /* the committer has reported every epoch below this */
+	int results[STY_PARK_RESULTS];   /* their results, by epoch modulo STY_PARK_RESULTS */
+	bool committing;                 /* the committer thread runs */
+	uint64_t commits;                /* batches the committer committed (atomic) */
 };
 
 /* One line to the server's log (desc.log, else stderr), at most 10 a second; newlines become spaces. */

@@ -39,6 +39,14 @@ typedef struct conn_state {
 	char body[STY_MAX_BODY_B + 1];
 	size_t len;
 	bool too_large;
+	/* a reply parked until its batch's commit (on_commit resumes the connection) */
+	bool resumed, answer;
+	int commit_rc;
+	uint64_t ticket;
+	sty_response reply;
+	struct timespec t0;
+	struct MHD_Connection *c;
+	struct conn_state *next;
 } conn_state;
 
 typedef struct header_list {
@@ -323,7 +331,45 @@ sty_server_stats sty_server_get_stats(sty_server *sv)
 		st.answers += counts[b] = __atomic_load_n(&sv->answer_us[b], __ATOMIC_RELAXED);
 	st.answer_ms_p50 = answer_quantile_ms(counts, st.answers, 0.5);
 	st.answer_ms_p99 = answer_quantile_ms(counts, st.answers, 0.99);
+	st.commits = __atomic_load_n(&sv->commits, __ATOMIC_RELAXED);
 	return st;
+}
+
+/* A parked reply, once its batch is committed: as it was, or a 500 when the commit failed (nothing was stored). */
+static enum MHD_Result deliver(struct sty_server *sv, struct MHD_Connection *c, conn_state *cs)
+{
+	cs->resumed = false;
+	if (cs->commit_rc) {
+		sty_response_release(&cs->reply);
+		sty_response_error(&cs->reply, 500, "internal error");
+	} else if (cs->answer) {
+		answer_timed(sv, &cs->t0);
+	}
+	return queue(c, &cs->reply);
+}
+
+/* The committer's report (sty_batch_committer_start): the replies parked for this batch go out. */
+static void on_commit(void *ctx, uint64_t epoch, int rc, const char *why)
+{
+	struct sty_server *sv = ctx;
+	__atomic_add_fetch(&sv->commits, 1, __ATOMIC_RELAXED);
+	pthread_mutex_lock(&sv->park_lock);
+	sv->results[epoch % STY_PARK_RESULTS] = rc;
+	sv->reported = epoch + 1;
+	if (rc) /* logged before the replies go out */
+		sty_serve_log(sv, "storing: %s (a failed commit: its requests got 500, nothing of them was stored)", why);
+	for (conn_state **p = &sv->parked; *p;) {
+		conn_state *cs = *p;
+		if (cs->ticket > epoch) {
+			p = &cs->next;
+			continue;
+		}
+		*p = cs->next;
+		cs->commit_rc = rc;
+		cs->resumed = true;
+		MHD_resume_connection(cs->c);
+	}
+	pthread_mutex_unlock(&sv->park_lock);
 }
 
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
@@ -364,19 +410,40 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 		track_phase(sv, c, CONN_ANSWER);
 		return queue(c, &r);
 	}
+	if (cs->resumed)
+		return deliver(sv, c, cs);
 	track_phase(sv, c, CONN_ANSWER);
 	rq.body = cs->body;
 	rq.body_size = cs->len;
 	rq.body_too_large = cs->too_large;
-	struct timespec t0;
-	clock_gettime(CLOCK_MONOTONIC, &t0);
+	clock_gettime(CLOCK_MONOTONIC, &cs->t0);
+	sty_batch_defer_begin();
 	sty_server_handle(sv, &rq, &r);
+	uint64_t ticket;
+	bool parked = sty_batch_defer_end(&ticket);
 	if (r.status == 0) { /* cannot happen with a body; be safe */
 		sty_response_error(&r, 500, "internal error");
 	}
 	size_t n = strlen(url);
-	if (r.status == 200 && !strcmp(method, "POST") && n > 7 && !strcmp(url + n - 7, "/answer"))
-		answer_timed(sv, &t0);
+	cs->answer = r.status == 200 && !strcmp(method, "POST") && n > 7 && !strcmp(url + n - 7, "/answer");
+	if (parked) { /* the reply waits for the commit, the thread goes on with other connections */
+		cs->reply = r;
+		cs->ticket = ticket;
+		cs->c = c;
+		pthread_mutex_lock(&sv->park_lock);
+		if (ticket >= sv->reported) {
+			cs->next = sv->parked;
+			sv->parked = cs;
+			MHD_suspend_connection(c);
+			pthread_mutex_unlock(&sv->park_lock);
+			return MHD_YES;
+		}
+		cs->commit_rc = sv->results[ticket % STY_PARK_RESULTS]; /* committed already */
+		pthread_mutex_unlock(&sv->park_lock);
+		return deliver(sv, c, cs);
+	}
+	if (cs->answer)
+		answer_timed(sv, &cs->t0);
 	return queue(c, &r);
 }
 
@@ -404,6 +471,7 @@ int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, cha
 		sv->desc = *desc;
 	pthread_mutex_init(&sv->log_lock, NULL);
 	pthread_mutex_init(&sv->conn_lock, NULL);
+	pthread_mutex_init(&sv->park_lock, NULL);
 	pthread_condattr_t ca;
 	pthread_condattr_init(&ca);
 	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -445,12 +513,22 @@ int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char
 		sty_server_stop(&sv);
 		return tl_error(err, err_size, TL_ERR_ARG, "--bind '%s' is not an IPv4 address", bind);
 	}
+	/* The group commit's committer (study_commit.c): a request waiting for its commit gives its thread back. */
+	pthread_mutex_lock(&s->lock);
+	sv->reported = s->batch.epoch;
+	pthread_mutex_unlock(&s->lock);
+	if (sty_batch_committer_start(s, on_commit, sv)) {
+		sty_server_stop(&sv);
+		return tl_error(err, err_size, TL_ERR_NOMEM, "cannot start the server's commit thread");
+	}
+	sv->committing = true;
 	sv->starting = 1;
 	/* Limits against one client locking the others out: connections per client address and in all, an idle
 	 * timeout (silent connections are closed), and the head/body deadlines and the cap on reading connections of
 	 * on_connection and the watchdog (trickling connections are closed). */
 	/* The logger comes first, or MHD prints the messages of the options before it itself. */
-	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG, 0, NULL, NULL,
+	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME,
+				   0, NULL, NULL,
 				   on_request, sv, MHD_OPTION_EXTERNAL_LOGGER, mhd_log, sv, MHD_OPTION_SOCK_ADDR,
 				   (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE, d->threads ? d->threads : 4u,
 				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_NOTIFY_CONNECTION, on_connection, sv,
@@ -507,12 +585,15 @@ void sty_server_stop(sty_server **psv)
 		pthread_mutex_unlock(&sv->conn_lock);
 		pthread_join(sv->watchdog, NULL);
 	}
+	if (sv->committing) /* commits what is open and resumes its parked replies; later requests wait as before */
+		sty_batch_committer_stop(sv->study);
 	if (sv->mhd)
 		MHD_stop_daemon(sv->mhd);
 	if (sv->lock_fd >= 0)
 		close(sv->lock_fd); /* releases the study's serve lock */
 	pthread_cond_destroy(&sv->conn_wake);
 	pthread_mutex_destroy(&sv->conn_lock);
+	pthread_mutex_destroy(&sv->park_lock);
 	pthread_mutex_destroy(&(*psv)->log_lock);
 	free(*psv);
 	*psv = NULL;

@@ -87,6 +87,7 @@ typedef struct sty_server_stats {
 	 * the median and the 99th percentile, in ms, to within 9 % (a histogram of 8 buckets per octave). */
 	uint64_t answers;
 	double answer_ms_p50, answer_ms_p99;
+	uint64_t commits; /* the group commit's transactions (answers, clip names, sessions share them) */
 } sty_server_stats;
 sty_server_stats sty_server_get_stats(sty_server *sv);
 /* Stops listening, waits for the threads, frees. Accepts NULL, nulls the pointer. */
