@@ -11,7 +11,14 @@
  * acknowledged that is not on disk.
  *
  * SQLite allows one writer, so a commit cannot overlap the next batch's writes anyway; the leader keeps s->lock
- * through the COMMIT, and the requests that arrive meanwhile form the next batch. */
+ * through the COMMIT, and the requests that arrive meanwhile form the next batch.
+ *
+ * The server runs a committer thread instead of leaders (sty_batch_committer_start, 2026-11-28): a waiting request
+ * held its server thread, so a batch had at most one request per thread (about three on average with four
+ * threads). Now a request handled on a deferring thread stores its change, takes the batch's epoch as a ticket and
+ * returns; the server suspends its connection, and the committer commits each batch and reports it, which resumes
+ * the batch's connections with their replies (or a 500 when the commit failed). Other callers (commands, tests, a
+ * request handled with no deferral) still wait for their commit, which the committer then makes. */
 #include <errno.h>
 #include <time.h>
 

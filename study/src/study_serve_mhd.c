@@ -40,7 +40,7 @@ typedef struct conn_state {
 	size_t len;
 	bool too_large;
 	/* a reply parked until its batch's commit (on_commit resumes the connection) */
-	bool resumed, answer;
+	bool resumed, answer, holding; /* holding: `reply` is this state's until it is queued */
 	int commit_rc;
 	uint64_t ticket;
 	sty_response reply;
@@ -338,7 +338,7 @@ sty_server_stats sty_server_get_stats(sty_server *sv)
 /* A parked reply, once its batch is committed: as it was, or a 500 when the commit failed (nothing was stored). */
 static enum MHD_Result deliver(struct sty_server *sv, struct MHD_Connection *c, conn_state *cs)
 {
-	cs->resumed = false;
+	cs->resumed = cs->holding = false;
 	if (cs->commit_rc) {
 		sty_response_release(&cs->reply);
 		sty_response_error(&cs->reply, 500, "internal error");
@@ -428,6 +428,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 	cs->answer = r.status == 200 && !strcmp(method, "POST") && n > 7 && !strcmp(url + n - 7, "/answer");
 	if (parked) { /* the reply waits for the commit, the thread goes on with other connections */
 		cs->reply = r;
+		cs->holding = true;
 		cs->ticket = ticket;
 		cs->c = c;
 		pthread_mutex_lock(&sv->park_lock);
@@ -450,6 +451,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
 	(void)toe;
+	conn_state *cs = *con_cls;
+	if (cs && cs->holding) /* a parked reply never sent (the server stopping) */
+		sty_response_release(&cs->reply);
 	free(*con_cls);
 	*con_cls = NULL;
 	track_phase(cls, c, CONN_HEAD); /* kept alive: the next request's head is due from now */
