@@ -133,18 +133,25 @@ static bool round_trip(sty *s, const char *code, int fail)
 	return true;
 }
 
-static void test_reader_waits_for_the_batch(void **state)
+/* A study of 8 participants (design seed `seed`) from the four-set stimuli in a fresh folder `name`, and its codes. */
+static sty *study_with_codes(const char *name, uint64_t seed, char ***codes, size_t *n)
 {
-	(void)state;
-	const char *dir = tu_tmpdir("study_commit");
+	const char *dir = tu_tmpdir(name);
 	char stim[4096], err[1024];
 	snprintf(stim, sizeof stim, "%s/stimuli", dir);
 	make_stimuli(stim);
 	sty_design_summary sm;
-	sty *s = designed(dir, "s.db", 3, 8, &sm);
-	char **codes;
+	sty *s = designed(dir, "s.db", seed, 8, &sm);
+	assert_int_equal(sty_participant_codes(s, codes, n, err, sizeof err), TL_OK);
+	return s;
+}
+
+static void test_reader_waits_for_the_batch(void **state)
+{
+	(void)state;
+	char err[1024], **codes;
 	size_t n;
-	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), TL_OK);
+	sty *s = study_with_codes("study_commit", 3, &codes, &n);
 	sqlite3_commit_hook(s->db, commit_hook, NULL);
 	/* the commit fails: the reader fails with it (a participant per try, until the reader got into the batch) */
 	size_t used = 0;
@@ -203,15 +210,9 @@ static void log_keep(void *cls, const char *line)
 static void test_parked_replies(void **state)
 {
 	(void)state;
-	const char *dir = tu_tmpdir("study_commit_parked");
-	char stim[4096], err[1024], path[256], body[128], resp[8192];
-	snprintf(stim, sizeof stim, "%s/stimuli", dir);
-	make_stimuli(stim);
-	sty_design_summary sm;
-	sty *s = designed(dir, "p.db", 2, 8, &sm);
-	char **codes;
+	char err[1024], path[256], body[128], resp[8192], **codes;
 	size_t n;
-	assert_int_equal(sty_participant_codes(s, &codes, &n, err, sizeof err), TL_OK);
+	sty *s = study_with_codes("study_commit_parked", 2, &codes, &n);
 	sty_server *sv = NULL;
 	sty_server_desc d = {.threads = 1, .log = log_keep};
 	if (sty_server_start(s, &d, &sv, err, sizeof err))
