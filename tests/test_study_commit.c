@@ -205,8 +205,8 @@ static void log_keep(void *cls, const char *line)
 
 /* Issue 32.3: the server's replies wait for their commit without holding a thread (the committer thread commits,
  * the connection is suspended until then). Over HTTP, with one server thread: a commit that fails makes the
- * parked reply a 500 and stores nothing (the trial's clip names, an answer); the next requests succeed; every
- * commit the server reports is one SQLite made (the hook counts them). */
+ * parked reply a 500 and stores nothing (the trial's clip names, an answer) and logs no answer; the next requests
+ * succeed; every commit the server reports is one SQLite made (the hook counts them). */
 static void test_parked_replies(void **state)
 {
 	(void)state;
@@ -235,8 +235,11 @@ static void test_parked_replies(void **state)
 	fail_commits = 1; /* the answer is not stored: 500, and the trial is still to be answered */
 	assert_int_equal(http(port, "POST", path, body, resp, sizeof resp), 500);
 	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 0);
+	if (strstr(log_text, "answered trial 0")) /* its log line waits for the commit, and goes with it */
+		fail_msg("the log lists an answer that was not stored:\n%s", log_text);
 	assert_int_equal(http(port, "POST", path, body, resp, sizeof resp), 200);
 	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 1);
+	assert_non_null(strstr(log_text, "answered trial 0 (1/"));
 	sty_server_stats st = sty_server_get_stats(sv);
 	assert_int_equal(st.answers, 1);
 	sty_server_stop(&sv);

@@ -125,8 +125,8 @@ int sty_adaptive_choice(sty *s, int64_t grp, int64_t *condition, char *err, size
 	if (!(st = sty_stmt(s,
 			    "SELECT t.condition, t.ref_first, a.answer FROM answers a JOIN trials t ON t.participant ="
 			    " a.participant AND t.idx = a.idx JOIN conditions c ON c.id = t.condition JOIN conditions g ON"
-			    " g.id = ?1 WHERE t.kind = 'test' AND a.broken IS NULL AND c.is_catch = 0 AND c.method = g.method AND c.period IS"
-			    " g.period AND c.scene = g.scene AND c.camera = g.camera"))) {
+			    " g.id = ?1 WHERE t.kind = 'test' AND a.broken IS NULL AND c.is_catch = 0 AND c.method = g.method AND"
+			    " c.period IS g.period AND c.scene = g.scene AND c.camera = g.camera"))) {
 		sty_adapt_free(&a);
 		return sty_db_fail(s, err, err_size, "adaptive design");
 	}

@@ -140,13 +140,17 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 	if (s->batch.committer)
 		pthread_cond_signal(&s->batch.work);
 	while (s->batch.epoch == mine) {
-		if (s->batch.leading || s->batch.committer) { /* another request is gathering this batch: it commits for us */
+		if (s->batch.leading || s->batch.committer) { /* a request gathering this batch, or the committer, commits it */
 			pthread_cond_wait(&s->batch.done, &s->lock);
 			continue;
 		}
 		s->batch.leading = true;
 		gather(s);
 		s->batch.leading = false;
+		if (s->batch.committer) { /* started meanwhile (it waits for no leader): it commits this batch */
+			pthread_cond_signal(&s->batch.work);
+			continue;
+		}
 		batch_commit(s);
 	}
 	/* A member reads its batch's result before STY_BATCH_RESULTS later batches overwrite it: members wait for
@@ -163,7 +167,7 @@ static void *committer_main(void *arg)
 	sty *s = arg;
 	pthread_mutex_lock(&s->lock);
 	for (;;) {
-		while (!s->batch.stopping && !(s->batch.open && s->batch.members))
+		while (s->batch.leading || (!s->batch.stopping && !(s->batch.open && s->batch.members)))
 			pthread_cond_wait(&s->batch.work, &s->lock);
 		if (!(s->batch.open && s->batch.members))
 			break; /* stopping, and nothing left to commit */

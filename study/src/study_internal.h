@@ -10,7 +10,7 @@
 #include "taslab/study.h"
 #include "taslab/tl_fs.h"
 
-#define STY_STMTS 40 /* prepared statements kept per handle (sty_stmt) */
+#define STY_STMTS 64 /* prepared statements kept per handle (sty_stmt); the server uses about 40 */
 #define STY_BATCH_RESULTS 64 /* results of the last batches kept for members that wake late (study_commit.c) */
 
 struct sty {

@@ -36,7 +36,8 @@ int sty_select_current(sty *s, int64_t pid, sty_pick *p, char *err, size_t err_s
 			    "  WHERE a.participant = ?1 AND a.idx = u.idx)),"
 			    " t.idx, t.ref_first, t.kind, t.break_before, c.ref_clip, c.test_clip"
 			    " FROM trials t JOIN conditions c ON c.id = t.condition"
-			    " WHERE t.participant = ?1 AND NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1 AND a.idx = t.idx)"
+			    " WHERE t.participant = ?1 AND NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1"
+			    "  AND a.idx = t.idx)"
 			    " ORDER BY t.idx LIMIT 1")))
 		return sty_db_fail(s, err, err_size, "next trial");
 	sqlite3_bind_int64(st, 1, pid);

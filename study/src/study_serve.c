@@ -88,14 +88,50 @@ void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
 	va_end(ap);
 }
 
+__thread sty_held_events *sty_events_held;
+
 /* A stored answer or a completed session (issue 27.8): never dropped by the rate limit — there are at most as many as
- * the study has trials, whoever sends them. */
+ * the study has trials, whoever sends them. Held while the reply waits for its commit (sty_events_held). */
 static void serve_event(struct sty_server *sv, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	sty_held_events *h = sty_events_held;
+	if (h) {
+		char line[512];
+		vsnprintf(line, sizeof line, fmt, ap);
+		size_t n = strlen(line);
+		if (h->len + n + 1 < sizeof h->text) {
+			memcpy(h->text + h->len, line, n);
+			h->text[h->len + n] = '\n';
+			h->len += n + 1;
+			va_end(ap);
+			return;
+		}
+		va_end(ap);
+		va_start(ap, fmt);
+	}
+	serve_vlog(sv, false, fmt, ap);
+	va_end(ap);
+}
+
+void sty_serve_event(struct sty_server *sv, const char *fmt, ...)
 {
 	va_list ap;
 	va_start(ap, fmt);
 	serve_vlog(sv, false, fmt, ap);
 	va_end(ap);
+}
+
+void sty_serve_events_flush(struct sty_server *sv, sty_held_events *h)
+{
+	for (size_t at = 0; at < h->len;) {
+		char *end = memchr(h->text + at, '\n', h->len - at);
+		size_t n = end ? (size_t)(end - (h->text + at)) : h->len - at;
+		sty_serve_event(sv, "%.*s", (int)n, h->text + at);
+		at += n + 1;
+	}
+	h->len = 0;
 }
 
 /* ------------------------------------------------------------------ responses */

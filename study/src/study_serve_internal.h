@@ -48,6 +48,19 @@ struct sty_server {
 	uint64_t commits;                /* batches the committer committed (atomic) */
 };
 
+/* Event lines (answers stored, sessions completed) of a request whose reply may wait for its commit
+ * (study_serve_mhd.c): held here while the thread's sty_events_held points at them, and logged once the commit is
+ * done, or dropped when it failed (its own line says so) — the log never lists an answer that was not stored. */
+typedef struct sty_held_events {
+	char text[1024]; /* lines, each ending in '\n' */
+	size_t len;
+} sty_held_events;
+extern __thread sty_held_events *sty_events_held;
+/* The held lines to the log (never rate-limited), emptied. */
+void sty_serve_events_flush(struct sty_server *sv, sty_held_events *h);
+/* A line that is never rate-limited (a failed commit). */
+void sty_serve_event(struct sty_server *sv, const char *fmt, ...);
+
 /* One line to the server's log (desc.log, else stderr), at most 10 a second; newlines become spaces. */
 void sty_serve_log(struct sty_server *sv, const char *fmt, ...);
 /* `r` initialised to a JSON error {"error": msg} with `status`. */

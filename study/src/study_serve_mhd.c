@@ -41,6 +41,7 @@ typedef struct conn_state {
 	bool too_large;
 	/* a reply parked until its batch's commit (on_commit resumes the connection) */
 	bool resumed, answer, holding; /* holding: `reply` is this state's until it is queued */
+	sty_held_events events;        /* its log lines, logged once its commit is done */
 	int commit_rc;
 	uint64_t ticket;
 	sty_response reply;
@@ -340,10 +341,13 @@ static enum MHD_Result deliver(struct sty_server *sv, struct MHD_Connection *c, 
 {
 	cs->resumed = cs->holding = false;
 	if (cs->commit_rc) {
+		cs->events.len = 0; /* not stored: on_commit's line says so */
 		sty_response_release(&cs->reply);
 		sty_response_error(&cs->reply, 500, "internal error");
-	} else if (cs->answer) {
-		answer_timed(sv, &cs->t0);
+	} else {
+		sty_serve_events_flush(sv, &cs->events);
+		if (cs->answer)
+			answer_timed(sv, &cs->t0);
 	}
 	return queue(c, &cs->reply);
 }
@@ -357,7 +361,7 @@ static void on_commit(void *ctx, uint64_t epoch, int rc, const char *why)
 	sv->results[epoch % STY_PARK_RESULTS] = rc;
 	sv->reported = epoch + 1;
 	if (rc) /* logged before the replies go out */
-		sty_serve_log(sv, "storing: %s (a failed commit: its requests got 500, nothing of them was stored)", why);
+		sty_serve_event(sv, "storing: %s (a failed commit: its requests got 500, nothing of them was stored)", why);
 	for (conn_state **p = &sv->parked; *p;) {
 		conn_state *cs = *p;
 		if (cs->ticket > epoch) {
@@ -418,7 +422,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 	rq.body_too_large = cs->too_large;
 	clock_gettime(CLOCK_MONOTONIC, &cs->t0);
 	sty_batch_defer_begin();
+	cs->events.len = 0;
+	sty_events_held = &cs->events;
 	sty_server_handle(sv, &rq, &r);
+	sty_events_held = NULL;
 	uint64_t ticket;
 	bool parked = sty_batch_defer_end(&ticket);
 	if (r.status == 0) { /* cannot happen with a body; be safe */
@@ -443,6 +450,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 		pthread_mutex_unlock(&sv->park_lock);
 		return deliver(sv, c, cs);
 	}
+	sty_serve_events_flush(sv, &cs->events);
 	if (cs->answer)
 		answer_timed(sv, &cs->t0);
 	return queue(c, &r);
@@ -531,8 +539,8 @@ int sty_server_start(sty *s, const sty_server_desc *desc, sty_server **out, char
 	 * timeout (silent connections are closed), and the head/body deadlines and the cap on reading connections of
 	 * on_connection and the watchdog (trickling connections are closed). */
 	/* The logger comes first, or MHD prints the messages of the options before it itself. */
-	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME,
-				   0, NULL, NULL,
+	sv->mhd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_AUTO | MHD_USE_ERROR_LOG |
+					   MHD_ALLOW_SUSPEND_RESUME, 0, NULL, NULL,
 				   on_request, sv, MHD_OPTION_EXTERNAL_LOGGER, mhd_log, sv, MHD_OPTION_SOCK_ADDR,
 				   (struct sockaddr *)&sa, MHD_OPTION_THREAD_POOL_SIZE, d->threads ? d->threads : 4u,
 				   MHD_OPTION_NOTIFY_COMPLETED, on_completed, sv, MHD_OPTION_NOTIFY_CONNECTION, on_connection, sv,

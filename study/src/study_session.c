@@ -22,7 +22,8 @@ static void fill_info(sty *s, int64_t pid, sty_session_info *info)
 	sqlite3_stmt *st;
 	if (!(st = sty_stmt(s,
 			    "SELECT (SELECT label FROM participants WHERE id = ?1), count(*) FILTER (WHERE retake_of IS NULL) -"
-			    " count(*) FILTER (WHERE NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1 AND a.idx = t.idx)),"
+			    " count(*) FILTER (WHERE NOT EXISTS (SELECT 1 FROM answers a WHERE a.participant = ?1"
+			    "  AND a.idx = t.idx)),"
 			    " count(*) FILTER (WHERE retake_of IS NULL) FROM trials t WHERE t.participant = ?1"))) /* one pass */
 		return;
 	sqlite3_bind_int64(st, 1, pid);
@@ -180,7 +181,8 @@ int sty_clip_padded_size(sty *s, const char *root, const char *name, const char 
 	/* every clip of the conditions that share this clip's reference: one scene x camera path, catch pairs included */
 	if (!(st = sty_stmt(s,
 			    "SELECT c2.ref_clip, c2.test_clip FROM clip_names k JOIN trials t ON t.participant = k.participant"
-			    " AND t.idx = k.idx JOIN conditions c ON c.id = t.condition JOIN conditions c2 ON c2.ref_clip = c.ref_clip"
+			    " AND t.idx = k.idx JOIN conditions c ON c.id = t.condition"
+			    " JOIN conditions c2 ON c2.ref_clip = c.ref_clip"
 			    " WHERE k.name = ?"))) {
 		rc = sty_db_fail(s, err, err_size, "clip size");
 		goto out;

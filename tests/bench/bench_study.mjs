@@ -3,7 +3,7 @@
 // Prints answers/s, p50/p99 POST latency and whether every acknowledged answer is stored exactly once.
 //   node bench_study.mjs BASE_URL ADMIN_TOKEN CODE...
 // By default every participant connects from 127.0.0.1, as a lab behind one NAT or reverse proxy does (issue 32.3);
-// BENCH_ADDRESSES=many gives each its own loopback address (127.0.0.2, .3, ...), as participants at home have.
+// BENCH_ADDRESSES=many gives each its own loopback address (127.0.1.2, .3, ...), as participants at home have.
 import http from 'node:http';
 const [base, token, ...codes] = process.argv.slice(2);
 function request(agent, path, method = 'GET', body = null, headers = {}) {

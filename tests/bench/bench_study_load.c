@@ -13,6 +13,7 @@
 #include <jansson.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <signal.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -133,6 +134,7 @@ int main(int argc, char **argv)
 	int port = atoi(argv[2]), n = argc - 3;
 	bool many = getenv("BENCH_ADDRESSES") && !strcmp(getenv("BENCH_ADDRESSES"), "many");
 	double think = getenv("BENCH_THINK_MS") ? atof(getenv("BENCH_THINK_MS")) : 0;
+	signal(SIGPIPE, SIG_IGN); /* a connection the server closed: write's error says so */
 	part *ps = calloc((size_t)n, sizeof *ps);
 	double *lat = malloc(sizeof *lat * (size_t)n * MAX_TRIALS);
 	if (!ps || !lat)
@@ -148,7 +150,7 @@ int main(int argc, char **argv)
 		p->code = argv[3 + i];
 		p->index = i;
 		p->fd = socket(AF_INET, SOCK_STREAM, 0);
-		if (many) { /* 127.0.x.y from 127.0.0.2 on, as bench_study.mjs numbers them */
+		if (many) { /* 127.0.1.2, 127.0.1.3, ..., as bench_study.mjs numbers them */
 			struct sockaddr_in from = {.sin_family = AF_INET};
 			from.sin_addr.s_addr = htonl(0x7f000000u | (uint32_t)(1 + (i + 2) / 256) << 8 | (uint32_t)((i + 2) % 256));
 			if (bind(p->fd, (struct sockaddr *)&from, sizeof from))
@@ -189,6 +191,8 @@ int main(int argc, char **argv)
 			}
 			if (!(evs[e].events & (EPOLLIN | EPOLLHUP | EPOLLERR)))
 				continue;
+			if (p->in_len >= BUF - 1)
+				fail(p, "a reply larger than the client's buffer");
 			ssize_t r = read(p->fd, p->in + p->in_len, BUF - 1 - p->in_len);
 			if (r < 0 && (errno == EAGAIN || errno == EINTR))
 				continue;
