@@ -16,6 +16,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -136,7 +137,7 @@ enum { SLOW_ADDRS = 10, SLOW_PER_ADDR = 30, SLOW_N = SLOW_ADDRS * SLOW_PER_ADDR,
 
 typedef struct trickle {
 	int port;
-	volatile int stop;
+	atomic_int stop; /* set by the test thread, read by the trickler */
 	int fd[SLOW_N];
 	size_t sent[SLOW_N];
 	unsigned closed, reconnects, connect_failures;
