@@ -30,10 +30,20 @@
 static int fail_commits; /* how many of the next commits the hook fails */
 static int commits_seen; /* commits the hook saw (it runs where SQLite commits) */
 
+static int commit_delay_us; /* how long the hook holds each commit (the server stopping meanwhile) */
+
+static void sleep_us(long us)
+{
+	struct timespec ts = {us / 1000000, us % 1000000 * 1000};
+	nanosleep(&ts, NULL);
+}
+
 static int commit_hook(void *arg)
 {
 	(void)arg;
 	__atomic_add_fetch(&commits_seen, 1, __ATOMIC_SEQ_CST);
+	if (commit_delay_us)
+		sleep_us(commit_delay_us);
 	return fail_commits > 0 ? fail_commits--, 1 : 0;
 }
 
@@ -250,11 +260,61 @@ static void test_parked_replies(void **state)
 	sty_close(&s);
 }
 
+typedef struct poster {
+	int port, status;
+	char path[256], resp[8192];
+} poster;
+
+static void *post_answer(void *arg)
+{
+	poster *p = arg;
+	p->status = http(p->port, "POST", p->path, "{\"trial\": 0, \"answer\": 2, \"rt_ms\": 700}", p->resp, sizeof p->resp);
+	return NULL;
+}
+
+/* The server stopped while a reply waits for its commit: the commit completes before the server stops, the answer
+ * is stored and the log lists it, whether its reply still went out (here it does: the stop resumes the parked
+ * connections before the daemon stops) or its connection closed with the reply held (on_completed). */
+static void test_stop_with_a_parked_reply(void **state)
+{
+	(void)state;
+	char err[1024], resp[8192], **codes;
+	size_t n;
+	sty *s = study_with_codes("study_commit_stop", 4, &codes, &n);
+	sty_server *sv = NULL;
+	log_text[0] = 0;
+	sty_server_desc d = {.threads = 1, .log = log_keep};
+	if (sty_server_start(s, &d, &sv, err, sizeof err))
+		fail_msg("%s", err);
+	poster p = {.port = sty_server_port(sv)};
+	snprintf(p.path, sizeof p.path, "/api/%s/trial", codes[0]);
+	assert_int_equal(http(p.port, "GET", p.path, "", resp, sizeof resp), 200);
+	snprintf(p.path, sizeof p.path, "/api/%s/answer", codes[0]);
+	int before = __atomic_load_n(&commits_seen, __ATOMIC_SEQ_CST);
+	commit_delay_us = 300 * 1000;
+	sqlite3_commit_hook(s->db, commit_hook, NULL);
+	pthread_t th;
+	assert_int_equal(pthread_create(&th, NULL, post_answer, &p), 0);
+	for (int i = 0; i < 500 && __atomic_load_n(&commits_seen, __ATOMIC_SEQ_CST) == before; i++)
+		sleep_us(10 * 1000); /* until the answer's commit is under way */
+	assert_int_not_equal(__atomic_load_n(&commits_seen, __ATOMIC_SEQ_CST), before);
+	sty_server_stop(&sv);
+	pthread_join(th, NULL);
+	commit_delay_us = 0;
+	sqlite3_commit_hook(s->db, NULL, NULL);
+	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 1);
+	if (!strstr(log_text, "answered trial 0 (1/"))
+		fail_msg("the stored answer is not in the log (its reply: HTTP %d):\n%s", p.status, log_text);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_reader_waits_for_the_batch),
 		cmocka_unit_test(test_parked_replies),
+		cmocka_unit_test(test_stop_with_a_parked_reply),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

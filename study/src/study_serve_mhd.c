@@ -460,8 +460,11 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, en
 {
 	(void)toe;
 	conn_state *cs = *con_cls;
-	if (cs && cs->holding) /* a parked reply never sent (the server stopping) */
+	if (cs && cs->holding) { /* a parked reply never sent (the server stopping) */
+		if (cs->resumed && !cs->commit_rc) /* its change is stored: the log lists it all the same */
+			sty_serve_events_flush(cls, &cs->events);
 		sty_response_release(&cs->reply);
+	}
 	free(*con_cls);
 	*con_cls = NULL;
 	track_phase(cls, c, CONN_HEAD); /* kept alive: the next request's head is due from now */
