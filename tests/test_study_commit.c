@@ -17,6 +17,8 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -183,17 +185,28 @@ static void test_reader_waits_for_the_batch(void **state)
 	sty_close(&s);
 }
 
-/* One request on a new connection (Connection: close) to 127.0.0.1:port; the reply into `out`, its status returned. */
-static int http(int port, const char *method, const char *path, const char *body, char *out, size_t size)
+/* One request on a new connection (Connection: close) to 127.0.0.1:port with extra header lines `headers` ("" or
+ * lines ending in CRLF); the reply into `out`, its status returned, -1 when the connection failed. No cmocka
+ * assertions: threads other than the test's call it. */
+static int http_try(int port, const char *method, const char *path, const char *headers, const char *body, char *out,
+		    size_t size)
 {
+	out[0] = 0;
 	int fd = socket(AF_INET, SOCK_STREAM, 0);
 	struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
 	inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
-	assert_int_equal(connect(fd, (struct sockaddr *)&a, sizeof a), 0);
+	if (fd < 0 || connect(fd, (struct sockaddr *)&a, sizeof a)) {
+		if (fd >= 0)
+			close(fd);
+		return -1;
+	}
 	char req[1024];
-	int n = snprintf(req, sizeof req, "%s %s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n"
-		 "Content-Type: application/json\r\nContent-Length: %zu\r\n\r\n%s", method, path, strlen(body), body);
-	assert_int_equal(write(fd, req, (size_t)n), n);
+	int n = snprintf(req, sizeof req, "%s %s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n%s"
+		 "Content-Type: application/json\r\nContent-Length: %zu\r\n\r\n%s", method, path, headers, strlen(body), body);
+	if (n < 0 || (size_t)n >= sizeof req || write(fd, req, (size_t)n) != n) {
+		close(fd);
+		return -1;
+	}
 	size_t len = 0;
 	ssize_t r;
 	while (len + 1 < size && (r = read(fd, out + len, size - 1 - len)) > 0)
@@ -202,6 +215,13 @@ static int http(int port, const char *method, const char *path, const char *body
 	close(fd);
 	int status = 0;
 	sscanf(out, "HTTP/1.1 %d", &status);
+	return status;
+}
+
+static int http(int port, const char *method, const char *path, const char *body, char *out, size_t size)
+{
+	int status = http_try(port, method, path, "", body, out, size);
+	assert_int_not_equal(status, -1);
 	return status;
 }
 
@@ -268,7 +288,8 @@ typedef struct poster {
 static void *post_answer(void *arg)
 {
 	poster *p = arg;
-	p->status = http(p->port, "POST", p->path, "{\"trial\": 0, \"answer\": 2, \"rt_ms\": 700}", p->resp, sizeof p->resp);
+	p->status = http_try(p->port, "POST", p->path, "", "{\"trial\": 0, \"answer\": 2, \"rt_ms\": 700}", p->resp,
+			     sizeof p->resp);
 	return NULL;
 }
 
@@ -309,12 +330,122 @@ static void test_stop_with_a_parked_reply(void **state)
 	sty_close(&s);
 }
 
+typedef struct participant {
+	int port, failed;
+	atomic_int answered;
+	const char *code;
+	atomic_int *stop;
+} participant;
+
+/* Answers its trials one after another (GET trial, POST answer) until done or told to stop. */
+static void *participate(void *arg)
+{
+	participant *p = arg;
+	char path[256], body[128], resp[8192];
+	while (!atomic_load(p->stop)) {
+		snprintf(path, sizeof path, "/api/%s/trial", p->code);
+		if (http_try(p->port, "GET", path, "", "", resp, sizeof resp) != 200) {
+			p->failed++;
+			break;
+		}
+		const char *idx = strstr(resp, "\"index\":");
+		if (!idx)
+			break; /* done */
+		snprintf(path, sizeof path, "/api/%s/answer", p->code);
+		snprintf(body, sizeof body, "{\"trial\": %d, \"answer\": 1, \"rt_ms\": 800}", atoi(idx + 8));
+		if (http_try(p->port, "POST", path, "", body, resp, sizeof resp) != 200) {
+			p->failed++;
+			break;
+		}
+		atomic_fetch_add(&p->answered, 1);
+	}
+	return NULL;
+}
+
+static int answers_so_far(participant *ps, int n)
+{
+	int a = 0;
+	for (int i = 0; i < n; i++)
+		a += atomic_load(&ps[i].answered);
+	return a;
+}
+
+/* Reads of committed data while participants answer without a pause and every commit takes 20 ms. The export waits
+ * for a moment with no batch open, and meanwhile requests may join the open batch but open no new one, so a steady
+ * stream of answers cannot keep it waiting (before, 2026-11-28: a woken export found the next batch open again, as
+ * long as answers came). The status reads on a connection of its own and holds no lock of the server's while its
+ * tally computes, so participants go on answering meanwhile (before: none could, for the whole tally). */
+static void test_reads_under_load(void **state)
+{
+	(void)state;
+	char err[1024], resp[65536], **codes, auth[128];
+	size_t n;
+	sty *s = study_with_codes("study_commit_reads", 5, &codes, &n);
+	sty_server *sv = NULL;
+	log_text[0] = 0;
+	sty_server_desc d = {.threads = 4, .log = log_keep};
+	if (sty_server_start(s, &d, &sv, err, sizeof err))
+		fail_msg("%s", err);
+	int port = sty_server_port(sv);
+	snprintf(auth, sizeof auth, "Authorization: Bearer %s\r\n", sty_admin_token(s));
+	commit_delay_us = 20 * 1000;
+	sqlite3_commit_hook(s->db, commit_hook, NULL);
+	atomic_int stop = 0;
+	enum { P = 6 };
+	participant ps[P];
+	pthread_t th[P];
+	for (int i = 0; i < P; i++) {
+		ps[i] = (participant){.port = port, .code = codes[i], .stop = &stop};
+		assert_int_equal(pthread_create(&th[i], NULL, participate, &ps[i]), 0);
+	}
+	sleep_us(200 * 1000); /* all answering */
+	double export_worst = 0, status_took[2] = {0, 0};
+	int during_status[2] = {0, 0};
+	for (int k = 0; k < 4; k++) {
+		bool status = k % 2;
+		struct timespec t0, t1;
+		int before = answers_so_far(ps, P);
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		assert_int_equal(http_try(port, "GET", status ? "/admin/status" : "/admin/export.csv", auth, "", resp,
+					  sizeof resp), 200);
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		double took = (double)(t1.tv_sec - t0.tv_sec) + (double)(t1.tv_nsec - t0.tv_nsec) / 1e9;
+		if (status)
+			status_took[k / 2] = took, during_status[k / 2] = answers_so_far(ps, P) - before;
+		else
+			export_worst = took > export_worst ? took : export_worst;
+	}
+	int running = 0;
+	for (int i = 0; i < P; i++)
+		running += atomic_load(&ps[i].answered) < 20; /* still answering when the reads were done */
+	atomic_store(&stop, 1);
+	for (int i = 0; i < P; i++)
+		pthread_join(th[i], NULL);
+	sty_server_stop(&sv);
+	commit_delay_us = 0;
+	sqlite3_commit_hook(s->db, NULL, NULL);
+	for (int i = 0; i < P; i++)
+		assert_int_equal(ps[i].failed, 0);
+	fprintf(stderr, "reads under load: exports within %.3f s; status reads %.3f s and %.3f s, %d and %d answers stored "
+			"meanwhile; %d answers in all, %d of %d participants still answering after the reads\n", export_worst,
+		status_took[0], status_took[1], during_status[0], during_status[1], answers_so_far(ps, P), running, P);
+	assert_true(running > 0); /* the reads met the load */
+	if (export_worst > 1.0)
+		fail_msg("an export waited %.3f s while participants answered", export_worst);
+	for (int k = 0; k < 2; k++)
+		if (status_took[k] > 0.3 && during_status[k] == 0) /* 20 ms a commit: several answers in 0.3 s */
+			fail_msg("no answer was stored during a status read of %.3f s", status_took[k]);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_reader_waits_for_the_batch),
 		cmocka_unit_test(test_parked_replies),
 		cmocka_unit_test(test_stop_with_a_parked_reply),
+		cmocka_unit_test(test_reads_under_load),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -69,6 +69,15 @@ void sty_batch_lock(sty *s)
 
 int sty_batch_join(sty *s, char *err, size_t err_size)
 {
+	while (!s->batch.open && s->batch.draining) /* a reader waits for a moment with no batch: it reads first */
+		pthread_cond_wait(&s->batch.done, &s->lock);
+	if (s->batch.open && sqlite3_get_autocommit(s->db)) {
+		/* SQLite rolled the batch's transaction back on its own (after SQLITE_FULL, IOERR, NOMEM): a savepoint now
+		 * would start a transaction of its own, which its RELEASE commits outside the batch. This request fails; the
+		 * batch's COMMIT fails and its members with it. */
+		return tl_error(err, err_size, TL_ERR_DB, "%s: storing: SQLite rolled back the open transaction (%s)", s->path,
+				sqlite3_errmsg(s->db));
+	}
 	if (!s->batch.open) {
 		if (sty_exec(s, "BEGIN IMMEDIATE") != SQLITE_OK)
 			return sty_db_fail(s, err, err_size, "starting a transaction");
@@ -158,6 +167,15 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size)
 	if (s->batch.results[mine % STY_BATCH_RESULTS])
 		return tl_error(err, err_size, TL_ERR_DB, "%s: storing: %s", s->path, s->batch.why);
 	return TL_OK;
+}
+
+void sty_batch_quiesce(sty *s)
+{
+	s->batch.draining++;
+	while (s->batch.open)
+		pthread_cond_wait(&s->batch.done, &s->lock);
+	if (--s->batch.draining == 0)
+		pthread_cond_broadcast(&s->batch.done); /* the requests waiting to open a batch: after s->lock is released */
 }
 
 /* ------------------------------------------------------------------ the committer thread */

@@ -28,6 +28,7 @@ struct sty {
 		unsigned members;     /* requests waiting for the open batch's commit: those whose change is in it, and those that
 				 * read it (sty_batch_leave) */
 		unsigned coming;      /* requests waiting for the lock (atomic) */
+		unsigned draining;    /* readers waiting for no open batch (sty_batch_quiesce): no new batch opens */
 		uint64_t epoch;       /* batches committed (or failed) so far */
 		int results[STY_BATCH_RESULTS];
 		char why[256];        /* SQLite's message of the last failed commit */
@@ -84,6 +85,11 @@ int sty_batch_leave(sty *s, int rc, bool wrote, char *err, size_t err_size);
 int sty_batch_committer_start(sty *s, void (*on_commit)(void *ctx, uint64_t epoch, int rc, const char *why), void *ctx);
 /* Commits what is open, reports it, stops the thread; requests afterwards wait for their commits again. */
 void sty_batch_committer_stop(sty *s);
+/* For a reader of committed data only on the writers' connection (an export, the status), s->lock held: returns
+ * with no batch open, so the connection shows what is on disk, and no write can start until s->lock is released.
+ * While it waits, requests join the open batch but open no new one, so a steady stream of them cannot keep a batch
+ * open forever. */
+void sty_batch_quiesce(sty *s);
 void sty_batch_defer_begin(void);
 bool sty_batch_defer_end(uint64_t *ticket);
 

@@ -90,28 +90,45 @@ void sty_serve_log(struct sty_server *sv, const char *fmt, ...)
 
 __thread sty_held_events *sty_events_held;
 
+/* A line of a request whose reply may wait for its commit: held while the thread's sty_events_held is set (its
+ * first byte says whether it is rate-limited), else logged at once. */
+static void serve_vhold(struct sty_server *sv, bool limited, const char *fmt, va_list ap)
+{
+	sty_held_events *h = sty_events_held;
+	if (h) {
+		char line[512];
+		va_list aq;
+		va_copy(aq, ap);
+		vsnprintf(line, sizeof line, fmt, aq);
+		va_end(aq);
+		size_t n = strlen(line);
+		if (h->len + n + 2 < sizeof h->text) {
+			h->text[h->len++] = limited ? 'L' : 'E';
+			for (size_t k = 0; k < n; k++) /* one line each: serve_vlog makes these spaces too */
+				h->text[h->len++] = line[k] == '\n' || line[k] == '\r' ? ' ' : line[k];
+			h->text[h->len++] = '\n';
+			return;
+		}
+	}
+	serve_vlog(sv, limited, fmt, ap);
+}
+
 /* A stored answer or a completed session (issue 27.8): never dropped by the rate limit — there are at most as many as
  * the study has trials, whoever sends them. Held while the reply waits for its commit (sty_events_held). */
 static void serve_event(struct sty_server *sv, const char *fmt, ...)
 {
 	va_list ap;
 	va_start(ap, fmt);
-	sty_held_events *h = sty_events_held;
-	if (h) {
-		char line[512];
-		vsnprintf(line, sizeof line, fmt, ap);
-		size_t n = strlen(line);
-		if (h->len + n + 1 < sizeof h->text) {
-			memcpy(h->text + h->len, line, n);
-			h->text[h->len + n] = '\n';
-			h->len += n + 1;
-			va_end(ap);
-			return;
-		}
-		va_end(ap);
-		va_start(ap, fmt);
-	}
-	serve_vlog(sv, false, fmt, ap);
+	serve_vhold(sv, false, fmt, ap);
+	va_end(ap);
+}
+
+/* A rate-limited line about a change (a session started), held like serve_event's. */
+static void serve_note(struct sty_server *sv, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	serve_vhold(sv, true, fmt, ap);
 	va_end(ap);
 }
 
@@ -128,7 +145,12 @@ void sty_serve_events_flush(struct sty_server *sv, sty_held_events *h)
 	for (size_t at = 0; at < h->len;) {
 		char *end = memchr(h->text + at, '\n', h->len - at);
 		size_t n = end ? (size_t)(end - (h->text + at)) : h->len - at;
-		sty_serve_event(sv, "%.*s", (int)n, h->text + at);
+		if (n) {
+			if (h->text[at] == 'L')
+				sty_serve_log(sv, "%.*s", (int)n - 1, h->text + at + 1);
+			else
+				sty_serve_event(sv, "%.*s", (int)n - 1, h->text + at + 1);
+		}
 		at += n + 1;
 	}
 	h->len = 0;
@@ -508,8 +530,7 @@ static void serve_export(struct sty_server *sv, const sty_request *rq, int pwcmp
 	 * exported, and a request caught between its answer and its telemetry. */
 	sty *st = sv->study;
 	pthread_mutex_lock(&st->lock);
-	while (st->batch.open)
-		pthread_cond_wait(&st->batch.done, &st->lock);
+	sty_batch_quiesce(st); /* and no new batch opens while it waits (found in review, 2026-11-28) */
 	int rc = pwcmp ? sty_export_pwcmp(st, file, err, sizeof err) : sty_export_long(st, file, err, sizeof err);
 	pthread_mutex_unlock(&st->lock);
 	int fd = rc ? -1 : open(file, O_RDONLY | O_CLOEXEC);
@@ -653,7 +674,7 @@ static void serve_session(struct sty_server *sv, const sty_request *rq, const ch
 		set_internal(sv, r, rq, err);
 		return;
 	}
-	sty_serve_log(sv, "%s %s (%u/%u answered)", info.label,
+	serve_note(sv, "%s %s (%u/%u answered)", info.label,
 		      info.restart ? "restarted: a new session took over the link" : "started a session", info.answered,
 		      info.total);
 	set_json(r, json_pack("{s:s}", "session", session));

@@ -48,11 +48,11 @@ struct sty_server {
 	uint64_t commits;                /* batches the committer committed (atomic) */
 };
 
-/* Event lines (answers stored, sessions completed) of a request whose reply may wait for its commit
+/* Event lines (answers stored, sessions started or completed) of a request whose reply may wait for its commit
  * (study_serve_mhd.c): held here while the thread's sty_events_held points at them, and logged once the commit is
  * done, or dropped when it failed (its own line says so) — the log never lists an answer that was not stored. */
 typedef struct sty_held_events {
-	char text[1024]; /* lines, each ending in '\n' */
+	char text[1024]; /* lines: 'E' (an event, never rate-limited) or 'L' (rate-limited), the line, '\n' */
 	size_t len;
 } sty_held_events;
 extern __thread sty_held_events *sty_events_held;

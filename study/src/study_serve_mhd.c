@@ -460,9 +460,19 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, en
 {
 	(void)toe;
 	conn_state *cs = *con_cls;
+	struct sty_server *sv = cls;
+	if (cs && cs->holding && !cs->resumed) { /* still parked (not seen to happen: the stop resumes them first) */
+		pthread_mutex_lock(&sv->park_lock);
+		for (conn_state **p = &sv->parked; *p; p = &(*p)->next)
+			if (*p == cs) {
+				*p = cs->next;
+				break;
+			}
+		pthread_mutex_unlock(&sv->park_lock);
+	}
 	if (cs && cs->holding) { /* a parked reply never sent (the server stopping) */
 		if (cs->resumed && !cs->commit_rc) /* its change is stored: the log lists it all the same */
-			sty_serve_events_flush(cls, &cs->events);
+			sty_serve_events_flush(sv, &cs->events);
 		sty_response_release(&cs->reply);
 	}
 	free(*con_cls);

@@ -82,10 +82,10 @@ typedef struct sty_server_stats {
 	uint64_t body_timeouts; /* closed: no complete body within body_timeout_s of its head */
 	uint64_t evicted;       /* closed: the longest-reading connection, to make room under max_reading */
 	uint64_t send_timeouts; /* closed: a reply not sent within send_timeout_s */
-	/* Answers acknowledged (POST /api/CODE/answer, 200) and the server's own time for them, from the complete
-	 * request to its reply queued (its batch's commit and, after that, its turn on a server thread included; not
-	 * the time before the request was read): the median and the 99th percentile, in ms, to within 9 % (a
-	 * histogram of 8 buckets per octave). */
+	/* Answers acknowledged (POST /api/CODE/answer, 200; a repeat of a stored answer included) and the server's own
+	 * time for them, from the complete request to its reply queued (its batch's commit and, after that, its turn on
+	 * a server thread included; not the time before the request was read): the median and the 99th percentile, in
+	 * ms, to within 9 % (a histogram of 8 buckets per octave). */
 	uint64_t answers;
 	double answer_ms_p50, answer_ms_p99;
 	uint64_t commits; /* the group commit's transactions (answers, clip names, sessions share them) */
