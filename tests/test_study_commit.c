@@ -362,6 +362,48 @@ static void *participate(void *arg)
 	return NULL;
 }
 
+typedef struct reader_done {
+	reader r;
+	atomic_int done;
+} reader_done;
+
+static void *read_trial_flagged(void *arg)
+{
+	reader_done *d = arg;
+	read_trial(&d->r);
+	atomic_store(&d->done, 1);
+	return NULL;
+}
+
+/* sty_batch_quiesce's promise, step by step: while a reader waits for a moment with no batch open (draining), a
+ * request that would open a new batch waits, and goes on once the reader is done. */
+static void test_no_batch_opens_while_draining(void **state)
+{
+	(void)state;
+	char **codes;
+	size_t n;
+	sty *s = study_with_codes("study_commit_drain", 6, &codes, &n);
+	pthread_mutex_lock(&s->lock);
+	s->batch.draining = 1; /* as sty_batch_quiesce sets it while it waits */
+	pthread_mutex_unlock(&s->lock);
+	reader_done d = {.r = {.s = s, .code = codes[0]}};
+	pthread_t th;
+	assert_int_equal(pthread_create(&th, NULL, read_trial_flagged, &d), 0);
+	sleep_us(200 * 1000);
+	if (atomic_load(&d.done))
+		fail_msg("a request opened a batch while a reader waited for none to be open");
+	pthread_mutex_lock(&s->lock);
+	assert_false(s->batch.open);
+	s->batch.draining = 0; /* the reader has read: as sty_batch_quiesce ends */
+	pthread_cond_broadcast(&s->batch.done);
+	pthread_mutex_unlock(&s->lock);
+	pthread_join(th, NULL);
+	if (d.r.rc)
+		fail_msg("%s", d.r.err);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
 static int answers_so_far(participant *ps, int n)
 {
 	int a = 0;
@@ -446,6 +488,7 @@ int main(void)
 		cmocka_unit_test(test_parked_replies),
 		cmocka_unit_test(test_stop_with_a_parked_reply),
 		cmocka_unit_test(test_reads_under_load),
+		cmocka_unit_test(test_no_batch_opens_while_draining),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
