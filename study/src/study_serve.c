@@ -709,17 +709,31 @@ static void serve_trial(struct sty_server *sv, const sty_request *rq, const char
 }
 
 /* GET /admin/status: the study's status as JSON (study_status.h), for the live status page. */
-static void serve_status(struct sty_server *sv, const sty_request *rq, sty_response *r)
+__thread bool sty_slow_allowed;
+__thread void (*sty_slow_pending)(struct sty_server *sv, sty_response *r);
+
+static void status_reply(struct sty_server *sv, sty_response *r)
 {
 	char err[512];
 	char *text = NULL;
+	resp_init(r);
 	int rc = sty_status_json(sv->study, &text, err, sizeof err);
 	if (rc) {
-		set_internal(sv, r, rq, err);
+		set_internal(sv, r, &(sty_request){.method = "GET", .path = "/admin/status"}, err);
 		return;
 	}
 	set_body(r, 200, "application/json", text, strlen(text));
 	free(text);
+}
+
+static void serve_status(struct sty_server *sv, sty_response *r)
+{
+	if (sty_slow_allowed) { /* computed on a thread of its own (study_serve_mhd.c) */
+		sty_slow_pending = status_reply;
+		set_error(r, 503, "the status is being computed");
+		return;
+	}
+	status_reply(sv, r);
 }
 
 void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
@@ -808,7 +822,7 @@ void sty_server_handle(sty_server *sv, const sty_request *rq, sty_response *r)
 		} else if (!strcmp(url, "/admin/export-pwcmp.csv")) {
 			serve_export(sv, rq, 1, r);
 		} else if (!strcmp(url, "/admin/status")) {
-			serve_status(sv, rq, r);
+			serve_status(sv, r);
 		} else {
 			set_error(r, 404, "no such endpoint (status, export.csv, export-pwcmp.csv)");
 		}

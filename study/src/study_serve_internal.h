@@ -46,7 +46,20 @@ struct sty_server {
 	int results[STY_PARK_RESULTS];   /* their results, by epoch modulo STY_PARK_RESULTS */
 	bool committing;                 /* the committer thread runs */
 	uint64_t commits;                /* batches the committer committed (atomic) */
+	/* Replies computed on threads of their own (sty_slow_pending), under park_lock: how many run; signalled as each
+	 * ends (the stop waits for none). */
+	unsigned slow_running;
+	bool slow_closed; /* stopping: no more start */
+	pthread_cond_t slow_done;
 };
+
+/* A reply that takes long to compute (the status's tally: seconds for a large study) would stall every connection of
+ * the server thread that computes it. When the thread's sty_slow_allowed is set (the libmicrohttpd adapter), the
+ * handler leaves the work in sty_slow_pending instead (its own response is a placeholder to release), and the
+ * adapter runs it on a thread of its own with the connection suspended. */
+#define STY_SLOW_MAX 2 /* such replies computed at once; more get 503 */
+extern __thread bool sty_slow_allowed;
+extern __thread void (*sty_slow_pending)(struct sty_server *sv, sty_response *r);
 
 /* Event lines (answers stored, sessions started or completed) of a request whose reply may wait for its commit
  * (study_serve_mhd.c): held here while the thread's sty_events_held points at them, and logged once the commit is

@@ -376,6 +376,62 @@ static void on_commit(void *ctx, uint64_t epoch, int rc, const char *why)
 	pthread_mutex_unlock(&sv->park_lock);
 }
 
+/* A reply computed on a thread of its own (sty_slow_pending), its connection suspended until it is done. */
+typedef struct slow_job {
+	struct sty_server *sv;
+	conn_state *cs;
+	void (*run)(struct sty_server *sv, sty_response *r);
+} slow_job;
+
+static void *slow_main(void *arg)
+{
+	slow_job *j = arg;
+	j->run(j->sv, &j->cs->reply);
+	pthread_mutex_lock(&j->sv->park_lock);
+	j->cs->resumed = true;
+	MHD_resume_connection(j->cs->c);
+	j->sv->slow_running--;
+	pthread_cond_broadcast(&j->sv->slow_done);
+	pthread_mutex_unlock(&j->sv->park_lock);
+	free(j);
+	return NULL;
+}
+
+/* Starts `run` for connection c (its handler's thread; the connection is suspended first, so the resume comes after
+ * it). Returns false, nothing started, when STY_SLOW_MAX run already or no thread can be made. */
+static bool slow_start(struct sty_server *sv, struct MHD_Connection *c, conn_state *cs,
+		       void (*run)(struct sty_server *sv, sty_response *r))
+{
+	slow_job *j = malloc(sizeof *j);
+	if (!j)
+		return false;
+	*j = (slow_job){sv, cs, run};
+	pthread_mutex_lock(&sv->park_lock);
+	bool ok = sv->slow_running < STY_SLOW_MAX && !sv->slow_closed;
+	if (ok) {
+		cs->c = c;
+		cs->holding = true;
+		MHD_suspend_connection(c);
+		pthread_attr_t a;
+		pthread_attr_init(&a);
+		pthread_attr_setdetachstate(&a, PTHREAD_CREATE_DETACHED);
+		pthread_t th;
+		if (pthread_create(&th, &a, slow_main, j)) { /* resumed at once, with a 500 */
+			sty_response_error(&cs->reply, 500, "internal error");
+			cs->resumed = true;
+			MHD_resume_connection(c);
+			j = NULL;
+		} else {
+			sv->slow_running++;
+			j = NULL; /* the thread's */
+		}
+		pthread_attr_destroy(&a);
+	}
+	pthread_mutex_unlock(&sv->park_lock);
+	free(j);
+	return ok;
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
 				  const char *version, const char *upload_data, size_t *upload_size, void **con_cls)
 {
@@ -406,7 +462,20 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 		if (!(cs = calloc(1, sizeof *cs)))
 			return MHD_NO;
 		*con_cls = cs;
+		sty_slow_allowed = true;
+		sty_slow_pending = NULL;
 		sty_server_handle(sv, &rq, &r);
+		sty_slow_allowed = false;
+		if (sty_slow_pending) { /* the reply is computed on a thread of its own: this thread goes on */
+			track_phase(sv, c, CONN_ANSWER);
+			if (slow_start(sv, c, cs, sty_slow_pending)) {
+				sty_response_release(&r);
+				return MHD_YES;
+			}
+			sty_response_release(&r);
+			sty_response_error(&r, 503, "busy: try again in a few seconds");
+			return queue(c, &r);
+		}
 		if (r.status == 0) {
 			track_phase(sv, c, CONN_BODY);
 			return MHD_YES;
@@ -497,6 +566,7 @@ int sty_server_create(sty *s, const sty_server_desc *desc, sty_server **out, cha
 	pthread_mutex_init(&sv->log_lock, NULL);
 	pthread_mutex_init(&sv->conn_lock, NULL);
 	pthread_mutex_init(&sv->park_lock, NULL);
+	pthread_cond_init(&sv->slow_done, NULL);
 	pthread_condattr_t ca;
 	pthread_condattr_init(&ca);
 	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -612,6 +682,11 @@ void sty_server_stop(sty_server **psv)
 	}
 	if (sv->committing) /* commits what is open and resumes its parked replies; later requests wait as before */
 		sty_batch_committer_stop(sv->study);
+	pthread_mutex_lock(&sv->park_lock); /* the replies computed on threads of their own: resumed before the stop */
+	sv->slow_closed = true;
+	while (sv->slow_running)
+		pthread_cond_wait(&sv->slow_done, &sv->park_lock);
+	pthread_mutex_unlock(&sv->park_lock);
 	if (sv->mhd)
 		MHD_stop_daemon(sv->mhd);
 	if (sv->lock_fd >= 0)
@@ -619,6 +694,7 @@ void sty_server_stop(sty_server **psv)
 	pthread_cond_destroy(&sv->conn_wake);
 	pthread_mutex_destroy(&sv->conn_lock);
 	pthread_mutex_destroy(&sv->park_lock);
+	pthread_cond_destroy(&sv->slow_done);
 	pthread_mutex_destroy(&(*psv)->log_lock);
 	free(*psv);
 	*psv = NULL;
