@@ -462,20 +462,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 		if (!(cs = calloc(1, sizeof *cs)))
 			return MHD_NO;
 		*con_cls = cs;
-		sty_slow_allowed = true;
-		sty_slow_pending = NULL;
 		sty_server_handle(sv, &rq, &r);
-		sty_slow_allowed = false;
-		if (sty_slow_pending) { /* the reply is computed on a thread of its own: this thread goes on */
-			track_phase(sv, c, CONN_ANSWER);
-			if (slow_start(sv, c, cs, sty_slow_pending)) {
-				sty_response_release(&r);
-				return MHD_YES;
-			}
-			sty_response_release(&r);
-			sty_response_error(&r, 503, "busy: try again in a few seconds");
-			return queue(c, &r);
-		}
 		if (r.status == 0) {
 			track_phase(sv, c, CONN_BODY);
 			return MHD_YES;
@@ -493,10 +480,20 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 	sty_batch_defer_begin();
 	cs->events.len = 0;
 	sty_events_held = &cs->events;
+	sty_slow_allowed = true;
+	sty_slow_pending = NULL;
 	sty_server_handle(sv, &rq, &r);
+	sty_slow_allowed = false;
 	sty_events_held = NULL;
 	uint64_t ticket;
 	bool parked = sty_batch_defer_end(&ticket);
+	if (sty_slow_pending && !parked) { /* the reply is computed on a thread of its own: this thread goes on */
+		sty_response_release(&r);
+		if (slow_start(sv, c, cs, sty_slow_pending))
+			return MHD_YES;
+		sty_response_error(&r, 503, "busy: try again in a few seconds");
+		return queue(c, &r);
+	}
 	if (r.status == 0) { /* cannot happen with a body; be safe */
 		sty_response_error(&r, 500, "internal error");
 	}
