@@ -422,6 +422,31 @@ static void test_no_batch_opens_while_draining(void **state)
 	sty_close(&s);
 }
 
+/* SQLite may roll an open transaction back on its own (after SQLITE_FULL, IOERR, NOMEM) while the batch thinks it
+ * is open: a request joining then fails instead of starting a transaction of its own (which its RELEASE would commit
+ * outside the batch). Simulated with a ROLLBACK of the batch's transaction. */
+static void test_join_after_sqlite_rolled_back(void **state)
+{
+	(void)state;
+	char err[1024], **codes;
+	size_t n;
+	sty *s = study_with_codes("study_commit_rolled", 7, &codes, &n);
+	pthread_mutex_lock(&s->lock);
+	assert_int_equal(sty_batch_join(s, err, sizeof err), TL_OK);
+	assert_int_equal(sty_exec(s, "RELEASE request"), SQLITE_OK);
+	s->batch.members = 1; /* a member waits for this batch */
+	assert_int_equal(sty_exec(s, "ROLLBACK"), SQLITE_OK); /* as SQLite does on its own after an I/O error */
+	assert_int_equal(sty_batch_join(s, err, sizeof err), TL_ERR_DB);
+	assert_non_null(strstr(err, "rolled back"));
+	assert_int_equal(sqlite3_get_autocommit(s->db), 1); /* no transaction of its own */
+	s->batch.members = 0, s->batch.open = false;
+	pthread_mutex_unlock(&s->lock);
+	sty_trial tr;
+	assert_int_equal(sty_next_trial(s, codes[0], &tr, err, sizeof err), TL_OK);
+	free_codes(codes, n);
+	sty_close(&s);
+}
+
 static int requests_so_far(participant *ps, int n)
 {
 	int a = 0;
@@ -520,6 +545,7 @@ int main(void)
 		cmocka_unit_test(test_stop_with_a_parked_reply),
 		cmocka_unit_test(test_reads_under_load),
 		cmocka_unit_test(test_no_batch_opens_while_draining),
+		cmocka_unit_test(test_join_after_sqlite_rolled_back),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
