@@ -271,6 +271,13 @@ static void test_parked_replies(void **state)
 	assert_int_equal(http(port, "POST", path, body, resp, sizeof resp), 200);
 	assert_int_equal(db_count(sty_path(s), "SELECT count(*) FROM answers"), 1);
 	assert_non_null(strstr(log_text, "answered trial 0 (1/"));
+	snprintf(path, sizeof path, "/api/%s/session", codes[1]); /* a session's line waits for its commit too */
+	fail_commits = 1;
+	assert_int_equal(http(port, "POST", path, "{}", resp, sizeof resp), 500);
+	if (strstr(log_text, "started a session"))
+		fail_msg("the log lists a session that was not stored:\n%s", log_text);
+	assert_int_equal(http(port, "POST", path, "{}", resp, sizeof resp), 200);
+	assert_non_null(strstr(log_text, "started a session"));
 	sty_server_stats st = sty_server_get_stats(sv);
 	assert_int_equal(st.answers, 1);
 	sty_server_stop(&sv);
