@@ -14,15 +14,12 @@
 #include <stddef.h>
 #include <cmocka.h>
 
-#include <arpa/inet.h>
 #include <math.h>
-#include <netinet/in.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -186,42 +183,9 @@ static void test_reader_waits_for_the_batch(void **state)
 	sty_close(&s);
 }
 
-/* One request on a new connection (Connection: close) to 127.0.0.1:port with extra header lines `headers` ("" or
- * lines ending in CRLF); the reply into `out`, its status returned, -1 when the connection failed. No cmocka
- * assertions: threads other than the test's call it. */
-static int http_try(int port, const char *method, const char *path, const char *headers, const char *body, char *out,
-		    size_t size)
-{
-	out[0] = 0;
-	int fd = socket(AF_INET, SOCK_STREAM, 0);
-	struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
-	inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
-	if (fd < 0 || connect(fd, (struct sockaddr *)&a, sizeof a)) {
-		if (fd >= 0)
-			close(fd);
-		return -1;
-	}
-	char req[1024];
-	int n = snprintf(req, sizeof req, "%s %s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n%s"
-		 "Content-Type: application/json\r\nContent-Length: %zu\r\n\r\n%s", method, path, headers, strlen(body), body);
-	if (n < 0 || (size_t)n >= sizeof req || write(fd, req, (size_t)n) != n) {
-		close(fd);
-		return -1;
-	}
-	size_t len = 0;
-	ssize_t r;
-	while (len + 1 < size && (r = read(fd, out + len, size - 1 - len)) > 0)
-		len += (size_t)r;
-	out[len] = 0;
-	close(fd);
-	int status = 0;
-	sscanf(out, "HTTP/1.1 %d", &status);
-	return status;
-}
-
 static int http(int port, const char *method, const char *path, const char *body, char *out, size_t size)
 {
-	int status = http_try(port, method, path, "", body, out, size);
+	int status = tu_http(port, method, path, NULL, body, out, size); /* the reply's body into out */
 	assert_int_not_equal(status, -1);
 	return status;
 }
@@ -296,7 +260,7 @@ typedef struct poster {
 static void *post_answer(void *arg)
 {
 	poster *p = arg;
-	p->status = http_try(p->port, "POST", p->path, "", "{\"trial\": 0, \"answer\": 2, \"rt_ms\": 700}", p->resp,
+	p->status = tu_http(p->port, "POST", p->path, "", "{\"trial\": 0, \"answer\": 2, \"rt_ms\": 700}", p->resp,
 			     sizeof p->resp);
 	return NULL;
 }
@@ -351,7 +315,7 @@ static int timed(participant *p, const char *method, const char *path, const cha
 {
 	struct timespec t0, t1;
 	clock_gettime(CLOCK_MONOTONIC, &t0);
-	int status = http_try(p->port, method, path, "", body, resp, size);
+	int status = tu_http(p->port, method, path, "", body, resp, size);
 	clock_gettime(CLOCK_MONOTONIC, &t1);
 	int us = (int)((t1.tv_sec - t0.tv_sec) * 1000000 + (t1.tv_nsec - t0.tv_nsec) / 1000);
 	for (int w = atomic_load(&p->worst_us); us > w && !atomic_compare_exchange_weak(&p->worst_us, &w, us);)
@@ -506,7 +470,7 @@ static void test_reads_under_load(void **state)
 		for (int i = 0; i < P; i++)
 			atomic_store(&ps[i].worst_us, 0);
 		clock_gettime(CLOCK_MONOTONIC, &t0);
-		assert_int_equal(http_try(port, "GET", status ? "/admin/status" : "/admin/export.csv", auth, "", resp,
+		assert_int_equal(tu_http(port, "GET", status ? "/admin/status" : "/admin/export.csv", auth, "", resp,
 					  sizeof resp), 200);
 		clock_gettime(CLOCK_MONOTONIC, &t1);
 		double took = (double)(t1.tv_sec - t0.tv_sec) + (double)(t1.tv_nsec - t0.tv_nsec) / 1e9;
