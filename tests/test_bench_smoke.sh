@@ -34,6 +34,7 @@ smokes=(
   "bench-sweep|--frames 0:2 --size 64x36 --variants ref,tfr@8|resume after SIGKILL"
   "bench-study|--participants 3|: 60 test ratings in the database (expected 60)"
   "bench-study|--participants 3 --client node --addresses many|the server's time per answer p50"
+  "bench-study|--participants 3 --think-ms 100 --poll-status|status page: [1-9][0-9]* replies while the participants answered, taking"
   "bench-thresholds|--studies 2|sd 1: .*RMSE"
 )
 failed=0
