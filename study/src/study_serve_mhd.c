@@ -419,8 +419,7 @@ static bool slow_start(struct sty_server *sv, struct MHD_Connection *c, conn_sta
 		if (pthread_create(&th, &a, slow_main, j)) { /* resumed at once, with a 500 */
 			sty_response_error(&cs->reply, 500, "internal error");
 			cs->resumed = true;
-			MHD_resume_connection(c);
-			j = NULL;
+			MHD_resume_connection(c); /* j is freed below */
 		} else {
 			sv->slow_running++;
 			j = NULL; /* the thread's */
